@@ -1,0 +1,54 @@
+// The one adapter interface every engine implements.
+//
+// An adapter maps the scene's physical meaning onto its engine's conventions (up axis,
+// friction and restitution combining, margins, contact buffers) so that the *physical*
+// scene is the same everywhere, and states every setting it changes from its engine's
+// defaults in settings(): that table is written into the results and shown in the report.
+#pragma once
+
+#include <functional>
+#include <memory>
+#include <optional>
+#include <string>
+#include <vector>
+
+#include "physbench/scene.h"
+
+namespace physbench {
+
+// a body's state as read back from an engine, in the scene's conventions
+struct BodyState {
+  Vec3 position = Vec3::Zero();          // centre of mass, world (m)
+  Quat orientation = Quat::Identity();   // body to world
+  Vec3 linear_velocity = Vec3::Zero();   // world (m/s)
+  Vec3 angular_velocity = Vec3::Zero();  // world (rad/s)
+};
+
+// one non-default engine setting: what, the value, and why the adapter sets it
+struct Setting {
+  std::string name;
+  std::string value;
+  std::string why;
+};
+
+class Engine {
+ public:
+  virtual ~Engine() = default;
+  // build the world for the scene (already checked with EngineInfo::unsupported)
+  virtual void load(const Scene& scene) = 0;
+  // advance one fixed step of scene.dt
+  virtual void step() = 0;
+  virtual BodyState body_state(int body) const = 0;
+};
+
+struct EngineInfo {
+  std::string name;                   // "rtp", "bullet", …
+  std::vector<std::string> variants;  // the engine's own knobs as names; the first is the default
+  std::string version;
+  // why the engine cannot model this scene in this variant, or nullopt when it can
+  std::function<std::optional<std::string>(const Scene&, const std::string& variant)> unsupported;
+  std::function<std::unique_ptr<Engine>(const std::string& variant)> create;
+  std::function<std::vector<Setting>(const std::string& variant)> settings;
+};
+
+}  // namespace physbench

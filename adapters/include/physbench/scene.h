@@ -1,0 +1,108 @@
+// A scene is data: what exists and what to record, nothing about any engine.
+//
+// World convention: metres, kilograms, seconds; y is up (gravity is a free vector, so an
+// engine with another "up" needs only the vector); a planar scene moves in the XY plane and
+// rotates about z only. Angular velocities are in the world frame. Every adapter consumes
+// this same structure; built-in scenarios create it in C++ and scene files in JSON.
+#pragma once
+
+#include <optional>
+#include <stdexcept>
+#include <string>
+#include <vector>
+
+#include <Eigen/Core>
+#include <Eigen/Geometry>
+
+namespace physbench {
+
+using Vec3 = Eigen::Vector3d;
+using Quat = Eigen::Quaterniond;
+using Mat3 = Eigen::Matrix3d;
+
+enum class ShapeKind { Box, Sphere, Plane };
+
+struct Shape {
+  ShapeKind kind = ShapeKind::Box;
+  Vec3 half_extents = Vec3(0.5, 0.5, 0.5);  // box (m)
+  double radius = 0.5;                      // sphere (m)
+  // a plane is the body's local y = 0 surface, solid below; it must be static
+};
+
+struct BodySpec {
+  std::string name;
+  Shape shape;
+  double mass = 1.0;                      // kg; 0 = static
+  Vec3 position = Vec3::Zero();           // centre of mass, world (m)
+  Quat orientation = Quat::Identity();    // body to world
+  Vec3 linear_velocity = Vec3::Zero();    // world (m/s)
+  Vec3 angular_velocity = Vec3::Zero();   // world (rad/s)
+  double friction = 0.5;                  // Coulomb coefficient of the pair, as the scene means it
+  double restitution = 0.0;               // coefficient of the pair, as the scene means it
+};
+
+// Hooke spring plus damping between a body point and a world point or another body's point
+struct SpringSpec {
+  int body_a = 0;
+  Vec3 local_point_a = Vec3::Zero();  // body-a frame (m)
+  int body_b = -1;                    // -1: point_b is a world anchor
+  Vec3 point_b = Vec3::Zero();        // body-b frame, or world (m)
+  double stiffness = 0.0;             // N/m
+  double damping = 0.0;               // N s/m
+  double rest_length = 0.0;           // m
+};
+
+// what the harness compares each engine's trajectory with
+enum class ReferenceKind {
+  None,       // invariants only (energy, momenta)
+  Ballistic,  // closed form x0 + v0 t + ½ g t² for every body's centre of mass
+  Converged,  // rtp RK4 at dt / divisor, shown converged by halving once more
+};
+
+enum class Metric { Position, Orientation, Energy, LinearMomentum, AngularMomentum };
+
+struct Probe {
+  std::vector<int> bodies;        // empty: every dynamic body
+  double interval = 1.0 / 60.0;   // s between samples (rounded to whole steps)
+  std::vector<Metric> metrics = {Metric::Position};
+};
+
+struct Reference {
+  ReferenceKind kind = ReferenceKind::None;
+  int dt_divisor = 64;  // converged: the reference runs at dt / dt_divisor
+};
+
+struct Scene {
+  std::string name;
+  std::string description;
+  Vec3 gravity = Vec3(0.0, -9.81, 0.0);  // m/s²
+  double dt = 1.0 / 60.0;                // fixed step (s)
+  double duration = 2.0;                 // simulated time (s)
+  bool planar = false;                   // all motion in the XY plane: 2D engines may run it
+  bool collisions = true;                // false: bodies pass through each other and planes
+  std::vector<BodySpec> bodies;
+  std::vector<SpringSpec> springs;
+  Probe probe;
+  Reference reference;
+
+  long step_count() const;                 // duration / dt, rounded
+  int probe_every_steps() const;           // interval / dt, rounded, at least 1
+  std::vector<int> probed_bodies() const;  // probe.bodies, or every dynamic body
+};
+
+// mass properties of a shape of the given mass: principal inertia in the body frame (kg m²)
+Vec3 principal_inertia(const Shape& shape, double mass);
+
+// Throws SceneError naming the first invalid field ("bodies[2].mass: must be >= 0, got -1").
+void validate(const Scene& scene);
+
+struct SceneError : std::runtime_error {
+  using std::runtime_error::runtime_error;
+};
+
+const char* to_string(ShapeKind kind);
+const char* to_string(ReferenceKind kind);
+const char* to_string(Metric metric);
+std::optional<Metric> metric_from_string(const std::string& name);
+
+}  // namespace physbench

@@ -1,0 +1,53 @@
+// Drive one engine through one scene: step, sample the probed bodies, detect explosions,
+// time the steps. Tests call it in-process; the harness calls it in an isolated worker.
+#pragma once
+
+#include <string>
+#include <vector>
+
+#include "physbench/engine.h"
+
+namespace physbench {
+
+enum class Status { Ok, Unsupported, Exploded, Crashed, Timeout, Error };
+const char* to_string(Status status);
+Status status_from_string(const std::string& name);
+
+struct Sample {
+  double time = 0.0;              // s
+  std::vector<BodyState> bodies;  // in Trajectory::bodies order
+};
+
+struct Trajectory {
+  std::vector<int> bodies;  // scene indices of the probed bodies
+  std::vector<Sample> samples;
+};
+
+struct SimulateOptions {
+  int every_steps = 0;             // steps between samples; 0: the scene's probe interval
+  double timing_budget = 0.3;      // s: timed repeats go on until this much stepping is measured
+  int min_timed_repeats = 3;
+  int max_timed_repeats = 50;
+  double explosion_distance = 1e6; // m from the origin: a body beyond it has exploded
+};
+
+struct RunResult {
+  Status status = Status::Ok;
+  std::string message;             // why, for anything but ok
+  std::string engine_version;
+  std::vector<Setting> settings;
+  long steps = 0;                  // steps per run
+  std::vector<double> wall_seconds;  // stepping time of each timed repeat (s)
+  Trajectory trajectory;           // from the first run
+};
+
+// A first run records the trajectory and warms caches; timed repeats then rebuild the world
+// and step it again with the same sampling work. A run that took longer than the budget is
+// timed once.
+RunResult simulate(const EngineInfo& engine, const std::string& variant, const Scene& scene,
+                   const SimulateOptions& options = {});
+
+// true when every probed state is finite and within the explosion distance
+bool is_sane(const Sample& sample, double explosion_distance);
+
+}  // namespace physbench

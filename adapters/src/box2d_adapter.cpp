@@ -1,0 +1,115 @@
+// Box2D adapter (2.4.1): planar scenes only. The scene's XY plane is Box2D's world; a body's
+// rotation about z is Box2D's angle.
+#include <box2d/box2d.h>
+
+#include <cmath>
+
+#include "physbench/registry.h"
+
+namespace physbench {
+
+namespace {
+
+constexpr int kVelocityIterations = 8;  // Box2D's recommended default
+constexpr int kPositionIterations = 3;  // Box2D's recommended default
+
+double angle_about_z(const Quat& q) { return 2.0 * std::atan2(q.z(), q.w()); }
+
+class Box2dEngine final : public Engine {
+ public:
+  void load(const Scene& scene) override {
+    dt_ = scene.dt;
+    world_ = std::make_unique<b2World>(b2Vec2(float(scene.gravity.x()), float(scene.gravity.y())));
+    world_->SetAllowSleeping(false);
+    for (const BodySpec& b : scene.bodies) {
+      b2BodyDef def;
+      def.type = b.mass > 0.0 ? b2_dynamicBody : b2_staticBody;
+      def.position.Set(float(b.position.x()), float(b.position.y()));
+      def.angle = float(angle_about_z(b.orientation));
+      def.linearVelocity.Set(float(b.linear_velocity.x()), float(b.linear_velocity.y()));
+      def.angularVelocity = float(b.angular_velocity.z());
+      def.allowSleep = false;
+      b2Body* body = world_->CreateBody(&def);
+
+      b2PolygonShape box;
+      b2CircleShape circle;
+      b2FixtureDef fixture;
+      if (b.shape.kind == ShapeKind::Box) {
+        box.SetAsBox(float(b.shape.half_extents.x()), float(b.shape.half_extents.y()));
+        fixture.shape = &box;
+      } else {
+        circle.m_radius = float(b.shape.radius);
+        fixture.shape = &circle;
+      }
+      fixture.density = 1.0f;  // replaced below by the scene's mass properties
+      fixture.friction = float(b.friction);
+      fixture.restitution = float(b.restitution);
+      if (!scene.collisions) fixture.filter.maskBits = 0;
+      body->CreateFixture(&fixture);
+      if (b.mass > 0.0) {
+        // the scene's mass and its inertia about z: a sphere keeps its 3D inertia, not a disc's
+        b2MassData mass;
+        mass.mass = float(b.mass);
+        mass.center.SetZero();
+        mass.I = float(principal_inertia(b.shape, b.mass).z());
+        body->SetMassData(&mass);
+      }
+      bodies_.push_back(body);
+    }
+  }
+
+  void step() override { world_->Step(float(dt_), kVelocityIterations, kPositionIterations); }
+
+  BodyState body_state(int index) const override {
+    const b2Body* body = bodies_[index];
+    const b2Vec2 p = body->GetPosition();
+    const b2Vec2 v = body->GetLinearVelocity();
+    const double angle = body->GetAngle();
+    return {Vec3(p.x, p.y, 0.0), Quat(Eigen::AngleAxisd(angle, Vec3::UnitZ())), Vec3(v.x, v.y, 0.0),
+            Vec3(0.0, 0.0, body->GetAngularVelocity())};
+  }
+
+ private:
+  double dt_ = 0.0;
+  std::unique_ptr<b2World> world_;
+  std::vector<b2Body*> bodies_;  // owned by world_
+};
+
+}  // namespace
+
+EngineInfo box2d_engine_info() {
+  EngineInfo info;
+  info.name = "box2d";
+  info.variants = {"default"};
+  info.version = std::to_string(b2_version.major) + "." + std::to_string(b2_version.minor) + "." +
+                 std::to_string(b2_version.revision) + " (as the library reports it)";
+  info.unsupported = [](const Scene& scene, const std::string&) -> std::optional<std::string> {
+    if (!scene.planar) return "Box2D is a 2D engine: the scene is not marked planar";
+    if (!scene.springs.empty()) return "springs are not mapped onto Box2D yet";
+    if (scene.collisions && scene.bodies.size() > 1)
+      return "contact scenes are not mapped onto Box2D yet (its 1 cm polygon skin is not compensated)";
+    for (std::size_t i = 0; i < scene.bodies.size(); ++i) {
+      const BodySpec& b = scene.bodies[i];
+      if (b.shape.kind == ShapeKind::Plane) return "planes are not mapped onto Box2D yet";
+      // Box2D clamps translation per step to b2_maxTranslation, silently
+      if (b.linear_velocity.norm() * scene.dt > 0.5 * b2_maxTranslation)
+        return "bodies[" + std::to_string(i) + "] moves near Box2D's per-step limit b2_maxTranslation";
+      if (std::abs(b.angular_velocity.z()) * scene.dt > 0.5 * b2_maxRotation)
+        return "bodies[" + std::to_string(i) + "] turns near Box2D's per-step limit b2_maxRotation";
+    }
+    return std::nullopt;
+  };
+  info.create = [](const std::string&) -> std::unique_ptr<Engine> { return std::make_unique<Box2dEngine>(); };
+  info.settings = [](const std::string&) {
+    return std::vector<Setting>{
+        {"velocity / position iterations", "8 / 3", "Box2D's recommended values"},
+        {"allow sleeping", "false (world and bodies)", "sleeping off in every engine"},
+        {"mass properties", "from the scene (SetMassData, I = scene's Izz)", "same inertia in every engine"},
+        {"collision mask", "0 when the scene has collisions off", "model only what the scene needs"},
+        {"precision", "float", "Box2D computes in single precision"},
+    };
+  };
+  return info;
+}
+
+}  // namespace physbench

@@ -1,0 +1,187 @@
+#include "physbench/scene.h"
+
+#include <algorithm>
+#include <cmath>
+#include <sstream>
+
+namespace physbench {
+
+long Scene::step_count() const { return std::lround(duration / dt); }
+
+int Scene::probe_every_steps() const {
+  return std::max(1, static_cast<int>(std::lround(probe.interval / dt)));
+}
+
+std::vector<int> Scene::probed_bodies() const {
+  if (!probe.bodies.empty()) return probe.bodies;
+  std::vector<int> dynamic;
+  for (int i = 0; i < static_cast<int>(bodies.size()); ++i)
+    if (bodies[i].mass > 0.0) dynamic.push_back(i);
+  return dynamic;
+}
+
+Vec3 principal_inertia(const Shape& shape, double mass) {
+  switch (shape.kind) {
+    case ShapeKind::Box: {
+      // solid cuboid: I_x = m (b² + c²) / 3 with half extents a, b, c
+      const Vec3 e2 = shape.half_extents.cwiseProduct(shape.half_extents);
+      return mass / 3.0 * Vec3(e2.y() + e2.z(), e2.x() + e2.z(), e2.x() + e2.y());
+    }
+    case ShapeKind::Sphere:
+      return Vec3::Constant(0.4 * mass * shape.radius * shape.radius);
+    case ShapeKind::Plane:
+      return Vec3::Zero();
+  }
+  return Vec3::Zero();
+}
+
+const char* to_string(ShapeKind kind) {
+  switch (kind) {
+    case ShapeKind::Box: return "box";
+    case ShapeKind::Sphere: return "sphere";
+    case ShapeKind::Plane: return "plane";
+  }
+  return "?";
+}
+
+const char* to_string(ReferenceKind kind) {
+  switch (kind) {
+    case ReferenceKind::None: return "none";
+    case ReferenceKind::Ballistic: return "ballistic";
+    case ReferenceKind::Converged: return "converged";
+  }
+  return "?";
+}
+
+const char* to_string(Metric metric) {
+  switch (metric) {
+    case Metric::Position: return "position";
+    case Metric::Orientation: return "orientation";
+    case Metric::Energy: return "energy";
+    case Metric::LinearMomentum: return "linear_momentum";
+    case Metric::AngularMomentum: return "angular_momentum";
+  }
+  return "?";
+}
+
+std::optional<Metric> metric_from_string(const std::string& name) {
+  for (Metric m : {Metric::Position, Metric::Orientation, Metric::Energy, Metric::LinearMomentum,
+                   Metric::AngularMomentum})
+    if (name == to_string(m)) return m;
+  return std::nullopt;
+}
+
+namespace {
+
+[[noreturn]] void fail(const std::string& field, const std::string& what) {
+  throw SceneError(field + ": " + what);
+}
+
+template <typename T>
+std::string show(const T& value) {
+  std::ostringstream out;
+  out << value;
+  return out.str();
+}
+
+void require_finite(const std::string& field, double value) {
+  if (!std::isfinite(value)) fail(field, "must be a finite number, got " + show(value));
+}
+
+void require_finite(const std::string& field, const Vec3& v) {
+  for (int i = 0; i < 3; ++i) require_finite(field + "[" + std::to_string(i) + "]", v[i]);
+}
+
+void require_positive(const std::string& field, double value) {
+  require_finite(field, value);
+  if (!(value > 0.0)) fail(field, "must be > 0, got " + show(value));
+}
+
+void require_nonnegative(const std::string& field, double value) {
+  require_finite(field, value);
+  if (!(value >= 0.0)) fail(field, "must be >= 0, got " + show(value));
+}
+
+}  // namespace
+
+void validate(const Scene& scene) {
+  if (scene.name.empty()) fail("name", "must not be empty");
+  require_finite("gravity", scene.gravity);
+  require_positive("dt", scene.dt);
+  require_positive("duration", scene.duration);
+  if (scene.duration < scene.dt) fail("duration", "is shorter than one step (dt = " + show(scene.dt) + ")");
+  if (scene.planar && scene.gravity.z() != 0.0) fail("gravity[2]", "must be 0 in a planar scene");
+
+  const int body_count = static_cast<int>(scene.bodies.size());
+  for (int i = 0; i < body_count; ++i) {
+    const BodySpec& b = scene.bodies[i];
+    const std::string at = "bodies[" + std::to_string(i) + "]";
+    require_nonnegative(at + ".mass", b.mass);
+    require_finite(at + ".position", b.position);
+    require_finite(at + ".linear_velocity", b.linear_velocity);
+    require_finite(at + ".angular_velocity", b.angular_velocity);
+    require_finite(at + ".orientation", b.orientation.vec());
+    require_finite(at + ".orientation", b.orientation.w());
+    if (std::abs(b.orientation.norm() - 1.0) > 1e-6)
+      fail(at + ".orientation", "must be a unit quaternion [w, x, y, z], norm is " + show(b.orientation.norm()));
+    require_nonnegative(at + ".friction", b.friction);
+    require_nonnegative(at + ".restitution", b.restitution);
+    if (b.restitution > 1.0) fail(at + ".restitution", "must be <= 1, got " + show(b.restitution));
+    switch (b.shape.kind) {
+      case ShapeKind::Box:
+        for (int k = 0; k < 3; ++k)
+          require_positive(at + ".shape.half_extents[" + std::to_string(k) + "]", b.shape.half_extents[k]);
+        break;
+      case ShapeKind::Sphere:
+        require_positive(at + ".shape.radius", b.shape.radius);
+        break;
+      case ShapeKind::Plane:
+        if (b.mass != 0.0) fail(at + ".mass", "a plane must be static (mass 0)");
+        break;
+    }
+    if (scene.planar) {
+      // planar: the body lies in z = 0 and turns about z only
+      if (b.position.z() != 0.0) fail(at + ".position[2]", "must be 0 in a planar scene");
+      if (b.linear_velocity.z() != 0.0) fail(at + ".linear_velocity[2]", "must be 0 in a planar scene");
+      if (b.angular_velocity.x() != 0.0 || b.angular_velocity.y() != 0.0)
+        fail(at + ".angular_velocity", "must be about z only in a planar scene");
+      if (std::abs(b.orientation.x()) > 1e-12 || std::abs(b.orientation.y()) > 1e-12)
+        fail(at + ".orientation", "must be a rotation about z in a planar scene");
+    }
+  }
+
+  for (int i = 0; i < static_cast<int>(scene.springs.size()); ++i) {
+    const SpringSpec& s = scene.springs[i];
+    const std::string at = "springs[" + std::to_string(i) + "]";
+    if (s.body_a < 0 || s.body_a >= body_count)
+      fail(at + ".body_a", "no body " + std::to_string(s.body_a) + " (the scene has " + std::to_string(body_count) + ")");
+    if (s.body_b < -1 || s.body_b >= body_count)
+      fail(at + ".body_b", "no body " + std::to_string(s.body_b) + " (-1 anchors to the world)");
+    if (s.body_b == s.body_a) fail(at + ".body_b", "a spring needs two different ends");
+    require_finite(at + ".local_point_a", s.local_point_a);
+    require_finite(at + ".point_b", s.point_b);
+    require_nonnegative(at + ".stiffness", s.stiffness);
+    require_nonnegative(at + ".damping", s.damping);
+    require_nonnegative(at + ".rest_length", s.rest_length);
+  }
+
+  require_positive("probe.interval", scene.probe.interval);
+  for (int i = 0; i < static_cast<int>(scene.probe.bodies.size()); ++i) {
+    const int b = scene.probe.bodies[i];
+    if (b < 0 || b >= body_count)
+      fail("probe.bodies[" + std::to_string(i) + "]", "no body " + std::to_string(b));
+  }
+  if (scene.reference.dt_divisor < 2) fail("reference.dt_divisor", "must be >= 2");
+  const bool needs_reference = std::any_of(scene.probe.metrics.begin(), scene.probe.metrics.end(), [](Metric m) {
+    return m == Metric::Position || m == Metric::Orientation;
+  });
+  if (needs_reference && scene.reference.kind == ReferenceKind::None)
+    fail("reference.kind", "metrics position/orientation need a reference (ballistic or converged)");
+  if (scene.reference.kind == ReferenceKind::Ballistic) {
+    if (!scene.springs.empty()) fail("reference.kind", "ballistic holds only without springs");
+    for (Metric m : scene.probe.metrics)
+      if (m == Metric::Orientation) fail("probe.metrics", "the ballistic reference has no orientation");
+  }
+}
+
+}  // namespace physbench

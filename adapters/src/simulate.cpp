@@ -1,0 +1,136 @@
+#include "physbench/simulate.h"
+
+#include <algorithm>
+#include <chrono>
+#include <cmath>
+#include <sstream>
+
+namespace physbench {
+
+namespace {
+
+using Clock = std::chrono::steady_clock;
+
+Sample sample_of(const Engine& engine, const std::vector<int>& bodies, double time) {
+  Sample s;
+  s.time = time;
+  s.bodies.reserve(bodies.size());
+  for (int b : bodies) s.bodies.push_back(engine.body_state(b));
+  return s;
+}
+
+bool finite(const Vec3& v) { return std::isfinite(v.x()) && std::isfinite(v.y()) && std::isfinite(v.z()); }
+
+struct Pass {
+  double stepping_seconds = 0.0;
+  bool exploded = false;
+  double explosion_time = 0.0;
+};
+
+// one run of the whole scene; the trajectory is kept when asked
+Pass run_once(Engine& engine, const Scene& scene, const std::vector<int>& bodies, int every_steps,
+              double explosion_distance, Trajectory* keep) {
+  Pass pass;
+  const long steps = scene.step_count();
+  Sample first = sample_of(engine, bodies, 0.0);
+  if (keep) keep->samples.push_back(std::move(first));
+  for (long done = 0; done < steps;) {
+    const long chunk = std::min<long>(every_steps, steps - done);
+    const auto start = Clock::now();
+    for (long i = 0; i < chunk; ++i) engine.step();
+    pass.stepping_seconds += std::chrono::duration<double>(Clock::now() - start).count();
+    done += chunk;
+    Sample s = sample_of(engine, bodies, static_cast<double>(done) * scene.dt);
+    const bool sane = is_sane(s, explosion_distance);
+    if (keep) keep->samples.push_back(std::move(s));
+    if (!sane) {
+      pass.exploded = true;
+      pass.explosion_time = static_cast<double>(done) * scene.dt;
+      return pass;
+    }
+  }
+  return pass;
+}
+
+}  // namespace
+
+const char* to_string(Status status) {
+  switch (status) {
+    case Status::Ok: return "ok";
+    case Status::Unsupported: return "unsupported";
+    case Status::Exploded: return "exploded";
+    case Status::Crashed: return "crashed";
+    case Status::Timeout: return "timeout";
+    case Status::Error: return "error";
+  }
+  return "?";
+}
+
+Status status_from_string(const std::string& name) {
+  for (Status s : {Status::Ok, Status::Unsupported, Status::Exploded, Status::Crashed, Status::Timeout, Status::Error})
+    if (name == to_string(s)) return s;
+  return Status::Error;
+}
+
+bool is_sane(const Sample& sample, double explosion_distance) {
+  for (const BodyState& b : sample.bodies) {
+    if (!finite(b.position) || !finite(b.linear_velocity) || !finite(b.angular_velocity)) return false;
+    if (!std::isfinite(b.orientation.w()) || !finite(b.orientation.vec())) return false;
+    if (b.position.norm() > explosion_distance) return false;
+  }
+  return true;
+}
+
+RunResult simulate(const EngineInfo& info, const std::string& variant, const Scene& scene,
+                   const SimulateOptions& options) {
+  RunResult result;
+  result.engine_version = info.version;
+  result.settings = info.settings(variant);
+  result.steps = scene.step_count();
+  result.trajectory.bodies = scene.probed_bodies();
+  if (std::find(info.variants.begin(), info.variants.end(), variant) == info.variants.end()) {
+    result.status = Status::Error;
+    result.message = "engine " + info.name + " has no variant '" + variant + "'";
+    return result;
+  }
+  if (auto why = info.unsupported(scene, variant)) {
+    result.status = Status::Unsupported;
+    result.message = *why;
+    return result;
+  }
+  const int every = options.every_steps > 0 ? options.every_steps : scene.probe_every_steps();
+
+  // first run: the trajectory, and a warm-up for the timed repeats
+  {
+    auto engine = info.create(variant);
+    engine->load(scene);
+    const Pass pass = run_once(*engine, scene, result.trajectory.bodies, every, options.explosion_distance,
+                               &result.trajectory);
+    if (pass.exploded) {
+      std::ostringstream why;
+      why << "non-finite or runaway state at t = " << pass.explosion_time << " s";
+      result.status = Status::Exploded;
+      result.message = why.str();
+      result.wall_seconds.push_back(pass.stepping_seconds);
+      return result;
+    }
+    if (pass.stepping_seconds >= options.timing_budget) {
+      result.wall_seconds.push_back(pass.stepping_seconds);
+      return result;
+    }
+  }
+
+  // timed repeats, each on a freshly built world
+  double measured = 0.0;
+  while (static_cast<int>(result.wall_seconds.size()) < options.max_timed_repeats &&
+         (static_cast<int>(result.wall_seconds.size()) < options.min_timed_repeats || measured < options.timing_budget)) {
+    auto engine = info.create(variant);
+    engine->load(scene);
+    const Pass pass = run_once(*engine, scene, result.trajectory.bodies, every, options.explosion_distance, nullptr);
+    result.wall_seconds.push_back(pass.stepping_seconds);
+    measured += pass.stepping_seconds;
+  }
+  return result;
+}
+
+}  // namespace physbench

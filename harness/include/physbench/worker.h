@@ -1,0 +1,27 @@
+// The worker: one (scene, engine, variant) job in its own process, result as JSON.
+#pragma once
+
+#include <nlohmann/json.hpp>
+#include <string>
+
+#include "physbench/simulate.h"
+
+namespace physbench {
+
+nlohmann::json result_to_json(const RunResult& result);
+RunResult result_from_json(const nlohmann::json& document);
+
+struct WorkerJob {
+  std::string scene_path;
+  std::string engine;
+  std::string variant;
+  int every_steps = 0;
+  double timing_budget = 0.3;
+  std::string out_path;
+};
+
+// Runs the job with the engines linked into this executable and writes out_path.
+// Returns the process exit code: 0 whenever a result (of any status) was written.
+int run_worker(const WorkerJob& job);
+
+}  // namespace physbench

@@ -1,0 +1,436 @@
+#include "physbench/runner.h"
+
+#include <sys/utsname.h>
+#include <unistd.h>
+
+#include <algorithm>
+#include <chrono>
+#include <cmath>
+#include <ctime>
+#include <fstream>
+#include <iomanip>
+#include <iostream>
+#include <map>
+#include <sstream>
+
+#include "physbench/metrics.h"
+#include "physbench/process.h"
+#include "physbench/registry.h"
+#include "physbench/scenarios.h"
+#include "physbench/scene_json.h"
+#include "physbench/worker.h"
+
+#ifndef PHYSBENCH_BUILD_INFO
+#define PHYSBENCH_BUILD_INFO "unknown"
+#endif
+#ifndef PHYSBENCH_SOURCE_DIR
+#define PHYSBENCH_SOURCE_DIR "."
+#endif
+
+namespace physbench {
+
+namespace fs = std::filesystem;
+using nlohmann::json;
+
+std::vector<EngineVariant> engine_catalog(const fs::path& self) {
+  std::vector<EngineVariant> catalog;
+  for (const EngineInfo& info : linked_engines())
+    for (const std::string& v : info.variants) catalog.push_back({info.name, v, info.version, self});
+#ifdef PHYSBENCH_HAVE_BULLET64
+  // the double-precision Bullet build lives in its own executable beside this one
+  for (std::size_t i = 0; i < catalog.size(); ++i)
+    if (catalog[i].engine == "bullet") {
+      catalog.insert(catalog.begin() + i + 1,
+                     {"bullet", "double", catalog[i].version, self.parent_path() / "physbench-bullet64"});
+      break;
+    }
+#endif
+  return catalog;
+}
+
+namespace {
+
+// ---- small helpers --------------------------------------------------------------------------
+
+std::string csv_field(const std::string& text) {
+  if (text.find_first_of(",\"\n") == std::string::npos) return text;
+  std::string quoted = "\"";
+  for (char c : text) quoted += (c == '"') ? std::string("\"\"") : std::string(1, c == '\n' ? ' ' : c);
+  return quoted + "\"";
+}
+
+std::string number(double value) {
+  if (!std::isfinite(value)) return std::isnan(value) ? "" : (value > 0 ? "inf" : "-inf");
+  std::ostringstream out;
+  out << std::setprecision(9) << value;
+  return out.str();
+}
+
+double median(std::vector<double> values) {
+  if (values.empty()) return std::nan("");
+  std::sort(values.begin(), values.end());
+  const std::size_t n = values.size();
+  return n % 2 ? values[n / 2] : 0.5 * (values[n / 2 - 1] + values[n / 2]);
+}
+
+std::string read_first_line(const std::string& command) {
+  std::string line;
+  if (FILE* pipe = popen(command.c_str(), "r")) {
+    char buffer[512];
+    if (fgets(buffer, sizeof buffer, pipe)) line = buffer;
+    pclose(pipe);
+  }
+  while (!line.empty() && (line.back() == '\n' || line.back() == '\r')) line.pop_back();
+  return line;
+}
+
+std::string cpu_model() {
+  std::ifstream in("/proc/cpuinfo");
+  for (std::string line; std::getline(in, line);)
+    if (line.rfind("model name", 0) == 0) return line.substr(line.find(':') + 2);
+  return "unknown";
+}
+
+std::string timestamp_utc() {
+  const std::time_t now = std::time(nullptr);
+  char text[32];
+  std::strftime(text, sizeof text, "%Y-%m-%dT%H:%M:%SZ", std::gmtime(&now));
+  return text;
+}
+
+bool selected(const std::vector<std::string>& filter, const std::string& name) {
+  return filter.empty() || std::find(filter.begin(), filter.end(), name) != filter.end();
+}
+
+std::string safe_name(std::string s) {
+  for (char& c : s)
+    if (!std::isalnum(static_cast<unsigned char>(c)) && c != '-' && c != '.') c = '_';
+  return s;
+}
+
+// ---- one job in its own process ----------------------------------------------------------------
+
+struct JobPaths {
+  fs::path scene, result, log;
+};
+
+RunResult run_job(const EngineVariant& ev, const JobPaths& paths, int every_steps, double timing_budget,
+                  double timeout) {
+  const std::vector<std::string> argv = {ev.host.string(), "worker", "--scene", paths.scene.string(),
+                                         "--engine", ev.engine, "--variant", ev.variant,
+                                         "--every", std::to_string(every_steps), "--budget",
+                                         number(timing_budget), "--out", paths.result.string()};
+  fs::remove(paths.result);
+  const ChildOutcome outcome = run_child(argv, paths.log.string(), timeout);
+  RunResult result;
+  result.engine_version = ev.version;
+  if (outcome.kind == ChildOutcome::Kind::Exited && outcome.exit_code == 0 && fs::exists(paths.result)) {
+    std::ifstream in(paths.result);
+    try {
+      return result_from_json(json::parse(in));
+    } catch (const std::exception& e) {
+      result.status = Status::Error;
+      result.message = std::string("unreadable worker result: ") + e.what();
+      return result;
+    }
+  }
+  switch (outcome.kind) {
+    case ChildOutcome::Kind::TimedOut: result.status = Status::Timeout; break;
+    case ChildOutcome::Kind::Signalled: result.status = Status::Crashed; break;
+    default: result.status = Status::Error; break;
+  }
+  result.message = outcome.describe();
+  const std::string tail = tail_of_file(paths.log.string(), 3);
+  if (!tail.empty()) result.message += ": " + tail;
+  return result;
+}
+
+// ---- the results folder -------------------------------------------------------------------------
+
+const std::vector<std::string> kColumns = {
+    "scenario", "engine", "variant", "status", "dt", "duration", "steps", "bodies", "repeats",
+    "wall_s_median", "steps_per_s", "steps_per_s_min", "steps_per_s_max", "body_steps_per_s", "realtime_factor",
+    "position_err_rms", "position_err_max", "position_err_final",
+    "orientation_err_rms", "orientation_err_max", "orientation_err_final",
+    "energy_drift_max", "energy_drift_final", "linear_momentum_drift_max", "linear_momentum_drift_final",
+    "angular_momentum_drift_max", "angular_momentum_drift_final",
+    "reference", "reference_self_error", "trajectory", "message"};
+
+void write_trajectory_csv(const fs::path& path, const Trajectory& run, const ErrorSeries& series) {
+  std::ofstream out(path);
+  out << "time,body,px,py,pz,qw,qx,qy,qz,vx,vy,vz,wx,wy,wz,position_err,orientation_err,energy_drift,"
+         "linear_momentum_drift,angular_momentum_drift\n";
+  auto at = [](const std::vector<double>& v, std::size_t k) { return k < v.size() ? number(v[k]) : std::string(); };
+  for (std::size_t k = 0; k < run.samples.size(); ++k) {
+    const Sample& s = run.samples[k];
+    for (std::size_t b = 0; b < s.bodies.size(); ++b) {
+      const BodyState& st = s.bodies[b];
+      out << number(s.time) << ',' << run.bodies[b];
+      for (int i = 0; i < 3; ++i) out << ',' << number(st.position[i]);
+      out << ',' << number(st.orientation.w());
+      for (int i = 0; i < 3; ++i) out << ',' << number(st.orientation.vec()[i]);
+      for (int i = 0; i < 3; ++i) out << ',' << number(st.linear_velocity[i]);
+      for (int i = 0; i < 3; ++i) out << ',' << number(st.angular_velocity[i]);
+      // the error series are per sample (worst body), repeated on each body's row
+      out << ',' << at(series.position_error, k) << ',' << at(series.orientation_error, k) << ','
+          << at(series.energy_drift, k) << ',' << at(series.linear_momentum_drift, k) << ','
+          << at(series.angular_momentum_drift, k) << '\n';
+    }
+  }
+}
+
+struct ReferenceRun {
+  bool available = false;
+  std::string failure;
+  Trajectory trajectory;     // converged: the dt/divisor run
+  double self_error = std::nan("");  // converged: difference to the dt/(2·divisor) run
+};
+
+struct PreparedScene {
+  Scene scene;
+  std::string question;
+  fs::path file;
+};
+
+}  // namespace
+
+int run_suite(const RunOptions& options, const fs::path& self) {
+  // ---- check every name before running anything
+  const std::vector<EngineVariant> catalog = engine_catalog(self);
+  auto known_engines = [&] {
+    std::string names;
+    for (const EngineVariant& ev : catalog)
+      if (names.find(ev.engine) == std::string::npos) names += (names.empty() ? "" : ", ") + ev.engine;
+    return names;
+  };
+  for (const std::string& e : options.engines)
+    if (std::none_of(catalog.begin(), catalog.end(), [&](const EngineVariant& ev) { return ev.engine == e; }))
+      throw RunError("unknown engine '" + e + "' (this build has: " + known_engines() + ")");
+  for (const std::string& v : options.variants)
+    if (std::none_of(catalog.begin(), catalog.end(), [&](const EngineVariant& ev) { return ev.variant == v; }))
+      throw RunError("unknown variant '" + v + "' (see `physbench list`)");
+
+  std::vector<PreparedScene> scenes;
+  std::vector<std::string> wanted = options.scenarios;
+  if (wanted.empty() && options.scene_files.empty())
+    for (const Scenario& s : physbench::scenarios()) wanted.push_back(s.name);
+  for (const std::string& name : wanted) {
+    const Scenario* scenario = find_scenario(name);
+    if (!scenario) {
+      std::string names;
+      for (const Scenario& s : physbench::scenarios()) names += (names.empty() ? "" : ", ") + s.name;
+      throw RunError("unknown scenario '" + name + "' (built in: " + names + ")");
+    }
+    scenes.push_back({scenario->build(), scenario->question, {}});
+  }
+  for (const std::string& file : options.scene_files) {
+    try {
+      scenes.push_back({load_scene_file(file), "scene file " + file, {}});
+    } catch (const SceneError& e) {
+      throw RunError(e.what());
+    }
+  }
+  for (PreparedScene& p : scenes) {
+    if (options.dt) p.scene.dt = *options.dt;
+    if (options.duration) p.scene.duration = *options.duration;
+    try {
+      validate(p.scene);
+    } catch (const SceneError& e) {
+      throw RunError(p.scene.name + " with the overrides given: " + e.what());
+    }
+  }
+
+  std::vector<EngineVariant> jobs_engines;
+  for (const EngineVariant& ev : catalog)
+    if (selected(options.engines, ev.engine) && selected(options.variants, ev.variant)) jobs_engines.push_back(ev);
+  if (jobs_engines.empty()) throw RunError("no engine variant matches the filters given");
+
+  // ---- the results folder; results.csv appears only when complete
+  const fs::path out = options.out;
+  fs::create_directories(out / "scenes");
+  fs::create_directories(out / "trajectories");
+  const fs::path work = out / ".work";
+  fs::create_directories(work);
+  std::ofstream csv(out / "results.csv.partial");
+  for (std::size_t i = 0; i < kColumns.size(); ++i) csv << (i ? "," : "") << kColumns[i];
+  csv << '\n';
+
+  json metadata;
+  metadata["created"] = timestamp_utc();
+  metadata["command"] = options.command_line;
+  metadata["git_commit"] = read_first_line(std::string("git -C '") + PHYSBENCH_SOURCE_DIR + "' rev-parse HEAD 2>/dev/null");
+  utsname uts{};
+  uname(&uts);
+  metadata["machine"] = {{"cpu", cpu_model()},
+                         {"logical_cores", sysconf(_SC_NPROCESSORS_ONLN)},
+                         {"memory_gib", std::round(double(sysconf(_SC_PHYS_PAGES)) * double(sysconf(_SC_PAGE_SIZE)) / (1 << 30))},
+                         {"os", std::string(uts.sysname) + " " + uts.release},
+                         {"hostname", uts.nodename}};
+  metadata["build"] = PHYSBENCH_BUILD_INFO;
+  metadata["compiler"] = std::string("g++ ") + __VERSION__;
+  metadata["timing"] = {{"budget_s", options.timing_budget},
+                        {"note", "each job: one warm-up run that records the trajectory, then timed repeats on a "
+                                 "fresh world until the budget is spent (at least 3); steps/s is the median"}};
+  metadata["engines"] = json::object();
+  metadata["scenarios"] = json::object();
+
+  int failures = 0;
+  const std::size_t total = scenes.size() * jobs_engines.size();
+  std::size_t done = 0;
+  for (PreparedScene& p : scenes) {
+    const Scene& scene = p.scene;
+    p.file = out / "scenes" / (safe_name(scene.name) + ".json");
+    save_scene_file(scene, p.file.string());
+    const int every = scene.probe_every_steps();
+
+    // ---- the reference this scene compares with
+    ReferenceRun reference;
+    if (scene.reference.kind == ReferenceKind::Converged) {
+      const EngineVariant rtp_rk4{"rtp", "rk4", rtp_engine_info().version, self};
+      std::vector<Trajectory> runs;
+      for (int factor : {1, 2}) {
+        const int divisor = scene.reference.dt_divisor * factor;
+        const Scene fine = refined(scene, divisor);
+        const fs::path file = out / "scenes" / (safe_name(scene.name) + ".reference-dt-over-" + std::to_string(divisor) + ".json");
+        save_scene_file(fine, file.string());
+        std::cerr << "  reference for " << scene.name << ": rtp rk4 at dt/" << divisor << "\n";
+        const RunResult r = run_job(rtp_rk4, {file, work / "reference.json", work / "reference.log"}, every * divisor,
+                                    0.0, options.timeout_seconds);
+        if (r.status != Status::Ok) {
+          reference.failure = "reference run (rtp rk4 at dt/" + std::to_string(divisor) + ") " + to_string(r.status) + ": " + r.message;
+          break;
+        }
+        runs.push_back(r.trajectory);
+      }
+      if (runs.size() == 2) {
+        reference.available = true;
+        reference.trajectory = runs[0];
+        // converged when halving the step once more changes the answer by this little
+        Scene check = scene;
+        check.probe.metrics = {Metric::Position, Metric::Orientation};
+        const ErrorSummary self_check = summarise(compare(check, runs[0], &runs[1]));
+        reference.self_error = std::max(self_check.position->max, self_check.orientation->max);
+      }
+    }
+    metadata["scenarios"][scene.name] = {{"description", scene.description},
+                                         {"question", p.question},
+                                         {"dt", scene.dt},
+                                         {"duration", scene.duration},
+                                         {"planar", scene.planar},
+                                         {"reference", to_string(scene.reference.kind)},
+                                         {"reference_dt_divisor", scene.reference.dt_divisor},
+                                         {"reference_self_error", reference.self_error},
+                                         {"scene_file", fs::relative(p.file, out).string()}};
+
+    int dynamic_bodies = 0;
+    for (const BodySpec& b : scene.bodies) dynamic_bodies += b.mass > 0.0;
+
+    for (const EngineVariant& ev : jobs_engines) {
+      ++done;
+      const std::string job = safe_name(scene.name + "__" + ev.engine + "__" + ev.variant);
+      std::cerr << "[" << done << "/" << total << "] " << scene.name << "  " << ev.engine << "/" << ev.variant << " ... " << std::flush;
+      RunResult r = run_job(ev, {p.file, work / (job + ".json"), work / (job + ".log")}, every, options.timing_budget,
+                            options.timeout_seconds);
+
+      json& engine_meta = metadata["engines"][ev.engine];
+      if (r.status != Status::Unsupported && r.status != Status::Crashed && r.status != Status::Timeout) {
+        engine_meta["version"] = r.engine_version;
+        json settings = json::array();
+        for (const Setting& s : r.settings) settings.push_back({{"name", s.name}, {"value", s.value}, {"why", s.why}});
+        engine_meta["variants"][ev.variant] = settings;
+      }
+
+      std::map<std::string, std::string> row;
+      row["scenario"] = scene.name;
+      row["engine"] = ev.engine;
+      row["variant"] = ev.variant;
+      row["dt"] = number(scene.dt);
+      row["duration"] = number(scene.duration);
+      row["steps"] = std::to_string(scene.step_count());
+      row["bodies"] = std::to_string(dynamic_bodies);
+      row["reference"] = to_string(scene.reference.kind);
+      row["reference_self_error"] = number(reference.self_error);
+      std::string message = r.message;
+
+      if (r.status == Status::Ok || r.status == Status::Exploded) {
+        if (!r.wall_seconds.empty()) {
+          const double wall = median(r.wall_seconds);
+          const double steps = static_cast<double>(r.steps);
+          const auto [lo, hi] = std::minmax_element(r.wall_seconds.begin(), r.wall_seconds.end());
+          row["repeats"] = std::to_string(r.wall_seconds.size());
+          row["wall_s_median"] = number(wall);
+          row["steps_per_s"] = number(steps / wall);
+          row["steps_per_s_min"] = number(steps / *hi);
+          row["steps_per_s_max"] = number(steps / *lo);
+          row["body_steps_per_s"] = number(steps * dynamic_bodies / wall);
+          row["realtime_factor"] = number(scene.duration / wall);
+          if (r.status == Status::Exploded) {
+            // the run stopped early: its speed is not comparable
+            for (const char* key : {"steps_per_s", "steps_per_s_min", "steps_per_s_max", "body_steps_per_s", "realtime_factor"})
+              row[key] = "";
+          }
+        }
+        try {
+          Trajectory ballistic;
+          const Trajectory* against = nullptr;
+          if (scene.reference.kind == ReferenceKind::Ballistic) {
+            ballistic = ballistic_reference(scene, r.trajectory);
+            against = &ballistic;
+          } else if (scene.reference.kind == ReferenceKind::Converged) {
+            if (reference.available) against = &reference.trajectory;
+            else message += (message.empty() ? "" : "; ") + reference.failure;
+          }
+          Scene measured = scene;
+          if (!against) {
+            // without a reference only the invariants can be judged
+            std::erase_if(measured.probe.metrics, [](Metric m) { return m == Metric::Position || m == Metric::Orientation; });
+          }
+          const ErrorSeries series = compare(measured, r.trajectory, against);
+          const ErrorSummary summary = summarise(series);
+          auto put = [&](const char* prefix, const std::optional<SeriesSummary>& s, bool with_rms) {
+            if (!s) return;
+            if (with_rms) row[std::string(prefix) + "_rms"] = number(s->rms);
+            row[std::string(prefix) + "_max"] = number(s->max);
+            row[std::string(prefix) + "_final"] = number(s->final);
+          };
+          put("position_err", summary.position, true);
+          put("orientation_err", summary.orientation, true);
+          put("energy_drift", summary.energy, false);
+          put("linear_momentum_drift", summary.linear_momentum, false);
+          put("angular_momentum_drift", summary.angular_momentum, false);
+          const fs::path trajectory = out / "trajectories" / (job + ".csv");
+          write_trajectory_csv(trajectory, r.trajectory, series);
+          row["trajectory"] = fs::relative(trajectory, out).string();
+        } catch (const std::exception& e) {
+          message += (message.empty() ? "" : "; ") + std::string("metrics failed: ") + e.what();
+        }
+      }
+      if (r.status == Status::Crashed || r.status == Status::Timeout || r.status == Status::Error) ++failures;
+      row["status"] = to_string(r.status);
+      row["message"] = message;
+      for (std::size_t i = 0; i < kColumns.size(); ++i) csv << (i ? "," : "") << csv_field(row[kColumns[i]]);
+      csv << '\n';
+
+      std::cerr << row["status"];
+      if (!row["steps_per_s"].empty()) std::cerr << "  " << row["steps_per_s"] << " steps/s";
+      if (!row["position_err_max"].empty()) std::cerr << "  pos err max " << row["position_err_max"] << " m";
+      if (!row["orientation_err_max"].empty()) std::cerr << "  orient err max " << row["orientation_err_max"] << " rad";
+      if (!row["energy_drift_max"].empty()) std::cerr << "  energy drift " << row["energy_drift_max"];
+      if (r.status != Status::Ok) std::cerr << "  (" << message << ")";
+      std::cerr << '\n';
+    }
+  }
+
+  csv.close();
+  if (!csv) throw RunError("cannot write " + (out / "results.csv").string());
+  {
+    std::ofstream meta(out / "metadata.json.partial");
+    meta << metadata.dump(2) << '\n';
+  }
+  fs::rename(out / "metadata.json.partial", out / "metadata.json");
+  fs::rename(out / "results.csv.partial", out / "results.csv");
+  fs::remove_all(work);
+  return failures;
+}
+
+}  // namespace physbench

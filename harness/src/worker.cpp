@@ -1,0 +1,106 @@
+#include "physbench/worker.h"
+
+#include <filesystem>
+#include <fstream>
+#include <iostream>
+
+#include "physbench/registry.h"
+#include "physbench/scene_json.h"
+
+namespace physbench {
+
+using nlohmann::json;
+
+json result_to_json(const RunResult& r) {
+  json doc;
+  doc["status"] = to_string(r.status);
+  doc["message"] = r.message;
+  doc["engine_version"] = r.engine_version;
+  doc["settings"] = json::array();
+  for (const Setting& s : r.settings) doc["settings"].push_back({{"name", s.name}, {"value", s.value}, {"why", s.why}});
+  doc["steps"] = r.steps;
+  doc["wall_seconds"] = r.wall_seconds;
+  doc["bodies"] = r.trajectory.bodies;
+  // one row per sample: time, then 13 numbers per body (position, quaternion wxyz, velocity, angular velocity)
+  json samples = json::array();
+  for (const Sample& s : r.trajectory.samples) {
+    json row = json::array({s.time});
+    for (const BodyState& b : s.bodies) {
+      for (int k = 0; k < 3; ++k) row.push_back(b.position[k]);
+      row.push_back(b.orientation.w());
+      for (int k = 0; k < 3; ++k) row.push_back(b.orientation.vec()[k]);
+      for (int k = 0; k < 3; ++k) row.push_back(b.linear_velocity[k]);
+      for (int k = 0; k < 3; ++k) row.push_back(b.angular_velocity[k]);
+    }
+    samples.push_back(std::move(row));
+  }
+  doc["samples"] = std::move(samples);
+  return doc;
+}
+
+namespace {
+// JSON has no NaN: nlohmann writes null for it, and null reads back as NaN here
+double number_or_nan(const json& v) { return v.is_number() ? v.get<double>() : std::nan(""); }
+}  // namespace
+
+RunResult result_from_json(const json& doc) {
+  RunResult r;
+  r.status = status_from_string(doc.at("status").get<std::string>());
+  r.message = doc.at("message").get<std::string>();
+  r.engine_version = doc.at("engine_version").get<std::string>();
+  for (const json& s : doc.at("settings"))
+    r.settings.push_back({s.at("name").get<std::string>(), s.at("value").get<std::string>(), s.at("why").get<std::string>()});
+  r.steps = doc.at("steps").get<long>();
+  r.wall_seconds = doc.at("wall_seconds").get<std::vector<double>>();
+  r.trajectory.bodies = doc.at("bodies").get<std::vector<int>>();
+  for (const json& row : doc.at("samples")) {
+    Sample s;
+    s.time = row.at(0).get<double>();
+    for (std::size_t b = 0; b < r.trajectory.bodies.size(); ++b) {
+      const std::size_t o = 1 + 13 * b;
+      auto at = [&](std::size_t k) { return number_or_nan(row.at(o + k)); };
+      BodyState state;
+      state.position = Vec3(at(0), at(1), at(2));
+      state.orientation = Quat(at(3), at(4), at(5), at(6));
+      state.linear_velocity = Vec3(at(7), at(8), at(9));
+      state.angular_velocity = Vec3(at(10), at(11), at(12));
+      s.bodies.push_back(state);
+    }
+    r.trajectory.samples.push_back(std::move(s));
+  }
+  return r;
+}
+
+int run_worker(const WorkerJob& job) {
+  RunResult result;
+  try {
+    const Scene scene = load_scene_file(job.scene_path);
+    const EngineInfo* engine = find_linked_engine(job.engine);
+    if (!engine) {
+      result.status = Status::Error;
+      result.message = "engine '" + job.engine + "' is not linked into this executable";
+    } else {
+      SimulateOptions options;
+      options.every_steps = job.every_steps;
+      options.timing_budget = job.timing_budget;
+      result = simulate(*engine, job.variant, scene, options);
+    }
+  } catch (const std::exception& e) {
+    // an engine that throws is an error row; one that crashes is caught by the parent
+    result.status = Status::Error;
+    result.message = e.what();
+  }
+  const std::string partial = job.out_path + ".partial";
+  {
+    std::ofstream out(partial);
+    out << result_to_json(result).dump();
+    if (!out) {
+      std::cerr << "worker: cannot write " << partial << '\n';
+      return 3;
+    }
+  }
+  std::filesystem::rename(partial, job.out_path);
+  return 0;
+}
+
+}  // namespace physbench

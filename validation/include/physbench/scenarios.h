@@ -1,0 +1,27 @@
+// Built-in scenarios: parameterised scene generators and the question each answers.
+// Tests, benchmarks and reports build their scenes from here, and only from here.
+#pragma once
+
+#include <functional>
+#include <string>
+#include <vector>
+
+#include "physbench/scene.h"
+
+namespace physbench {
+
+struct Scenario {
+  std::string name;
+  std::string question;  // what the scenario answers, for `physbench list` and the report
+  std::function<Scene()> build;
+};
+
+const std::vector<Scenario>& scenarios();
+const Scenario* find_scenario(const std::string& name);
+
+// the scenes themselves, for callers that want to change a parameter
+Scene projectile_scene();
+Scene projectile_planar_scene();
+Scene tumbling_box_scene();
+
+}  // namespace physbench

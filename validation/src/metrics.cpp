@@ -1,0 +1,154 @@
+#include "physbench/metrics.h"
+
+#include <cmath>
+#include <stdexcept>
+
+namespace physbench {
+
+namespace {
+
+struct Invariants {
+  double energy = 0.0, kinetic = 0.0;
+  Vec3 linear_momentum = Vec3::Zero(), angular_momentum = Vec3::Zero();
+};
+
+Invariants invariants_of(const Scene& scene, const std::vector<int>& bodies, const Sample& sample) {
+  Invariants inv;
+  std::vector<const BodyState*> state_of(scene.bodies.size(), nullptr);
+  for (std::size_t i = 0; i < bodies.size(); ++i) {
+    const BodySpec& spec = scene.bodies[bodies[i]];
+    const BodyState& s = sample.bodies[i];
+    state_of[bodies[i]] = &s;
+    if (spec.mass == 0.0) continue;
+    const Mat3 rotation = s.orientation.normalized().toRotationMatrix();
+    const Mat3 inertia_world =
+        rotation * principal_inertia(spec.shape, spec.mass).asDiagonal() * rotation.transpose();
+    const Vec3 spin_momentum = inertia_world * s.angular_velocity;
+    const double kinetic = 0.5 * spec.mass * s.linear_velocity.squaredNorm() + 0.5 * s.angular_velocity.dot(spin_momentum);
+    inv.kinetic += kinetic;
+    inv.energy += kinetic - spec.mass * scene.gravity.dot(s.position);
+    inv.linear_momentum += spec.mass * s.linear_velocity;
+    inv.angular_momentum += spin_momentum + s.position.cross(spec.mass * s.linear_velocity);
+  }
+  // spring potential, for springs whose moving ends are all probed
+  for (const SpringSpec& spring : scene.springs) {
+    const BodyState* a = state_of[spring.body_a];
+    if (!a) continue;
+    const Vec3 pa = a->position + a->orientation * spring.local_point_a;
+    Vec3 pb = spring.point_b;
+    if (spring.body_b >= 0) {
+      const BodyState* b = state_of[spring.body_b];
+      if (!b) continue;
+      pb = b->position + b->orientation * spring.point_b;
+    }
+    const double extension = (pa - pb).norm() - spring.rest_length;
+    inv.energy += 0.5 * spring.stiffness * extension * extension;
+  }
+  return inv;
+}
+
+bool wants(const Scene& scene, Metric metric) {
+  for (Metric m : scene.probe.metrics)
+    if (m == metric) return true;
+  return false;
+}
+
+SeriesSummary summary_of(const std::vector<double>& values) {
+  SeriesSummary s;
+  double squares = 0.0;
+  for (double v : values) {
+    squares += v * v;
+    s.max = std::max(s.max, v);
+    if (std::isnan(v)) s.max = v;
+  }
+  s.rms = std::sqrt(squares / static_cast<double>(values.size()));
+  s.final = values.back();
+  return s;
+}
+
+}  // namespace
+
+double orientation_angle(const Quat& a, const Quat& b) {
+  const Quat relative = a.normalized().conjugate() * b.normalized();
+  // robust near zero, unlike 2 acos(w); |w| takes the shorter of q and −q
+  return 2.0 * std::atan2(relative.vec().norm(), std::abs(relative.w()));
+}
+
+ErrorSeries compare(const Scene& scene, const Trajectory& run, const Trajectory* reference) {
+  const bool position = wants(scene, Metric::Position);
+  const bool orientation = wants(scene, Metric::Orientation);
+  if ((position || orientation) && !reference) throw std::invalid_argument("compare: the scene needs a reference");
+  if (reference && reference->samples.size() < run.samples.size())
+    throw std::invalid_argument("compare: the reference has fewer samples than the run");
+
+  ErrorSeries series;
+  if (run.samples.empty()) return series;
+  const Invariants initial = invariants_of(scene, run.bodies, run.samples.front());
+  const double energy_scale = initial.kinetic > 0.0 ? initial.kinetic : 1.0;
+  const double angular_scale = initial.angular_momentum.norm() > 0.0 ? initial.angular_momentum.norm() : 1.0;
+
+  for (std::size_t k = 0; k < run.samples.size(); ++k) {
+    const Sample& s = run.samples[k];
+    series.time.push_back(s.time);
+    if (position || orientation) {
+      const Sample& r = reference->samples[k];
+      if (std::abs(r.time - s.time) > 1e-9 * std::max(1.0, s.time))
+        throw std::invalid_argument("compare: sample times differ from the reference's");
+      double worst_position = 0.0, worst_orientation = 0.0;
+      for (std::size_t b = 0; b < s.bodies.size(); ++b) {
+        worst_position = std::max(worst_position, (s.bodies[b].position - r.bodies[b].position).norm());
+        worst_orientation = std::max(worst_orientation, orientation_angle(r.bodies[b].orientation, s.bodies[b].orientation));
+      }
+      if (position) series.position_error.push_back(worst_position);
+      if (orientation) series.orientation_error.push_back(worst_orientation);
+    }
+    const Invariants now = invariants_of(scene, run.bodies, s);
+    if (wants(scene, Metric::Energy)) series.energy_drift.push_back(std::abs(now.energy - initial.energy) / energy_scale);
+    if (wants(scene, Metric::LinearMomentum))
+      series.linear_momentum_drift.push_back((now.linear_momentum - initial.linear_momentum).norm());
+    if (wants(scene, Metric::AngularMomentum))
+      series.angular_momentum_drift.push_back((now.angular_momentum - initial.angular_momentum).norm() / angular_scale);
+  }
+  return series;
+}
+
+ErrorSummary summarise(const ErrorSeries& series) {
+  ErrorSummary summary;
+  if (!series.position_error.empty()) summary.position = summary_of(series.position_error);
+  if (!series.orientation_error.empty()) summary.orientation = summary_of(series.orientation_error);
+  if (!series.energy_drift.empty()) summary.energy = summary_of(series.energy_drift);
+  if (!series.linear_momentum_drift.empty()) summary.linear_momentum = summary_of(series.linear_momentum_drift);
+  if (!series.angular_momentum_drift.empty()) summary.angular_momentum = summary_of(series.angular_momentum_drift);
+  return summary;
+}
+
+Trajectory ballistic_reference(const Scene& scene, const Trajectory& sampled_at) {
+  Trajectory reference;
+  reference.bodies = sampled_at.bodies;
+  for (const Sample& at : sampled_at.samples) {
+    Sample s;
+    s.time = at.time;
+    for (int index : sampled_at.bodies) {
+      const BodySpec& b = scene.bodies[index];
+      BodyState state;
+      if (b.mass > 0.0) {
+        state.position = b.position + b.linear_velocity * at.time + 0.5 * scene.gravity * at.time * at.time;
+        state.linear_velocity = b.linear_velocity + scene.gravity * at.time;
+      } else {
+        state.position = b.position;
+      }
+      state.orientation = b.orientation;  // not part of the closed form: the scene asks no orientation metric
+      s.bodies.push_back(state);
+    }
+    reference.samples.push_back(std::move(s));
+  }
+  return reference;
+}
+
+Scene refined(const Scene& scene, int divisor) {
+  Scene fine = scene;
+  fine.dt = scene.dt / divisor;
+  return fine;
+}
+
+}  // namespace physbench
