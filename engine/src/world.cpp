@@ -15,8 +15,14 @@ double seconds_since(Clock::time_point start) {
 
 Vec3 derived_velocity(const BodyState& s, const BodyMass& m) { return s.linear_momentum * m.inverse_mass; }
 
+// Runge-Kutta stages carry quaternions off the unit sphere by O((ω h)²); the rotation they
+// stand for is that of the normalised quaternion, and using the raw one would cost RK4 its order
 Vec3 derived_angular_velocity(const BodyState& s, const BodyMass& m) {
-  return world_inverse_inertia(s.orientation, m.inverse_inertia_body) * s.angular_momentum;
+  return world_inverse_inertia(s.orientation.normalized(), m.inverse_inertia_body) * s.angular_momentum;
+}
+
+Vec3 world_point(const BodyState& s, const Vec3& local_point) {
+  return s.position + s.orientation.normalized() * local_point;
 }
 
 }  // namespace
@@ -103,14 +109,14 @@ void World::evaluate(const std::vector<BodyState>& states, std::vector<BodyRate>
   // springs: Hooke plus damping along the line, torque r × F on each end
   for (const SpringDef& spring : springs_) {
     const BodyState& a = states[spring.body_a];
-    const Vec3 point_a = a.position + a.orientation * spring.local_point_a;
+    const Vec3 point_a = world_point(a, spring.local_point_a);
     const Vec3 velocity_a = rates[spring.body_a].velocity +
                             derived_angular_velocity(a, masses_[spring.body_a]).cross(point_a - a.position);
     Vec3 point_b = spring.point_b;
     Vec3 velocity_b = Vec3::Zero();
     if (spring.body_b != kWorldAnchor) {
       const BodyState& b = states[spring.body_b];
-      point_b = b.position + b.orientation * spring.point_b;
+      point_b = world_point(b, spring.point_b);
       velocity_b = rates[spring.body_b].velocity +
                    derived_angular_velocity(b, masses_[spring.body_b]).cross(point_b - b.position);
     }
@@ -218,11 +224,11 @@ double World::mechanical_energy() const {
   }
   for (const SpringDef& spring : springs_) {
     const BodyState& a = states_[spring.body_a];
-    const Vec3 point_a = a.position + a.orientation * spring.local_point_a;
+    const Vec3 point_a = world_point(a, spring.local_point_a);
     Vec3 point_b = spring.point_b;
     if (spring.body_b != kWorldAnchor) {
       const BodyState& b = states_[spring.body_b];
-      point_b = b.position + b.orientation * spring.point_b;
+      point_b = world_point(b, spring.point_b);
     }
     const double extension = (point_a - point_b).norm() - spring.rest_length;
     energy += 0.5 * spring.stiffness * extension * extension;

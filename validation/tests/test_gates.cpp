@@ -1,0 +1,98 @@
+// Accuracy gates: rtp's error on gated scenarios may not rise past its baselines
+// (validation/baselines/rtp.json), and the references themselves must be converged.
+#include <gtest/gtest.h>
+
+#include <fstream>
+#include <nlohmann/json.hpp>
+
+#include "physbench/scenarios.h"
+#include "support.h"
+
+namespace {
+
+using namespace physbench;
+using physbench::testing::measure;
+
+std::optional<double> metric_value(const ErrorSummary& s, const std::string& metric) {
+  auto pick = [](const std::optional<SeriesSummary>& series, const std::string& part) -> std::optional<double> {
+    if (!series) return std::nullopt;
+    if (part == "rms") return series->rms;
+    if (part == "max") return series->max;
+    return series->final;
+  };
+  const auto cut = metric.rfind('_');
+  const std::string series = metric.substr(0, cut), part = metric.substr(cut + 1);
+  if (series == "position_err") return pick(s.position, part);
+  if (series == "orientation_err") return pick(s.orientation, part);
+  if (series == "energy_drift") return pick(s.energy, part);
+  if (series == "linear_momentum_drift") return pick(s.linear_momentum, part);
+  if (series == "angular_momentum_drift") return pick(s.angular_momentum, part);
+  return std::nullopt;
+}
+
+TEST(Gates, RtpStaysWithinItsAccuracyBaselines) {
+  std::ifstream in(PHYSBENCH_BASELINES);
+  ASSERT_TRUE(in) << "cannot open " << PHYSBENCH_BASELINES;
+  const nlohmann::json baselines = nlohmann::json::parse(in);
+  ASSERT_FALSE(baselines.at("gates").empty());
+  for (const auto& gate : baselines.at("gates")) {
+    const std::string scenario = gate.at("scenario"), variant = gate.at("variant"), metric = gate.at("metric");
+    const Scenario* s = find_scenario(scenario);
+    ASSERT_NE(s, nullptr) << "baseline names an unknown scenario " << scenario;
+    const auto measured = metric_value(measure("rtp", variant, s->build()).summary, metric);
+    ASSERT_TRUE(measured) << scenario << " does not measure " << metric;
+    const double limit = std::max(gate.at("baseline").get<double>() * gate.at("factor").get<double>(),
+                                  gate.at("floor").get<double>());
+    EXPECT_LE(*measured, limit) << "gate " << scenario << "/rtp/" << variant << " " << metric << ": measured "
+                                << *measured << ", baseline " << gate.at("baseline") << ", limit " << limit;
+  }
+}
+
+TEST(Gates, ProjectileRk4MatchesTheClosedForm) {
+  // the trajectory is a polynomial of degree 2: RK4 is exact up to round-off
+  const auto m = measure("rtp", "rk4", projectile_scene());
+  EXPECT_LT(m.summary.position->max, 1e-10);
+}
+
+TEST(Gates, SemiImplicitEulerLagsByHalfGDtT) {
+  // x_n = x0 + v0 t + ½ g t² + ½ g dt t: the known first-order signature, to round-off
+  const Scene scene = projectile_scene();
+  const auto m = measure("rtp", "euler", scene);
+  const double expected = 0.5 * scene.gravity.norm() * scene.dt * scene.duration;
+  EXPECT_NEAR(m.summary.position->final, expected, 1e-9);
+}
+
+TEST(Gates, TumblingBoxRk4EnergyDriftBelowEulerAndMidpoint) {
+  const Scene scene = tumbling_box_scene();
+  const double rk4 = measure("rtp", "rk4", scene).summary.energy->max;
+  const double midpoint = measure("rtp", "midpoint", scene).summary.energy->max;
+  const double euler = measure("rtp", "euler", scene).summary.energy->max;
+  EXPECT_LT(rk4, 1e-6);
+  EXPECT_LT(rk4, midpoint);
+  EXPECT_LT(midpoint, euler);
+}
+
+TEST(References, TumblingBoxReferenceIsConvergedByHalving) {
+  // the reference at dt/64 and at dt/128 agree far below any engine's error
+  Scene scene = tumbling_box_scene();
+  const Trajectory coarse = physbench::testing::converged_reference(scene, 64);
+  const Trajectory fine = physbench::testing::converged_reference(scene, 128);
+  scene.probe.metrics = {Metric::Orientation};
+  const ErrorSummary difference = summarise(compare(scene, coarse, &fine));
+  EXPECT_LT(difference.orientation->max, 1e-9);
+}
+
+TEST(References, DzhanibekovFlipHappens) {
+  // the scene asks a real question only if the box flips: its long-axis angular velocity
+  // component must reverse sign within the run
+  const Scene scene = tumbling_box_scene();
+  const Trajectory reference = physbench::testing::converged_reference(scene, 64);
+  bool reversed = false;
+  for (const Sample& s : reference.samples) {
+    const Vec3 body_spin = s.bodies[0].orientation.conjugate() * s.bodies[0].angular_velocity;
+    reversed |= body_spin.y() < 0.0;
+  }
+  EXPECT_TRUE(reversed);
+}
+
+}  // namespace

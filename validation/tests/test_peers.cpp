@@ -1,0 +1,108 @@
+// Each peer adapter loads a scene and shows a physical fact about its result. These check the
+// adapters' mapping (frames, units, mass properties), not the peers' quality.
+#include <gtest/gtest.h>
+
+#include "physbench/scenarios.h"
+#include "support.h"
+
+namespace {
+
+using namespace physbench;
+using physbench::testing::measure;
+
+// a projectile with a general orientation and spin: frame conversions have nowhere to hide
+Scene turned_projectile(bool planar) {
+  Scene scene = planar ? projectile_planar_scene() : projectile_scene();
+  scene.bodies[0].orientation =
+      planar ? Quat(Eigen::AngleAxisd(0.8, Vec3::UnitZ())) : Quat(Eigen::AngleAxisd(0.8, Vec3(1, 2, 3).normalized()));
+  return scene;
+}
+
+void expect_initial_state_read_back(const std::string& engine, const std::string& variant, bool planar,
+                                    double tolerance) {
+  const Scene scene = turned_projectile(planar);
+  const RunResult r = measure(engine, variant, scene).run;
+  ASSERT_FALSE(r.trajectory.samples.empty());
+  const BodyState& s = r.trajectory.samples.front().bodies[0];
+  const BodySpec& b = scene.bodies[0];
+  EXPECT_LT((s.position - b.position).norm(), tolerance) << engine;
+  EXPECT_LT(orientation_angle(s.orientation, b.orientation), tolerance) << engine;
+  EXPECT_LT((s.linear_velocity - b.linear_velocity).norm(), tolerance) << engine;
+  EXPECT_LT((s.angular_velocity - b.angular_velocity).norm(), tolerance) << engine;
+}
+
+// semi-implicit Euler under constant gravity ends ½ g dt T behind the parabola
+void expect_semi_implicit_signature(const std::string& engine, const std::string& variant, bool planar,
+                                    double tolerance) {
+  const Scene scene = planar ? projectile_planar_scene() : projectile_scene();
+  const auto m = measure(engine, variant, scene);
+  ASSERT_TRUE(m.summary.position);
+  EXPECT_NEAR(m.summary.position->final, 0.5 * scene.gravity.norm() * scene.dt * scene.duration, tolerance)
+      << engine << "/" << variant;
+}
+
+TEST(Rtp, ReadsBackTheInitialState) { expect_initial_state_read_back("rtp", "rk4", false, 1e-12); }
+
+#ifdef PHYSBENCH_HAVE_BULLET
+TEST(Bullet, ReadsBackTheInitialState) { expect_initial_state_read_back("bullet", "float", false, 1e-6); }
+TEST(Bullet, ProjectileShowsSemiImplicitEuler) { expect_semi_implicit_signature("bullet", "float", false, 1e-4); }
+TEST(Bullet, GyroscopicTorqueIsOnSoTheBoxFlips) {
+  // without the gyroscopic term ω stays constant and the intermediate-axis spin never reverses
+  const auto run = measure("bullet", "float", tumbling_box_scene()).run.trajectory;
+  bool reversed = false;
+  for (const Sample& s : run.samples)
+    reversed |= (s.bodies[0].orientation.conjugate() * s.bodies[0].angular_velocity).y() < 0.0;
+  EXPECT_TRUE(reversed);
+}
+#endif
+
+#ifdef PHYSBENCH_HAVE_ODE
+TEST(Ode, ReadsBackTheInitialState) { expect_initial_state_read_back("ode", "quickstep", false, 1e-12); }
+TEST(Ode, ProjectileShowsSemiImplicitEuler) { expect_semi_implicit_signature("ode", "step", false, 1e-9); }
+TEST(Ode, BothSteppersAgreeOnAFreeBody) {
+  // with no constraints there is nothing for the two solvers to differ on
+  const Scene scene = tumbling_box_scene();
+  const auto quick = measure("ode", "quickstep", scene).run.trajectory;
+  const auto exact = measure("ode", "step", scene).run.trajectory;
+  ASSERT_EQ(quick.samples.size(), exact.samples.size());
+  for (std::size_t k = 0; k < quick.samples.size(); ++k)
+    ASSERT_LT(orientation_angle(quick.samples[k].bodies[0].orientation, exact.samples[k].bodies[0].orientation), 1e-12);
+}
+#endif
+
+#ifdef PHYSBENCH_HAVE_BOX2D
+TEST(Box2d, ReadsBackTheInitialState) { expect_initial_state_read_back("box2d", "default", true, 1e-6); }
+TEST(Box2d, PlanarProjectileShowsSemiImplicitEuler) {
+  expect_semi_implicit_signature("box2d", "default", true, 1e-4);
+}
+TEST(Box2d, SpinIsConstantInFreeFlight) {
+  const Scene scene = projectile_planar_scene();
+  const auto run = measure("box2d", "default", scene).run.trajectory;
+  const BodyState& last = run.samples.back().bodies[0];
+  const double expected = scene.bodies[0].angular_velocity.z() * scene.duration;
+  const double turned = 2.0 * std::atan2(last.orientation.z(), last.orientation.w());
+  EXPECT_NEAR(std::remainder(turned - expected, 2.0 * M_PI), 0.0, 1e-4);
+}
+TEST(Box2d, RefusesA3dScene) {
+  const auto why = physbench::testing::engine("box2d").unsupported(projectile_scene(), "default");
+  ASSERT_TRUE(why);
+  EXPECT_NE(why->find("2D"), std::string::npos);
+}
+#endif
+
+#ifdef PHYSBENCH_HAVE_MUJOCO
+TEST(Mujoco, ReadsBackTheInitialStateIncludingBodyFrameSpin) {
+  expect_initial_state_read_back("mujoco", "euler", false, 1e-12);
+}
+TEST(Mujoco, Rk4ProjectileIsExact) {
+  EXPECT_LT(measure("mujoco", "rk4", projectile_scene()).summary.position->max, 1e-10);
+}
+TEST(Mujoco, EulerProjectileShowsSemiImplicitEuler) {
+  expect_semi_implicit_signature("mujoco", "euler", false, 1e-9);
+}
+TEST(Mujoco, Rk4KeepsTumblingBoxEnergy) {
+  EXPECT_LT(measure("mujoco", "rk4", tumbling_box_scene()).summary.energy->max, 1e-6);
+}
+#endif
+
+}  // namespace
