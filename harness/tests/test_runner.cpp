@@ -1,0 +1,165 @@
+// The physbench command end to end: rows for every engine, isolation of failures, and clear
+// errors with no results file for bad input.
+#include <gtest/gtest.h>
+
+#include <filesystem>
+#include <fstream>
+#include <map>
+#include <sstream>
+
+#include "physbench/process.h"
+
+namespace {
+
+namespace fs = std::filesystem;
+using physbench::ChildOutcome;
+using physbench::run_child;
+using physbench::tail_of_file;
+
+struct Invocation {
+  ChildOutcome outcome;
+  std::string output;  // stdout and stderr together
+};
+
+fs::path fresh_dir(const std::string& name) {
+  const fs::path dir = fs::temp_directory_path() / ("physbench_test_" + name);
+  fs::remove_all(dir);
+  fs::create_directories(dir);
+  return dir;
+}
+
+Invocation physbench(const std::vector<std::string>& args, const fs::path& dir) {
+  std::vector<std::string> argv = {PHYSBENCH_EXE};
+  argv.insert(argv.end(), args.begin(), args.end());
+  const fs::path log = dir / "physbench.log";
+  Invocation inv;
+  inv.outcome = run_child(argv, log.string(), 300.0);
+  std::ifstream in(log);
+  std::stringstream text;
+  text << in.rdbuf();
+  inv.output = text.str();
+  return inv;
+}
+
+// results.csv as rows of column → value
+std::vector<std::map<std::string, std::string>> read_rows(const fs::path& csv) {
+  std::ifstream in(csv);
+  std::vector<std::map<std::string, std::string>> rows;
+  auto split = [](const std::string& line) {
+    std::vector<std::string> fields;
+    std::string field;
+    bool quoted = false;
+    for (std::size_t i = 0; i < line.size(); ++i) {
+      const char c = line[i];
+      if (quoted && c == '"' && i + 1 < line.size() && line[i + 1] == '"') field += '"', ++i;
+      else if (c == '"') quoted = !quoted;
+      else if (c == ',' && !quoted) fields.push_back(field), field.clear();
+      else field += c;
+    }
+    fields.push_back(field);
+    return fields;
+  };
+  std::string line;
+  std::getline(in, line);
+  const auto header = split(line);
+  while (std::getline(in, line)) {
+    const auto fields = split(line);
+    std::map<std::string, std::string> row;
+    for (std::size_t i = 0; i < header.size() && i < fields.size(); ++i) row[header[i]] = fields[i];
+    rows.push_back(row);
+  }
+  return rows;
+}
+
+const std::map<std::string, std::string>* find_row(const std::vector<std::map<std::string, std::string>>& rows,
+                                                    const std::string& engine, const std::string& variant) {
+  for (const auto& r : rows)
+    if (r.at("engine") == engine && r.at("variant") == variant) return &r;
+  return nullptr;
+}
+
+TEST(Runner, ProjectileOnEveryEngineVariant) {
+  const fs::path dir = fresh_dir("all_engines");
+  const Invocation inv = physbench({"run", "--scenario", "projectile-planar", "--budget", "0.01", "--out", (dir / "r").string()}, dir);
+  ASSERT_EQ(inv.outcome.kind, ChildOutcome::Kind::Exited) << inv.output;
+  ASSERT_EQ(inv.outcome.exit_code, 0) << inv.output;
+  const auto rows = read_rows(dir / "r" / "results.csv");
+  for (const auto& [engine, variant] : std::vector<std::pair<std::string, std::string>>{
+           {"rtp", "rk4"}, {"bullet", "float"}, {"bullet", "double"}, {"ode", "quickstep"}, {"box2d", "default"},
+           {"mujoco", "euler"}}) {
+    const auto* row = find_row(rows, engine, variant);
+    ASSERT_NE(row, nullptr) << "no row for " << engine << "/" << variant;
+    EXPECT_EQ(row->at("status"), "ok") << engine << "/" << variant << ": " << row->at("message");
+    EXPECT_GT(std::stod(row->at("steps_per_s")), 0.0);
+    EXPECT_TRUE(fs::exists(dir / "r" / row->at("trajectory")));
+  }
+  // the double-precision build ran in its own process: closer to the closed form than float
+  const double single = std::stod(find_row(rows, "bullet", "float")->at("position_err_final"));
+  const double dbl = std::stod(find_row(rows, "bullet", "double")->at("position_err_final"));
+  const double semi_implicit = 0.5 * 9.81 / 60.0 * 2.5;
+  EXPECT_LT(std::abs(dbl - semi_implicit), 1e-9);
+  EXPECT_GT(std::abs(single - semi_implicit), 1e-7);
+  EXPECT_TRUE(fs::exists(dir / "r" / "metadata.json"));
+  EXPECT_FALSE(fs::exists(dir / "r" / ".work"));
+}
+
+TEST(Runner, UnsupportedSceneIsARowWithItsReason) {
+  const fs::path dir = fresh_dir("unsupported");
+  const Invocation inv = physbench({"run", "-s", "projectile", "-e", "box2d", "--out", (dir / "r").string()}, dir);
+  ASSERT_EQ(inv.outcome.exit_code, 0) << inv.output;
+  const auto rows = read_rows(dir / "r" / "results.csv");
+  ASSERT_EQ(rows.size(), 1u);
+  EXPECT_EQ(rows[0].at("status"), "unsupported");
+  EXPECT_NE(rows[0].at("message").find("not marked planar"), std::string::npos);
+}
+
+TEST(Runner, RunawaySceneIsRecordedAsExploded) {
+  const fs::path dir = fresh_dir("exploded");
+  std::ofstream(dir / "runaway.json") << R"({"name": "runaway", "dt": 0.01, "duration": 1, "collisions": false,
+    "bodies": [{"shape": {"type": "sphere", "radius": 0.1}, "mass": 1, "linear_velocity": [1e8, 0, 0]}],
+    "probe": {"metrics": ["energy"]}})";
+  const Invocation inv =
+      physbench({"run", "--scene", (dir / "runaway.json").string(), "-e", "rtp", "--out", (dir / "r").string()}, dir);
+  ASSERT_EQ(inv.outcome.exit_code, 0) << inv.output;
+  const auto rows = read_rows(dir / "r" / "results.csv");
+  ASSERT_EQ(rows.size(), 3u);  // rk4, midpoint, euler
+  for (const auto& row : rows) {
+    EXPECT_EQ(row.at("status"), "exploded");
+    EXPECT_TRUE(row.at("steps_per_s").empty()) << "an early stop has no comparable speed";
+  }
+}
+
+TEST(Runner, UnknownEngineIsAClearErrorAndWritesNothing) {
+  const fs::path dir = fresh_dir("unknown_engine");
+  const Invocation inv = physbench({"run", "-e", "havok", "--out", (dir / "r").string()}, dir);
+  EXPECT_EQ(inv.outcome.exit_code, 2);
+  EXPECT_NE(inv.output.find("unknown engine 'havok'"), std::string::npos) << inv.output;
+  EXPECT_NE(inv.output.find("rtp"), std::string::npos) << "the error lists the engines there are";
+  EXPECT_FALSE(fs::exists(dir / "r"));
+}
+
+TEST(Runner, MalformedSceneFileNamesTheFieldAndWritesNothing) {
+  const fs::path dir = fresh_dir("malformed");
+  std::ofstream(dir / "bad.json") << R"({"name": "bad", "dt": 0.01, "duration": 1,
+    "bodies": [{"shape": {"type": "box", "half_extents": [1, 1, 1]}, "mass": "heavy"}]})";
+  const Invocation inv = physbench({"run", "--scene", (dir / "bad.json").string(), "--out", (dir / "r").string()}, dir);
+  EXPECT_EQ(inv.outcome.exit_code, 2);
+  EXPECT_NE(inv.output.find("bad.json: bodies[0].mass: expected a number"), std::string::npos) << inv.output;
+  EXPECT_FALSE(fs::exists(dir / "r" / "results.csv"));
+}
+
+TEST(Runner, SceneFileRunsTheSameAsTheBuiltInScenario) {
+  // a scene written out by one run and read back by another gives the same trajectory
+  const fs::path dir = fresh_dir("scene_file");
+  ASSERT_EQ(physbench({"run", "-s", "tumbling-box", "-e", "rtp", "--variant", "rk4", "--budget", "0", "--out",
+                       (dir / "a").string()}, dir).outcome.exit_code, 0);
+  ASSERT_EQ(physbench({"run", "--scene", (dir / "a" / "scenes" / "tumbling-box.json").string(), "-e", "rtp",
+                       "--variant", "rk4", "--budget", "0", "--out", (dir / "b").string()}, dir).outcome.exit_code, 0);
+  const auto a = read_rows(dir / "a" / "results.csv"), b = read_rows(dir / "b" / "results.csv");
+  ASSERT_EQ(a.size(), 1u);
+  ASSERT_EQ(b.size(), 1u);
+  EXPECT_EQ(a[0].at("orientation_err_max"), b[0].at("orientation_err_max"));
+  EXPECT_EQ(a[0].at("energy_drift_max"), b[0].at("energy_drift_max"));
+}
+
+}  // namespace
