@@ -10,7 +10,13 @@ namespace {
 
 using namespace physbench;
 
-std::string log_file() { return (std::filesystem::temp_directory_path() / "physbench_process_test.log").string(); }
+// one log per test: CTest runs tests in parallel
+std::string log_file() {
+  const std::string name = ::testing::UnitTest::GetInstance()->current_test_info()->name();
+  const auto path = std::filesystem::temp_directory_path() / ("physbench_process_" + name + ".log");
+  std::filesystem::remove(path);
+  return path.string();
+}
 
 TEST(Process, ReportsExitCode) {
   const ChildOutcome o = run_child({"/bin/sh", "-c", "exit 3"}, log_file(), 10.0);

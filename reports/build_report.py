@@ -1,0 +1,251 @@
+#!/usr/bin/env python3
+"""Build one self-contained HTML report (index.html) from a physbench results folder.
+
+Reads only files: results.csv, metadata.json and trajectories/*.csv, as `physbench run`
+writes them. The page embeds plotly.js, so it opens offline.
+
+    python reports/build_report.py results/20261122-041500
+"""
+from __future__ import annotations
+
+import argparse
+import html
+import json
+import math
+import sys
+from pathlib import Path
+
+import jinja2
+import pandas as pd
+import plotly.graph_objects as go
+import plotly.offline
+
+# the error series a trajectory CSV may hold: column, title, unit, and the results.csv summary column
+SERIES = [
+    ("position_err", "Position error against the reference", "m", "position_err_max"),
+    ("orientation_err", "Orientation error against the reference", "rad", "orientation_err_max"),
+    ("energy_drift", "Relative energy drift |E − E₀| / KE₀", "", "energy_drift_max"),
+    ("linear_momentum_drift", "Linear momentum drift |P − P₀|", "kg m/s", "linear_momentum_drift_max"),
+    ("angular_momentum_drift", "Relative angular momentum drift |L − L₀| / |L₀|", "", "angular_momentum_drift_max"),
+]
+
+STATUS_ORDER = ["ok", "exploded", "unsupported", "timeout", "crashed", "error"]
+
+
+class ReportError(Exception):
+    """A results folder that cannot be reported, with what is wrong and where."""
+
+
+def load_results(folder: Path) -> tuple[pd.DataFrame, dict]:
+    csv = folder / "results.csv"
+    meta = folder / "metadata.json"
+    if not csv.is_file():
+        raise ReportError(f"{csv}: missing (is {folder} a physbench results folder?)")
+    if not meta.is_file():
+        raise ReportError(f"{meta}: missing")
+    try:
+        results = pd.read_csv(csv, dtype={"message": str, "trajectory": str})
+    except Exception as exc:  # pandas raises several types for a broken file
+        raise ReportError(f"{csv}: unreadable: {exc}") from exc
+    needed = {"scenario", "engine", "variant", "status", "steps_per_s"}
+    missing = needed - set(results.columns)
+    if missing:
+        raise ReportError(f"{csv}: missing columns {sorted(missing)}")
+    try:
+        metadata = json.loads(meta.read_text())
+    except json.JSONDecodeError as exc:
+        raise ReportError(f"{meta}: not valid JSON: {exc}") from exc
+    results["label"] = results["engine"] + "/" + results["variant"]
+    return results, metadata
+
+
+def fmt(value, digits: int = 3) -> str:
+    if value is None or (isinstance(value, float) and math.isnan(value)):
+        return ""
+    if isinstance(value, (int, float)):
+        if value == 0:
+            return "0"
+        if abs(value) >= 1e5 or abs(value) < 1e-3:
+            return f"{value:.{digits - 1}e}"
+        return f"{value:.{digits}g}"
+    return html.escape(str(value))
+
+
+def figure_html(fig: go.Figure) -> str:
+    fig.update_layout(template="plotly_white", margin=dict(l=60, r=20, t=50, b=50), height=420,
+                      legend=dict(font=dict(size=11)))
+    return plotly.offline.plot(fig, output_type="div", include_plotlyjs=False, config={"displaylogo": False})
+
+
+def error_over_time(folder: Path, rows: pd.DataFrame, column: str, title: str, unit: str) -> str | None:
+    fig = go.Figure()
+    for _, row in rows.iterrows():
+        if not isinstance(row.get("trajectory"), str):
+            continue
+        traj = pd.read_csv(folder / row["trajectory"])
+        if column not in traj or traj[column].isna().all():
+            continue
+        per_time = traj.groupby("time", sort=True)[column].max()
+        # a log axis cannot show zeros: exact values sit at the floor
+        fig.add_trace(go.Scatter(x=per_time.index, y=per_time.clip(lower=1e-16).values, mode="lines",
+                                 name=row["label"]))
+    if not fig.data:
+        return None
+    fig.update_layout(title=title, xaxis_title="time (s)",
+                      yaxis_title=f"{title.split(' ')[0].lower()} error ({unit})" if unit else "relative drift")
+    fig.update_yaxes(type="log", exponentformat="power")
+    return figure_html(fig)
+
+
+def throughput_chart(rows: pd.DataFrame) -> str | None:
+    ok = rows[rows["steps_per_s"].notna()]
+    if ok.empty:
+        return None
+    fig = go.Figure(go.Bar(
+        x=ok["label"], y=ok["steps_per_s"],
+        error_y=dict(type="data", symmetric=False,
+                     array=(ok["steps_per_s_max"] - ok["steps_per_s"]).clip(lower=0),
+                     arrayminus=(ok["steps_per_s"] - ok["steps_per_s_min"]).clip(lower=0)),
+        text=[fmt(v) for v in ok["steps_per_s"]], textposition="outside"))
+    fig.update_layout(title="Throughput: median steps/s (bars: min to max over repeats)", yaxis_title="steps/s")
+    fig.update_yaxes(type="log", exponentformat="power")
+    return figure_html(fig)
+
+
+def speed_error_chart(rows: pd.DataFrame, error_column: str, error_title: str) -> str | None:
+    ok = rows[rows["steps_per_s"].notna() & rows[error_column].notna()] if error_column in rows else rows.iloc[0:0]
+    if ok.empty:
+        return None
+    cost = ok["wall_s_median"] / ok["duration"]  # wall seconds per simulated second
+    fig = go.Figure()
+    for (_, row), c in zip(ok.iterrows(), cost):
+        fig.add_trace(go.Scatter(x=[c], y=[max(row[error_column], 1e-16)], mode="markers+text", name=row["label"],
+                                 text=[row["label"]], textposition="top center", marker=dict(size=11)))
+    fig.update_layout(title=f"Speed against error: {error_title} vs wall time per simulated second",
+                      xaxis_title="wall s per simulated s (lower is faster)",
+                      yaxis_title="max error", showlegend=False)
+    fig.update_xaxes(type="log", exponentformat="power")
+    fig.update_yaxes(type="log", exponentformat="power")
+    return figure_html(fig)
+
+
+TEMPLATE = jinja2.Template("""<!doctype html>
+<html lang="en"><head><meta charset="utf-8">
+<title>physbench report {{ meta.created }}</title>
+<script type="text/javascript">{{ plotlyjs }}</script>
+<style>
+ body { font-family: system-ui, sans-serif; margin: 2em auto; max-width: 1200px; color: #222; padding: 0 1em; }
+ table { border-collapse: collapse; margin: 0.5em 0 1.5em; font-size: 0.9em; }
+ th, td { border: 1px solid #ccc; padding: 3px 7px; text-align: right; vertical-align: top; }
+ th { background: #f0f0f0; } td.l, th.l { text-align: left; }
+ .ok { color: #176a17; } .exploded, .crashed, .timeout, .error { color: #b00; font-weight: bold; }
+ .unsupported { color: #777; } .note { color: #555; font-size: 0.9em; }
+ section { border-top: 2px solid #ddd; margin-top: 2em; }
+</style></head><body>
+<h1>physbench report</h1>
+<p class="note">{{ meta.created }} · commit {{ meta.git_commit or "unknown" }} · {{ meta.machine.cpu }},
+ {{ meta.machine.logical_cores }} logical cores, {{ meta.machine.memory_gib }} GiB · {{ meta.machine.os }}<br>
+ {{ meta.compiler }} · build {{ meta.build }}<br>command: <code>{{ meta.command }}</code><br>
+ timing: {{ meta.timing.note }} (budget {{ meta.timing.budget_s }} s per job)</p>
+
+<h2>Summary</h2>
+<table><tr><th class="l">scenario</th><th class="l">engine/variant</th><th class="l">status</th><th>dt (s)</th>
+<th>steps/s (median)</th><th>min–max</th><th>body-steps/s</th><th>real-time ×</th>
+{% for col, title in summary_columns %}<th>{{ title }}</th>{% endfor %}<th class="l">message</th></tr>
+{% for r in summary_rows %}<tr><td class="l">{{ r.scenario }}</td><td class="l">{{ r.label }}</td>
+<td class="l {{ r.status }}">{{ r.status }}</td><td>{{ r.dt }}</td><td>{{ r.sps }}</td><td>{{ r.spread }}</td>
+<td>{{ r.bsps }}</td><td>{{ r.rtf }}</td>{% for v in r.errors %}<td>{{ v }}</td>{% endfor %}
+<td class="l">{{ r.message }}</td></tr>{% endfor %}</table>
+
+{% for s in scenarios %}<section><h2>{{ s.name }}</h2>
+<p>{{ s.description }}<br><em>{{ s.question }}</em></p>
+<p class="note">dt {{ s.dt }} s · {{ s.duration }} s simulated · reference: {{ s.reference }}
+{% if s.self_error %} · reference changes by {{ s.self_error }} when its step is halved (its own error){% endif %}
+{% if s.scene_file %} · scene file: <code>{{ s.scene_file }}</code>{% endif %}</p>
+{% for chart in s.charts %}{{ chart }}{% endfor %}
+{% if s.unsupported %}<p class="note">Not run: {% for u in s.unsupported %}<br>{{ u }}{% endfor %}</p>{% endif %}
+</section>{% endfor %}
+
+<section><h2>Engine settings</h2>
+<p class="note">Every setting an adapter changes from its engine's defaults, as the adapter states it.</p>
+{% for e in engines %}<h3>{{ e.name }} <small>{{ e.version }}</small></h3>
+{% for v in e.variants %}<table><tr><th class="l" colspan="3">variant {{ v.name }}</th></tr>
+<tr><th class="l">setting</th><th class="l">value</th><th class="l">why</th></tr>
+{% for s in v.settings %}<tr><td class="l">{{ s.name }}</td><td class="l">{{ s.value }}</td><td class="l">{{ s.why }}</td></tr>{% endfor %}
+</table>{% endfor %}{% endfor %}</section>
+</body></html>
+""", autoescape=True)
+
+
+def build_report(folder: Path) -> Path:
+    results, meta = load_results(folder)
+    present = [(c, t) for c, t, _, summary in SERIES if summary in results and results[summary].notna().any()]
+    summary_columns = [(c, f"{c.replace('_', ' ')} max") for c, _ in present]
+
+    summary_rows = []
+    for _, r in results.iterrows():
+        spread = ""
+        if pd.notna(r["steps_per_s"]):
+            spread = f"{fmt(r['steps_per_s_min'])}–{fmt(r['steps_per_s_max'])}"
+        summary_rows.append(dict(
+            scenario=r["scenario"], label=r["label"], status=r["status"], dt=fmt(r.get("dt")),
+            sps=fmt(r["steps_per_s"]), spread=spread, bsps=fmt(r.get("body_steps_per_s")),
+            rtf=fmt(r.get("realtime_factor")),
+            errors=[fmt(r.get(f"{c}_max")) for c, _ in present],
+            message=r["message"] if isinstance(r.get("message"), str) else ""))
+
+    scenarios = []
+    for name, rows in results.groupby("scenario", sort=False):
+        info = meta.get("scenarios", {}).get(name, {})
+        charts = []
+        for column, title, unit, summary in SERIES:
+            if summary in rows and rows[summary].notna().any():
+                chart = error_over_time(folder, rows, column, title, unit)
+                if chart:
+                    charts.append(chart)
+        chart = throughput_chart(rows)
+        if chart:
+            charts.append(chart)
+        for column, title, unit, summary in SERIES:
+            if summary in rows and rows[summary].notna().any():
+                chart = speed_error_chart(rows, summary, title.split(" against")[0].lower())
+                if chart:
+                    charts.append(chart)
+                break  # the scenario's first metric is its headline error
+        self_error = info.get("reference_self_error")
+        scenarios.append(dict(
+            name=name, description=info.get("description", ""), question=info.get("question", ""),
+            dt=fmt(info.get("dt")), duration=fmt(info.get("duration")), reference=info.get("reference", ""),
+            self_error=fmt(self_error) if isinstance(self_error, (int, float)) else "",
+            scene_file=info.get("scene_file", ""), charts=charts,
+            unsupported=[f"{r['label']}: {r['message']}" for _, r in rows.iterrows() if r["status"] == "unsupported"]))
+
+    engines = []
+    for name, info in meta.get("engines", {}).items():
+        variants = [dict(name=v, settings=s) for v, s in info.get("variants", {}).items()]
+        engines.append(dict(name=name, version=info.get("version", ""), variants=variants))
+
+    page = TEMPLATE.render(meta=meta, plotlyjs=plotly.offline.get_plotlyjs(), summary_columns=summary_columns,
+                           summary_rows=summary_rows, scenarios=scenarios, engines=engines)
+    out = folder / "index.html"
+    partial = folder / "index.html.partial"
+    partial.write_text(page, encoding="utf-8")
+    partial.replace(out)  # never a half-written report
+    return out
+
+
+def main(argv: list[str] | None = None) -> int:
+    parser = argparse.ArgumentParser(description=__doc__.splitlines()[0])
+    parser.add_argument("results", type=Path, help="a results folder written by `physbench run`")
+    args = parser.parse_args(argv)
+    try:
+        out = build_report(args.results)
+    except ReportError as exc:
+        print(f"build_report: {exc}", file=sys.stderr)
+        return 2
+    print(f"report: {out}")
+    return 0
+
+
+if __name__ == "__main__":
+    sys.exit(main())
