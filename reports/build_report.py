@@ -132,7 +132,7 @@ def speed_error_chart(rows: pd.DataFrame, error_column: str, error_title: str) -
 TEMPLATE = jinja2.Template("""<!doctype html>
 <html lang="en"><head><meta charset="utf-8">
 <title>physbench report {{ meta.created }}</title>
-<script type="text/javascript">{{ plotlyjs }}</script>
+<script type="text/javascript">{{ plotlyjs | safe }}</script>
 <style>
  body { font-family: system-ui, sans-serif; margin: 2em auto; max-width: 1200px; color: #222; padding: 0 1em; }
  table { border-collapse: collapse; margin: 0.5em 0 1.5em; font-size: 0.9em; }
@@ -162,7 +162,7 @@ TEMPLATE = jinja2.Template("""<!doctype html>
 <p class="note">dt {{ s.dt }} s · {{ s.duration }} s simulated · reference: {{ s.reference }}
 {% if s.self_error %} · reference changes by {{ s.self_error }} when its step is halved (its own error){% endif %}
 {% if s.scene_file %} · scene file: <code>{{ s.scene_file }}</code>{% endif %}</p>
-{% for chart in s.charts %}{{ chart }}{% endfor %}
+{% for chart in s.charts %}{{ chart | safe }}{% endfor %}
 {% if s.unsupported %}<p class="note">Not run: {% for u in s.unsupported %}<br>{{ u }}{% endfor %}</p>{% endif %}
 </section>{% endfor %}
 
