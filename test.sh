@@ -1,11 +1,21 @@
 #!/usr/bin/env bash
-# Runs every test: installs what is missing, builds the release preset, runs CTest
-# (GoogleTest unit, validation and harness tests, and the report builder's pytest suite).
-#   ./test.sh            all tests
-#   ./test.sh -R Gates   only tests whose name matches (any ctest arguments pass through)
+# Runs every test: installs what is missing, then builds and runs CTest twice — the release
+# preset, and the debug preset with AddressSanitizer + UndefinedBehaviorSanitizer (GoogleTest
+# unit, validation and harness tests, and the report builder's pytest suite).
+#   ./test.sh               everything
+#   ./test.sh --quick       release only, no sanitizer pass
+#   ./test.sh -R Gates      only tests whose name matches (other arguments go to ctest)
 set -euo pipefail
 cd "$(dirname "$0")"
+presets=(release debug)
+if [ "${1:-}" = "--quick" ]; then
+  presets=(release)
+  shift
+fi
 scripts/setup.sh
-cmake --preset release
-cmake --build --preset release
-ctest --preset release -j2 "$@"
+for preset in "${presets[@]}"; do
+  echo "== $preset ==" >&2
+  cmake --preset "$preset"
+  cmake --build --preset "$preset"
+  ctest --preset "$preset" -j2 "$@"
+done
