@@ -78,6 +78,8 @@ const std::map<std::string, std::string>* find_row(const std::vector<std::map<st
   return nullptr;
 }
 
+#if defined(PHYSBENCH_HAVE_BULLET) && defined(PHYSBENCH_HAVE_ODE) && defined(PHYSBENCH_HAVE_BOX2D) && \
+    defined(PHYSBENCH_HAVE_MUJOCO)
 TEST(Runner, ProjectileOnEveryEngineVariant) {
   const fs::path dir = fresh_dir("all_engines");
   const Invocation inv = physbench({"run", "--scenario", "projectile-planar", "--budget", "0.01", "--out", (dir / "r").string()}, dir);
@@ -102,7 +104,9 @@ TEST(Runner, ProjectileOnEveryEngineVariant) {
   EXPECT_TRUE(fs::exists(dir / "r" / "metadata.json"));
   EXPECT_FALSE(fs::exists(dir / "r" / ".work"));
 }
+#endif
 
+#ifdef PHYSBENCH_HAVE_BOX2D
 TEST(Runner, UnsupportedSceneIsARowWithItsReason) {
   const fs::path dir = fresh_dir("unsupported");
   const Invocation inv = physbench({"run", "-s", "projectile", "-e", "box2d", "--out", (dir / "r").string()}, dir);
@@ -112,6 +116,7 @@ TEST(Runner, UnsupportedSceneIsARowWithItsReason) {
   EXPECT_EQ(rows[0].at("status"), "unsupported");
   EXPECT_NE(rows[0].at("message").find("not marked planar"), std::string::npos);
 }
+#endif
 
 TEST(Runner, RunawaySceneIsRecordedAsExploded) {
   const fs::path dir = fresh_dir("exploded");
