@@ -86,26 +86,32 @@ EngineInfo box2d_engine_info() {
   info.unsupported = [](const Scene& scene, const std::string&) -> std::optional<std::string> {
     if (!scene.planar) return "Box2D is a 2D engine: the scene is not marked planar";
     if (!scene.springs.empty()) return "springs are not mapped onto Box2D yet";
-    if (scene.collisions && scene.bodies.size() > 1)
-      return "contact scenes are not mapped onto Box2D yet (its 1 cm polygon skin is not compensated)";
+    if (scene.has_contacts())
+      return "contact scenes are not mapped onto Box2D yet (its 1 cm polygon skin is not "
+             "compensated)";
     for (std::size_t i = 0; i < scene.bodies.size(); ++i) {
       const BodySpec& b = scene.bodies[i];
       if (b.shape.kind == ShapeKind::Plane) return "planes are not mapped onto Box2D yet";
       // Box2D clamps translation per step to b2_maxTranslation, silently
       if (b.linear_velocity.norm() * scene.dt > 0.5 * b2_maxTranslation)
-        return "bodies[" + std::to_string(i) + "] moves near Box2D's per-step limit b2_maxTranslation";
+        return "bodies[" + std::to_string(i) +
+               "] moves near Box2D's per-step limit b2_maxTranslation";
       if (std::abs(b.angular_velocity.z()) * scene.dt > 0.5 * b2_maxRotation)
         return "bodies[" + std::to_string(i) + "] turns near Box2D's per-step limit b2_maxRotation";
     }
     return std::nullopt;
   };
-  info.create = [](const std::string&) -> std::unique_ptr<Engine> { return std::make_unique<Box2dEngine>(); };
+  info.create = [](const std::string&) -> std::unique_ptr<Engine> {
+    return std::make_unique<Box2dEngine>();
+  };
   info.settings = [](const std::string&) {
     return std::vector<Setting>{
         {"velocity / position iterations", "8 / 3", "Box2D's recommended values"},
         {"allow sleeping", "false (world and bodies)", "sleeping off in every engine"},
-        {"mass properties", "from the scene (SetMassData, I = scene's Izz)", "same inertia in every engine"},
-        {"collision mask", "0 when the scene has collisions off", "model only what the scene needs"},
+        {"mass properties", "from the scene (SetMassData, I = scene's Izz)",
+         "same inertia in every engine"},
+        {"collision mask", "0 when the scene has collisions off",
+         "model only what the scene needs"},
         {"precision", "float", "Box2D computes in single precision"},
     };
   };

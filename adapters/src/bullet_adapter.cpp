@@ -18,8 +18,12 @@ constexpr const char* kVariant = "double";
 constexpr const char* kVariant = "float";
 #endif
 
-btVector3 to_bt(const Vec3& v) { return btVector3(btScalar(v.x()), btScalar(v.y()), btScalar(v.z())); }
-btQuaternion to_bt(const Quat& q) { return btQuaternion(btScalar(q.x()), btScalar(q.y()), btScalar(q.z()), btScalar(q.w())); }
+btVector3 to_bt(const Vec3& v) {
+  return btVector3(btScalar(v.x()), btScalar(v.y()), btScalar(v.z()));
+}
+btQuaternion to_bt(const Quat& q) {
+  return btQuaternion(btScalar(q.x()), btScalar(q.y()), btScalar(q.z()), btScalar(q.w()));
+}
 Vec3 from_bt(const btVector3& v) { return Vec3(v.x(), v.y(), v.z()); }
 
 class BulletEngine final : public Engine {
@@ -36,27 +40,34 @@ class BulletEngine final : public Engine {
     dispatcher_ = std::make_unique<btCollisionDispatcher>(configuration_.get());
     broadphase_ = std::make_unique<btDbvtBroadphase>();
     solver_ = std::make_unique<btSequentialImpulseConstraintSolver>();
-    world_ = std::make_unique<btDiscreteDynamicsWorld>(dispatcher_.get(), broadphase_.get(), solver_.get(),
-                                                       configuration_.get());
+    world_ = std::make_unique<btDiscreteDynamicsWorld>(dispatcher_.get(), broadphase_.get(),
+                                                       solver_.get(), configuration_.get());
     world_->setGravity(to_bt(scene.gravity));
 
     for (const BodySpec& b : scene.bodies) {
       std::unique_ptr<btCollisionShape> shape;
       btTransform pose(to_bt(b.orientation), to_bt(b.position));
       switch (b.shape.kind) {
-        case ShapeKind::Box: shape = std::make_unique<btBoxShape>(to_bt(b.shape.half_extents)); break;
-        case ShapeKind::Sphere: shape = std::make_unique<btSphereShape>(btScalar(b.shape.radius)); break;
+        case ShapeKind::Box:
+          shape = std::make_unique<btBoxShape>(to_bt(b.shape.half_extents));
+          break;
+        case ShapeKind::Sphere:
+          shape = std::make_unique<btSphereShape>(btScalar(b.shape.radius));
+          break;
         case ShapeKind::Plane: {
           // the scene's plane is the body's local y = 0: Bullet's plane takes a normal and offset
           const Vec3 normal = b.orientation * Vec3::UnitY();
-          shape = std::make_unique<btStaticPlaneShape>(to_bt(normal), btScalar(normal.dot(b.position)));
+          shape =
+              std::make_unique<btStaticPlaneShape>(to_bt(normal), btScalar(normal.dot(b.position)));
           pose.setIdentity();
           break;
         }
       }
       // the scene's mass properties, not Bullet's own, so every engine integrates the same body
-      const btVector3 inertia = b.mass > 0.0 ? to_bt(principal_inertia(b.shape, b.mass)) : btVector3(0, 0, 0);
-      btRigidBody::btRigidBodyConstructionInfo info(btScalar(b.mass), nullptr, shape.get(), inertia);
+      const btVector3 inertia =
+          b.mass > 0.0 ? to_bt(principal_inertia(b.shape, b.mass)) : btVector3(0, 0, 0);
+      btRigidBody::btRigidBodyConstructionInfo info(btScalar(b.mass), nullptr, shape.get(),
+                                                    inertia);
       info.m_startWorldTransform = pose;
       // Bullet multiplies the two bodies' coefficients: √ on each gives the scene's pair value
       info.m_friction = btScalar(std::sqrt(b.friction));
@@ -86,8 +97,8 @@ class BulletEngine final : public Engine {
     const btRigidBody& body = *bodies_[index];
     const btTransform& t = body.getCenterOfMassTransform();
     const btQuaternion q = t.getRotation();
-    return {from_bt(t.getOrigin()), Quat(q.w(), q.x(), q.y(), q.z()), from_bt(body.getLinearVelocity()),
-            from_bt(body.getAngularVelocity())};
+    return {from_bt(t.getOrigin()), Quat(q.w(), q.x(), q.y(), q.z()),
+            from_bt(body.getLinearVelocity()), from_bt(body.getAngularVelocity())};
   }
 
  private:
@@ -109,24 +120,33 @@ EngineInfo bullet_engine_info() {
   info.variants = {kVariant};
   const int v = btGetVersion();
   info.version = std::to_string(v / 100) + "." + std::to_string(v % 100) + " (" + kVariant + ")";
-  info.unsupported = [](const Scene& scene, const std::string& variant) -> std::optional<std::string> {
+  info.unsupported = [](const Scene& scene,
+                        const std::string& variant) -> std::optional<std::string> {
     if (variant != kVariant)
       return "this executable links Bullet's " + std::string(kVariant) + " build, not " + variant;
     if (!scene.springs.empty()) return "springs are not mapped onto Bullet yet";
-    if (scene.collisions && scene.bodies.size() > 1)
-      return "contact scenes are not mapped onto Bullet yet (the contact settings table is not written)";
+    if (scene.has_contacts())
+      return "contact scenes are not mapped onto Bullet yet (the contact settings table is not "
+             "written)";
     return std::nullopt;
   };
-  info.create = [](const std::string&) -> std::unique_ptr<Engine> { return std::make_unique<BulletEngine>(); };
+  info.create = [](const std::string&) -> std::unique_ptr<Engine> {
+    return std::make_unique<BulletEngine>();
+  };
   info.settings = [](const std::string&) {
     return std::vector<Setting>{
-        {"precision", kVariant, "the variant: Bullet's float or double library, each in its own process"},
-        {"stepSimulation maxSubSteps", "0", "one internal step of exactly dt per call; no interpolation"},
+        {"precision", kVariant,
+         "the variant: Bullet's float or double library, each in its own process"},
+        {"stepSimulation maxSubSteps", "0",
+         "one internal step of exactly dt per call; no interpolation"},
         {"activation state", "DISABLE_DEACTIVATION", "sleeping off in every engine"},
-        {"rigid body flags", "+BT_ENABLE_GYROSCOPIC_FORCE_IMPLICIT_BODY", "gyroscopic torque on, as in every engine"},
+        {"rigid body flags", "+BT_ENABLE_GYROSCOPIC_FORCE_IMPLICIT_BODY",
+         "gyroscopic torque on, as in every engine"},
         {"mass properties", "from the scene", "inertia set explicitly, same as every engine"},
-        {"friction, restitution", "sqrt of the scene's value per body", "Bullet multiplies the pair's values"},
-        {"collision mask", "0 when the scene has collisions off", "model only what the scene needs"},
+        {"friction, restitution", "sqrt of the scene's value per body",
+         "Bullet multiplies the pair's values"},
+        {"collision mask", "0 when the scene has collisions off",
+         "model only what the scene needs"},
         {"broadphase", "btDbvtBroadphase", "Bullet's recommended default"},
     };
   };

@@ -38,9 +38,10 @@ const char* integrator_name(const std::string& variant) {
 std::string model_xml(const Scene& scene, const std::string& variant) {
   std::ostringstream xml;
   xml << std::setprecision(17);
-  xml << "<mujoco model=\"" << "physbench\">\n";
-  xml << "  <option timestep=\"" << scene.dt << "\" gravity=\"" << triple(scene.gravity) << "\" integrator=\""
-      << integrator_name(variant) << "\">\n";
+  xml << "<mujoco model=\""
+      << "physbench\">\n";
+  xml << "  <option timestep=\"" << scene.dt << "\" gravity=\"" << triple(scene.gravity)
+      << "\" integrator=\"" << integrator_name(variant) << "\">\n";
   // a scene without collisions runs no collision detection at all
   if (!scene.collisions) xml << "    <flag contact=\"disable\"/>\n";
   xml << "  </option>\n  <worldbody>\n";
@@ -48,10 +49,11 @@ std::string model_xml(const Scene& scene, const std::string& variant) {
     const BodySpec& b = scene.bodies[i];
     if (b.mass == 0.0) continue;  // static geometry arrives with contact scenes
     const Vec3 inertia = principal_inertia(b.shape, b.mass);
-    xml << "    <body name=\"b" << i << "\" pos=\"" << triple(b.position) << "\" quat=\"" << quaternion(b.orientation)
-        << "\">\n";
+    xml << "    <body name=\"b" << i << "\" pos=\"" << triple(b.position) << "\" quat=\""
+        << quaternion(b.orientation) << "\">\n";
     xml << "      <freejoint/>\n";
-    xml << "      <inertial pos=\"0 0 0\" mass=\"" << b.mass << "\" diaginertia=\"" << triple(inertia) << "\"/>\n";
+    xml << "      <inertial pos=\"0 0 0\" mass=\"" << b.mass << "\" diaginertia=\""
+        << triple(inertia) << "\"/>\n";
     if (b.shape.kind == ShapeKind::Box)
       xml << "      <geom type=\"box\" size=\"" << triple(b.shape.half_extents) << "\"/>\n";
     else
@@ -139,8 +141,9 @@ EngineInfo mujoco_engine_info() {
   info.version = mj_versionString();
   info.unsupported = [](const Scene& scene, const std::string&) -> std::optional<std::string> {
     if (!scene.springs.empty()) return "springs are not mapped onto MuJoCo yet";
-    if (scene.collisions && scene.bodies.size() > 1)
-      return "contact scenes are not mapped onto MuJoCo yet (nconmax/njmax are not sized from the scene)";
+    if (scene.has_contacts())
+      return "contact scenes are not mapped onto MuJoCo yet (nconmax/njmax are not sized from the "
+             "scene)";
     return std::nullopt;
   };
   info.create = [](const std::string& variant) -> std::unique_ptr<Engine> {
@@ -149,7 +152,8 @@ EngineInfo mujoco_engine_info() {
   info.settings = [](const std::string& variant) {
     return std::vector<Setting>{
         {"integrator", integrator_name(variant), "the variant"},
-        {"contact flag", "disabled when the scene has collisions off", "model only what the scene needs"},
+        {"contact flag", "disabled when the scene has collisions off",
+         "model only what the scene needs"},
         {"mass properties", "explicit <inertial> from the scene", "same inertia in every engine"},
         {"joint", "one free joint per dynamic body", "a free rigid body, as in every engine"},
     };

@@ -46,10 +46,12 @@ class OdeEngine final : public Engine {
       dMassSetParameters(&mass, b.mass, 0, 0, 0, inertia.x(), inertia.y(), inertia.z(), 0, 0, 0);
       dBodySetMass(body, &mass);
       dBodySetPosition(body, b.position.x(), b.position.y(), b.position.z());
-      const dQuaternion q = {b.orientation.w(), b.orientation.x(), b.orientation.y(), b.orientation.z()};
+      const dQuaternion q = {b.orientation.w(), b.orientation.x(), b.orientation.y(),
+                             b.orientation.z()};
       dBodySetQuaternion(body, q);
       dBodySetLinearVel(body, b.linear_velocity.x(), b.linear_velocity.y(), b.linear_velocity.z());
-      dBodySetAngularVel(body, b.angular_velocity.x(), b.angular_velocity.y(), b.angular_velocity.z());
+      dBodySetAngularVel(body, b.angular_velocity.x(), b.angular_velocity.y(),
+                         b.angular_velocity.z());
       dBodySetAutoDisableFlag(body, 0);
       dBodySetGyroscopicMode(body, 1);
       bodies_.push_back(body);
@@ -57,8 +59,10 @@ class OdeEngine final : public Engine {
   }
 
   void step() override {
-    if (quick_step_) dWorldQuickStep(world_, dt_);
-    else dWorldStep(world_, dt_);
+    if (quick_step_)
+      dWorldQuickStep(world_, dt_);
+    else
+      dWorldStep(world_, dt_);
   }
 
   BodyState body_state(int index) const override {
@@ -68,7 +72,8 @@ class OdeEngine final : public Engine {
     const dReal* q = dBodyGetQuaternion(body);
     const dReal* v = dBodyGetLinearVel(body);
     const dReal* w = dBodyGetAngularVel(body);
-    return {Vec3(p[0], p[1], p[2]), Quat(q[0], q[1], q[2], q[3]), Vec3(v[0], v[1], v[2]), Vec3(w[0], w[1], w[2])};
+    return {Vec3(p[0], p[1], p[2]), Quat(q[0], q[1], q[2], q[3]), Vec3(v[0], v[1], v[2]),
+            Vec3(w[0], w[1], w[2])};
   }
 
  private:
@@ -88,8 +93,9 @@ EngineInfo ode_engine_info() {
   info.version = std::string(PHYSBENCH_ODE_VERSION) + " (" + dGetConfiguration() + ")";
   info.unsupported = [](const Scene& scene, const std::string&) -> std::optional<std::string> {
     if (!scene.springs.empty()) return "springs are not mapped onto ODE yet";
-    if (scene.collisions && scene.bodies.size() > 1)
-      return "contact scenes are not mapped onto ODE yet (the contact settings table is not written)";
+    if (scene.has_contacts())
+      return "contact scenes are not mapped onto ODE yet (the contact settings table is not "
+             "written)";
     return std::nullopt;
   };
   info.create = [](const std::string& variant) -> std::unique_ptr<Engine> {
@@ -97,9 +103,11 @@ EngineInfo ode_engine_info() {
   };
   info.settings = [](const std::string& variant) {
     return std::vector<Setting>{
-        {"stepper", variant == "quickstep" ? "dWorldQuickStep (20 iterations, ODE default)" : "dWorldStep",
+        {"stepper",
+         variant == "quickstep" ? "dWorldQuickStep (20 iterations, ODE default)" : "dWorldStep",
          "the variant"},
-        {"dRandSetSeed", "0 before each run", "QuickStep shuffles constraints with a global generator"},
+        {"dRandSetSeed", "0 before each run",
+         "QuickStep shuffles constraints with a global generator"},
         {"auto-disable", "off (world and every body)", "sleeping off in every engine"},
         {"gyroscopic mode", "on", "stated explicitly; ODE's default"},
         {"mass properties", "from the scene (dMassSetParameters)", "same inertia in every engine"},

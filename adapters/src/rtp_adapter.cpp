@@ -67,7 +67,7 @@ EngineInfo rtp_engine_info() {
   info.version = "0.1.0";
   info.unsupported = [](const Scene& scene, const std::string&) -> std::optional<std::string> {
     // rtp has no contact pipeline yet: a scene where two bodies may touch cannot be modelled
-    if (scene.collisions && scene.bodies.size() > 1)
+    if (scene.has_contacts())
       return "contacts are not implemented in rtp yet (no broad or narrow phase)";
     return std::nullopt;
   };
@@ -76,7 +76,10 @@ EngineInfo rtp_engine_info() {
   };
   info.settings = [](const std::string& variant) {
     std::vector<Setting> s;
-    s.push_back({"integrator", variant == "euler" ? "semi-implicit Euler" : variant == "midpoint" ? "midpoint" : "RK4",
+    s.push_back({"integrator",
+                 variant == "euler"      ? "semi-implicit Euler"
+                 : variant == "midpoint" ? "midpoint"
+                                         : "RK4",
                  "the variant; momentum form, forces re-evaluated at every stage"});
     s.push_back({"precision", "double", "rtp computes in double throughout"});
     return s;

@@ -8,6 +8,8 @@ namespace physbench {
 
 long Scene::step_count() const { return std::lround(duration / dt); }
 
+bool Scene::has_contacts() const { return collisions && bodies.size() > 1; }
+
 int Scene::probe_every_steps() const {
   return std::max(1, static_cast<int>(std::lround(probe.interval / dt)));
 }
@@ -37,29 +39,40 @@ Vec3 principal_inertia(const Shape& shape, double mass) {
 
 const char* to_string(ShapeKind kind) {
   switch (kind) {
-    case ShapeKind::Box: return "box";
-    case ShapeKind::Sphere: return "sphere";
-    case ShapeKind::Plane: return "plane";
+    case ShapeKind::Box:
+      return "box";
+    case ShapeKind::Sphere:
+      return "sphere";
+    case ShapeKind::Plane:
+      return "plane";
   }
   return "?";
 }
 
 const char* to_string(ReferenceKind kind) {
   switch (kind) {
-    case ReferenceKind::None: return "none";
-    case ReferenceKind::Ballistic: return "ballistic";
-    case ReferenceKind::Converged: return "converged";
+    case ReferenceKind::None:
+      return "none";
+    case ReferenceKind::Ballistic:
+      return "ballistic";
+    case ReferenceKind::Converged:
+      return "converged";
   }
   return "?";
 }
 
 const char* to_string(Metric metric) {
   switch (metric) {
-    case Metric::Position: return "position";
-    case Metric::Orientation: return "orientation";
-    case Metric::Energy: return "energy";
-    case Metric::LinearMomentum: return "linear_momentum";
-    case Metric::AngularMomentum: return "angular_momentum";
+    case Metric::Position:
+      return "position";
+    case Metric::Orientation:
+      return "orientation";
+    case Metric::Energy:
+      return "energy";
+    case Metric::LinearMomentum:
+      return "linear_momentum";
+    case Metric::AngularMomentum:
+      return "angular_momentum";
   }
   return "?";
 }
@@ -109,7 +122,8 @@ void validate(const Scene& scene) {
   require_finite("gravity", scene.gravity);
   require_positive("dt", scene.dt);
   require_positive("duration", scene.duration);
-  if (scene.duration < scene.dt) fail("duration", "is shorter than one step (dt = " + show(scene.dt) + ")");
+  if (scene.duration < scene.dt)
+    fail("duration", "is shorter than one step (dt = " + show(scene.dt) + ")");
   if (scene.planar && scene.gravity.z() != 0.0) fail("gravity[2]", "must be 0 in a planar scene");
 
   const int body_count = static_cast<int>(scene.bodies.size());
@@ -123,14 +137,16 @@ void validate(const Scene& scene) {
     require_finite(at + ".orientation", b.orientation.vec());
     require_finite(at + ".orientation", b.orientation.w());
     if (std::abs(b.orientation.norm() - 1.0) > 1e-6)
-      fail(at + ".orientation", "must be a unit quaternion [w, x, y, z], norm is " + show(b.orientation.norm()));
+      fail(at + ".orientation",
+           "must be a unit quaternion [w, x, y, z], norm is " + show(b.orientation.norm()));
     require_nonnegative(at + ".friction", b.friction);
     require_nonnegative(at + ".restitution", b.restitution);
     if (b.restitution > 1.0) fail(at + ".restitution", "must be <= 1, got " + show(b.restitution));
     switch (b.shape.kind) {
       case ShapeKind::Box:
         for (int k = 0; k < 3; ++k)
-          require_positive(at + ".shape.half_extents[" + std::to_string(k) + "]", b.shape.half_extents[k]);
+          require_positive(at + ".shape.half_extents[" + std::to_string(k) + "]",
+                           b.shape.half_extents[k]);
         break;
       case ShapeKind::Sphere:
         require_positive(at + ".shape.radius", b.shape.radius);
@@ -142,7 +158,8 @@ void validate(const Scene& scene) {
     if (scene.planar) {
       // planar: the body lies in z = 0 and turns about z only
       if (b.position.z() != 0.0) fail(at + ".position[2]", "must be 0 in a planar scene");
-      if (b.linear_velocity.z() != 0.0) fail(at + ".linear_velocity[2]", "must be 0 in a planar scene");
+      if (b.linear_velocity.z() != 0.0)
+        fail(at + ".linear_velocity[2]", "must be 0 in a planar scene");
       if (b.angular_velocity.x() != 0.0 || b.angular_velocity.y() != 0.0)
         fail(at + ".angular_velocity", "must be about z only in a planar scene");
       if (std::abs(b.orientation.x()) > 1e-12 || std::abs(b.orientation.y()) > 1e-12)
@@ -154,7 +171,8 @@ void validate(const Scene& scene) {
     const SpringSpec& s = scene.springs[i];
     const std::string at = "springs[" + std::to_string(i) + "]";
     if (s.body_a < 0 || s.body_a >= body_count)
-      fail(at + ".body_a", "no body " + std::to_string(s.body_a) + " (the scene has " + std::to_string(body_count) + ")");
+      fail(at + ".body_a", "no body " + std::to_string(s.body_a) + " (the scene has " +
+                               std::to_string(body_count) + ")");
     if (s.body_b < -1 || s.body_b >= body_count)
       fail(at + ".body_b", "no body " + std::to_string(s.body_b) + " (-1 anchors to the world)");
     if (s.body_b == s.body_a) fail(at + ".body_b", "a spring needs two different ends");
@@ -172,15 +190,17 @@ void validate(const Scene& scene) {
       fail("probe.bodies[" + std::to_string(i) + "]", "no body " + std::to_string(b));
   }
   if (scene.reference.dt_divisor < 2) fail("reference.dt_divisor", "must be >= 2");
-  const bool needs_reference = std::any_of(scene.probe.metrics.begin(), scene.probe.metrics.end(), [](Metric m) {
-    return m == Metric::Position || m == Metric::Orientation;
-  });
+  const bool needs_reference =
+      std::any_of(scene.probe.metrics.begin(), scene.probe.metrics.end(),
+                  [](Metric m) { return m == Metric::Position || m == Metric::Orientation; });
   if (needs_reference && scene.reference.kind == ReferenceKind::None)
-    fail("reference.kind", "metrics position/orientation need a reference (ballistic or converged)");
+    fail("reference.kind",
+         "metrics position/orientation need a reference (ballistic or converged)");
   if (scene.reference.kind == ReferenceKind::Ballistic) {
     if (!scene.springs.empty()) fail("reference.kind", "ballistic holds only without springs");
     for (Metric m : scene.probe.metrics)
-      if (m == Metric::Orientation) fail("probe.metrics", "the ballistic reference has no orientation");
+      if (m == Metric::Orientation)
+        fail("probe.metrics", "the ballistic reference has no orientation");
   }
 }
 

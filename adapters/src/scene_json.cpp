@@ -57,7 +57,9 @@ class Field {
       fail("expected " + std::to_string(size) + " numbers, got " + std::to_string(value_.size()));
     return value_;
   }
-  Field at(std::size_t index) const { return Field(value_[index], path_ + "[" + std::to_string(index) + "]"); }
+  Field at(std::size_t index) const {
+    return Field(value_[index], path_ + "[" + std::to_string(index) + "]");
+  }
 
   // an object whose keys are all known; optional members read through has()/member()
   const Field& object(std::initializer_list<const char*> known) const {
@@ -78,7 +80,9 @@ class Field {
   }
 
  private:
-  std::string child_path(const std::string& key) const { return path_.empty() ? key : path_ + "." + key; }
+  std::string child_path(const std::string& key) const {
+    return path_.empty() ? key : path_ + "." + key;
+  }
   std::string type_of() const {
     if (value_.is_string()) return "\"" + value_.get<std::string>() + "\"";
     return value_.type_name();
@@ -109,8 +113,8 @@ Shape read_shape(const Field& f) {
 }
 
 BodySpec read_body(const Field& f) {
-  f.object({"name", "shape", "mass", "position", "orientation", "linear_velocity", "angular_velocity",
-            "friction", "restitution"});
+  f.object({"name", "shape", "mass", "position", "orientation", "linear_velocity",
+            "angular_velocity", "friction", "restitution"});
   BodySpec b;
   if (f.has("name")) b.name = f.member("name").string();
   b.shape = read_shape(f.member("shape"));
@@ -178,16 +182,18 @@ json to_json(const Scene& scene) {
   }
   json metrics = json::array();
   for (Metric m : scene.probe.metrics) metrics.push_back(to_string(m));
-  doc["probe"] = {{"bodies", scene.probe.bodies}, {"interval", scene.probe.interval}, {"metrics", metrics}};
-  doc["reference"] = {{"kind", to_string(scene.reference.kind)}, {"dt_divisor", scene.reference.dt_divisor}};
+  doc["probe"] = {
+      {"bodies", scene.probe.bodies}, {"interval", scene.probe.interval}, {"metrics", metrics}};
+  doc["reference"] = {{"kind", to_string(scene.reference.kind)},
+                      {"dt_divisor", scene.reference.dt_divisor}};
   return doc;
 }
 
 Scene scene_from_json(const json& document, const std::string& source) {
   try {
     const Field root(document, "");
-    root.object({"name", "description", "gravity", "dt", "duration", "planar", "collisions", "bodies", "springs",
-                 "probe", "reference"});
+    root.object({"name", "description", "gravity", "dt", "duration", "planar", "collisions",
+                 "bodies", "springs", "probe", "reference"});
     Scene scene;
     scene.name = root.member("name").string();
     if (root.has("description")) scene.description = root.member("description").string();
@@ -197,17 +203,20 @@ Scene scene_from_json(const json& document, const std::string& source) {
     if (root.has("planar")) scene.planar = root.member("planar").boolean();
     if (root.has("collisions")) scene.collisions = root.member("collisions").boolean();
     const Field bodies = root.member("bodies");
-    for (std::size_t i = 0; i < bodies.array().size(); ++i) scene.bodies.push_back(read_body(bodies.at(i)));
+    for (std::size_t i = 0; i < bodies.array().size(); ++i)
+      scene.bodies.push_back(read_body(bodies.at(i)));
     if (root.has("springs")) {
       const Field springs = root.member("springs");
-      for (std::size_t i = 0; i < springs.array().size(); ++i) scene.springs.push_back(read_spring(springs.at(i)));
+      for (std::size_t i = 0; i < springs.array().size(); ++i)
+        scene.springs.push_back(read_spring(springs.at(i)));
     }
     if (root.has("probe")) {
       const Field probe = root.member("probe");
       probe.object({"bodies", "interval", "metrics"});
       if (probe.has("bodies")) {
         const Field list = probe.member("bodies");
-        for (std::size_t i = 0; i < list.array().size(); ++i) scene.probe.bodies.push_back(list.at(i).integer());
+        for (std::size_t i = 0; i < list.array().size(); ++i)
+          scene.probe.bodies.push_back(list.at(i).integer());
       }
       if (probe.has("interval")) scene.probe.interval = probe.member("interval").number();
       if (probe.has("metrics")) {
@@ -217,8 +226,9 @@ Scene scene_from_json(const json& document, const std::string& source) {
           const std::string name = list.at(i).string();
           const auto metric = metric_from_string(name);
           if (!metric)
-            list.at(i).fail("unknown metric \"" + name +
-                            "\" (known: position, orientation, energy, linear_momentum, angular_momentum)");
+            list.at(i).fail(
+                "unknown metric \"" + name +
+                "\" (known: position, orientation, energy, linear_momentum, angular_momentum)");
           scene.probe.metrics.push_back(*metric);
         }
       }
@@ -227,11 +237,17 @@ Scene scene_from_json(const json& document, const std::string& source) {
       const Field reference = root.member("reference");
       reference.object({"kind", "dt_divisor"});
       const std::string kind = reference.member("kind").string();
-      if (kind == "none") scene.reference.kind = ReferenceKind::None;
-      else if (kind == "ballistic") scene.reference.kind = ReferenceKind::Ballistic;
-      else if (kind == "converged") scene.reference.kind = ReferenceKind::Converged;
-      else reference.member("kind").fail("unknown reference \"" + kind + "\" (known: none, ballistic, converged)");
-      if (reference.has("dt_divisor")) scene.reference.dt_divisor = reference.member("dt_divisor").integer();
+      if (kind == "none")
+        scene.reference.kind = ReferenceKind::None;
+      else if (kind == "ballistic")
+        scene.reference.kind = ReferenceKind::Ballistic;
+      else if (kind == "converged")
+        scene.reference.kind = ReferenceKind::Converged;
+      else
+        reference.member("kind").fail("unknown reference \"" + kind +
+                                      "\" (known: none, ballistic, converged)");
+      if (reference.has("dt_divisor"))
+        scene.reference.dt_divisor = reference.member("dt_divisor").integer();
     }
     validate(scene);
     return scene;

@@ -19,7 +19,9 @@ Sample sample_of(const Engine& engine, const std::vector<int>& bodies, double ti
   return s;
 }
 
-bool finite(const Vec3& v) { return std::isfinite(v.x()) && std::isfinite(v.y()) && std::isfinite(v.z()); }
+bool finite(const Vec3& v) {
+  return std::isfinite(v.x()) && std::isfinite(v.y()) && std::isfinite(v.z());
+}
 
 struct Pass {
   double stepping_seconds = 0.0;
@@ -56,25 +58,33 @@ Pass run_once(Engine& engine, const Scene& scene, const std::vector<int>& bodies
 
 const char* to_string(Status status) {
   switch (status) {
-    case Status::Ok: return "ok";
-    case Status::Unsupported: return "unsupported";
-    case Status::Exploded: return "exploded";
-    case Status::Crashed: return "crashed";
-    case Status::Timeout: return "timeout";
-    case Status::Error: return "error";
+    case Status::Ok:
+      return "ok";
+    case Status::Unsupported:
+      return "unsupported";
+    case Status::Exploded:
+      return "exploded";
+    case Status::Crashed:
+      return "crashed";
+    case Status::Timeout:
+      return "timeout";
+    case Status::Error:
+      return "error";
   }
   return "?";
 }
 
 Status status_from_string(const std::string& name) {
-  for (Status s : {Status::Ok, Status::Unsupported, Status::Exploded, Status::Crashed, Status::Timeout, Status::Error})
+  for (Status s : {Status::Ok, Status::Unsupported, Status::Exploded, Status::Crashed,
+                   Status::Timeout, Status::Error})
     if (name == to_string(s)) return s;
   return Status::Error;
 }
 
 bool is_sane(const Sample& sample, double explosion_distance) {
   for (const BodyState& b : sample.bodies) {
-    if (!finite(b.position) || !finite(b.linear_velocity) || !finite(b.angular_velocity)) return false;
+    if (!finite(b.position) || !finite(b.linear_velocity) || !finite(b.angular_velocity))
+      return false;
     if (!std::isfinite(b.orientation.w()) || !finite(b.orientation.vec())) return false;
     if (b.position.norm() > explosion_distance) return false;
   }
@@ -104,8 +114,8 @@ RunResult simulate(const EngineInfo& info, const std::string& variant, const Sce
   {
     auto engine = info.create(variant);
     engine->load(scene);
-    const Pass pass = run_once(*engine, scene, result.trajectory.bodies, every, options.explosion_distance,
-                               &result.trajectory);
+    const Pass pass = run_once(*engine, scene, result.trajectory.bodies, every,
+                               options.explosion_distance, &result.trajectory);
     if (pass.exploded) {
       std::ostringstream why;
       why << "non-finite or runaway state at t = " << pass.explosion_time << " s";
@@ -123,10 +133,12 @@ RunResult simulate(const EngineInfo& info, const std::string& variant, const Sce
   // timed repeats, each on a freshly built world
   double measured = 0.0;
   while (static_cast<int>(result.wall_seconds.size()) < options.max_timed_repeats &&
-         (static_cast<int>(result.wall_seconds.size()) < options.min_timed_repeats || measured < options.timing_budget)) {
+         (static_cast<int>(result.wall_seconds.size()) < options.min_timed_repeats ||
+          measured < options.timing_budget)) {
     auto engine = info.create(variant);
     engine->load(scene);
-    const Pass pass = run_once(*engine, scene, result.trajectory.bodies, every, options.explosion_distance, nullptr);
+    const Pass pass = run_once(*engine, scene, result.trajectory.bodies, every,
+                               options.explosion_distance, nullptr);
     result.wall_seconds.push_back(pass.stepping_seconds);
     measured += pass.stepping_seconds;
   }

@@ -90,31 +90,38 @@ TEST(SceneJson, MissingRequiredFieldIsNamed) {
 TEST(SceneJson, UnknownFieldIsRejectedNotIgnored) {
   json doc = to_json(sample_scene());
   doc["bodies"][0]["colour"] = "red";
-  EXPECT_NE(error_for(doc).find("bodies[0].colour: unknown field"), std::string::npos) << error_for(doc);
+  EXPECT_NE(error_for(doc).find("bodies[0].colour: unknown field"), std::string::npos)
+      << error_for(doc);
 }
 
 TEST(SceneJson, OutOfRangeValuesAreNamed) {
   json doc = to_json(sample_scene());
   doc["bodies"][0]["mass"] = -2.0;
-  EXPECT_NE(error_for(doc).find("bodies[0].mass: must be >= 0"), std::string::npos) << error_for(doc);
+  EXPECT_NE(error_for(doc).find("bodies[0].mass: must be >= 0"), std::string::npos)
+      << error_for(doc);
   doc = to_json(sample_scene());
   doc["springs"][0]["body_b"] = 7;
-  EXPECT_NE(error_for(doc).find("springs[0].body_b: no body 7"), std::string::npos) << error_for(doc);
+  EXPECT_NE(error_for(doc).find("springs[0].body_b: no body 7"), std::string::npos)
+      << error_for(doc);
   doc = to_json(sample_scene());
   doc["bodies"][0]["orientation"] = json::array({1.0, 1.0, 0.0, 0.0});
-  EXPECT_NE(error_for(doc).find("bodies[0].orientation: must be a unit quaternion"), std::string::npos);
+  EXPECT_NE(error_for(doc).find("bodies[0].orientation: must be a unit quaternion"),
+            std::string::npos);
   doc = to_json(sample_scene());
   doc["bodies"][0]["shape"]["type"] = "torus";
-  EXPECT_NE(error_for(doc).find("bodies[0].shape.type: unknown shape \"torus\""), std::string::npos);
+  EXPECT_NE(error_for(doc).find("bodies[0].shape.type: unknown shape \"torus\""),
+            std::string::npos);
   doc = to_json(sample_scene());
   doc["bodies"][0]["position"] = json::array({1.0, 2.0});
-  EXPECT_NE(error_for(doc).find("bodies[0].position: expected 3 numbers, got 2"), std::string::npos);
+  EXPECT_NE(error_for(doc).find("bodies[0].position: expected 3 numbers, got 2"),
+            std::string::npos);
 }
 
 TEST(SceneJson, InfiniteNumberIsRejected) {
   json doc = to_json(sample_scene());
   doc["gravity"][1] = std::numeric_limits<double>::infinity();
-  EXPECT_NE(error_for(doc).find("gravity[1]: must be a finite number"), std::string::npos) << error_for(doc);
+  EXPECT_NE(error_for(doc).find("gravity[1]: must be a finite number"), std::string::npos)
+      << error_for(doc);
 }
 
 TEST(SceneJson, NanInAFileIsAParseErrorWithItsPlace) {
@@ -142,7 +149,8 @@ TEST(SceneJson, PlanarSceneMustStayInThePlane) {
   scene.bodies[0].position.z() = 0.0;
   scene.bodies[1].position.z() = 0.0;
   scene.bodies[0].linear_velocity.z() = 0.0;
-  EXPECT_NE(error_for(to_json(scene)).find("bodies[0].angular_velocity: must be about z only"), std::string::npos);
+  EXPECT_NE(error_for(to_json(scene)).find("bodies[0].angular_velocity: must be about z only"),
+            std::string::npos);
 }
 
 TEST(SceneJson, MissingFileIsNamed) {

@@ -13,12 +13,15 @@ double seconds_since(Clock::time_point start) {
   return std::chrono::duration<double>(Clock::now() - start).count();
 }
 
-Vec3 derived_velocity(const BodyState& s, const BodyMass& m) { return s.linear_momentum * m.inverse_mass; }
+Vec3 derived_velocity(const BodyState& s, const BodyMass& m) {
+  return s.linear_momentum * m.inverse_mass;
+}
 
 // Runge-Kutta stages carry quaternions off the unit sphere by O((ω h)²); the rotation they
 // stand for is that of the normalised quaternion, and using the raw one would cost RK4 its order
 Vec3 derived_angular_velocity(const BodyState& s, const BodyMass& m) {
-  return world_inverse_inertia(s.orientation.normalized(), m.inverse_inertia_body) * s.angular_momentum;
+  return world_inverse_inertia(s.orientation.normalized(), m.inverse_inertia_body) *
+         s.angular_momentum;
 }
 
 Vec3 world_point(const BodyState& s, const Vec3& local_point) {
@@ -110,8 +113,9 @@ void World::evaluate(const std::vector<BodyState>& states, std::vector<BodyRate>
   for (const SpringDef& spring : springs_) {
     const BodyState& a = states[spring.body_a];
     const Vec3 point_a = world_point(a, spring.local_point_a);
-    const Vec3 velocity_a = rates[spring.body_a].velocity +
-                            derived_angular_velocity(a, masses_[spring.body_a]).cross(point_a - a.position);
+    const Vec3 velocity_a =
+        rates[spring.body_a].velocity +
+        derived_angular_velocity(a, masses_[spring.body_a]).cross(point_a - a.position);
     Vec3 point_b = spring.point_b;
     Vec3 velocity_b = Vec3::Zero();
     if (spring.body_b != kWorldAnchor) {
@@ -127,7 +131,8 @@ void World::evaluate(const std::vector<BodyState>& states, std::vector<BodyRate>
     const Vec3 direction = delta / length;
     const double extension_rate = direction.dot(velocity_a - velocity_b);
     const Vec3 force_on_a =
-        -(spring.stiffness * (length - spring.rest_length) + spring.damping * extension_rate) * direction;
+        -(spring.stiffness * (length - spring.rest_length) + spring.damping * extension_rate) *
+        direction;
     if (masses_[spring.body_a].inverse_mass > 0.0) {
       rates[spring.body_a].force += force_on_a;
       rates[spring.body_a].torque += (point_a - a.position).cross(force_on_a);
@@ -139,12 +144,13 @@ void World::evaluate(const std::vector<BodyState>& states, std::vector<BodyRate>
   }
 }
 
-void World::advance(const std::vector<BodyState>& base, const std::vector<BodyRate>& rates, double h,
-                    std::vector<BodyState>& out) const {
+void World::advance(const std::vector<BodyState>& base, const std::vector<BodyRate>& rates,
+                    double h, std::vector<BodyState>& out) const {
   for (std::size_t i = 0; i < base.size(); ++i) {
     out[i].position = base[i].position + h * rates[i].velocity;
     out[i].linear_momentum = base[i].linear_momentum + h * rates[i].force;
-    out[i].orientation.coeffs() = base[i].orientation.coeffs() + h * rates[i].orientation_rate.coeffs();
+    out[i].orientation.coeffs() =
+        base[i].orientation.coeffs() + h * rates[i].orientation_rate.coeffs();
     out[i].angular_momentum = base[i].angular_momentum + h * rates[i].torque;
   }
 }
@@ -164,7 +170,8 @@ void World::integrate_semi_implicit_euler(double dt) {
     s.angular_momentum += dt * k1_[i].torque;
     // positions from the new velocities
     s.position += dt * derived_velocity(s, m);
-    s.orientation.coeffs() += dt * quaternion_rate(derived_angular_velocity(s, m), s.orientation).coeffs();
+    s.orientation.coeffs() +=
+        dt * quaternion_rate(derived_angular_velocity(s, m), s.orientation).coeffs();
   }
   normalise_orientations();
 }
@@ -189,12 +196,15 @@ void World::integrate_runge_kutta4(double dt) {
   const double w = dt / 6.0;
   for (std::size_t i = 0; i < states_.size(); ++i) {
     BodyState& s = states_[i];
-    s.position += w * (k1_[i].velocity + 2.0 * (k2_[i].velocity + k3_[i].velocity) + k4_[i].velocity);
+    s.position +=
+        w * (k1_[i].velocity + 2.0 * (k2_[i].velocity + k3_[i].velocity) + k4_[i].velocity);
     s.linear_momentum += w * (k1_[i].force + 2.0 * (k2_[i].force + k3_[i].force) + k4_[i].force);
-    s.orientation.coeffs() += w * (k1_[i].orientation_rate.coeffs() +
-                                   2.0 * (k2_[i].orientation_rate.coeffs() + k3_[i].orientation_rate.coeffs()) +
-                                   k4_[i].orientation_rate.coeffs());
-    s.angular_momentum += w * (k1_[i].torque + 2.0 * (k2_[i].torque + k3_[i].torque) + k4_[i].torque);
+    s.orientation.coeffs() +=
+        w * (k1_[i].orientation_rate.coeffs() +
+             2.0 * (k2_[i].orientation_rate.coeffs() + k3_[i].orientation_rate.coeffs()) +
+             k4_[i].orientation_rate.coeffs());
+    s.angular_momentum +=
+        w * (k1_[i].torque + 2.0 * (k2_[i].torque + k3_[i].torque) + k4_[i].torque);
   }
   normalise_orientations();
 }
@@ -203,9 +213,15 @@ void World::step(double dt) {
   const auto start = Clock::now();
   // apply forces and integrate: forces are evaluated inside the integrator, once per stage
   switch (integrator_) {
-    case Integrator::SemiImplicitEuler: integrate_semi_implicit_euler(dt); break;
-    case Integrator::Midpoint: integrate_midpoint(dt); break;
-    case Integrator::RungeKutta4: integrate_runge_kutta4(dt); break;
+    case Integrator::SemiImplicitEuler:
+      integrate_semi_implicit_euler(dt);
+      break;
+    case Integrator::Midpoint:
+      integrate_midpoint(dt);
+      break;
+    case Integrator::RungeKutta4:
+      integrate_runge_kutta4(dt);
+      break;
   }
   profile_.integrate = seconds_since(start);
   profile_.total = profile_.integrate;

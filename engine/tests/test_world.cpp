@@ -19,8 +19,8 @@ constexpr double kPi = 3.14159265358979323846;
 void expect_finite(const World& world) {
   for (rtp::BodyId i = 0; i < world.body_count(); ++i) {
     const rtp::BodyState& s = world.state(i);
-    ASSERT_TRUE(s.position.allFinite() && s.linear_momentum.allFinite() && s.orientation.coeffs().allFinite() &&
-                s.angular_momentum.allFinite())
+    ASSERT_TRUE(s.position.allFinite() && s.linear_momentum.allFinite() &&
+                s.orientation.coeffs().allFinite() && s.angular_momentum.allFinite())
         << "body " << i << " has a non-finite state";
   }
 }
@@ -69,7 +69,8 @@ struct Oscillator {
 
 // observed order from the error at dt and dt/2: log2(e(dt) / e(dt/2))
 double observed_order(Integrator integrator, double dt) {
-  return std::log2(Oscillator::error(integrator, dt, 1.0) / Oscillator::error(integrator, dt / 2.0, 1.0));
+  return std::log2(Oscillator::error(integrator, dt, 1.0) /
+                   Oscillator::error(integrator, dt / 2.0, 1.0));
 }
 
 TEST(Integrators, Rk4ErrorFallsAbout16TimesWhenDtHalves) {
@@ -122,7 +123,8 @@ World tumbling(Integrator integrator) {
 }
 
 TEST(Integrators, QuaternionStaysNormalised) {
-  for (Integrator integrator : {Integrator::SemiImplicitEuler, Integrator::Midpoint, Integrator::RungeKutta4}) {
+  for (Integrator integrator :
+       {Integrator::SemiImplicitEuler, Integrator::Midpoint, Integrator::RungeKutta4}) {
     World world = tumbling(integrator);
     for (int i = 0; i < 2000; ++i) world.step(1.0 / 30.0);
     expect_finite(world);
@@ -131,7 +133,8 @@ TEST(Integrators, QuaternionStaysNormalised) {
 }
 
 TEST(Integrators, TorqueFreeAngularMomentumIsConservedByEveryIntegrator) {
-  for (Integrator integrator : {Integrator::SemiImplicitEuler, Integrator::Midpoint, Integrator::RungeKutta4}) {
+  for (Integrator integrator :
+       {Integrator::SemiImplicitEuler, Integrator::Midpoint, Integrator::RungeKutta4}) {
     World world = tumbling(integrator);
     const Vec3 initial = world.state(0).angular_momentum;
     for (int i = 0; i < 1000; ++i) world.step(1.0 / 60.0);

@@ -1,6 +1,5 @@
 // physbench: run identical scenes on rtp and the peer engines; report speed against error.
 #include <CLI/CLI.hpp>
-
 #include <chrono>
 #include <ctime>
 #include <filesystem>
@@ -10,7 +9,7 @@
 #include "physbench/runner.h"
 #include "physbench/scenarios.h"
 #include "physbench/scene_json.h"
-#include "physbench/worker.h"
+#include "physbench/worker_cli.h"
 
 namespace fs = std::filesystem;
 using namespace physbench;
@@ -34,7 +33,8 @@ void print_list(const fs::path& self) {
   std::cout << "scenarios:\n";
   for (const Scenario& s : scenarios()) {
     const Scene scene = s.build();
-    std::cout << "  " << s.name << (scene.planar ? "  [planar]" : "") << "\n      " << s.question << "\n";
+    std::cout << "  " << s.name << (scene.planar ? "  [planar]" : "") << "\n      " << s.question
+              << "\n";
   }
   std::cout << "engines (variants; the first is the default):\n";
   std::string current;
@@ -51,7 +51,8 @@ void print_list(const fs::path& self) {
 }  // namespace
 
 int main(int argc, char** argv) {
-  CLI::App app{"physbench: identical scenes on rtp, Bullet, ODE, Box2D and MuJoCo; speed against error"};
+  CLI::App app{
+      "physbench: identical scenes on rtp, Bullet, ODE, Box2D and MuJoCo; speed against error"};
   app.require_subcommand(1);
 
   auto* list = app.add_subcommand("list", "list scenarios, engines and variants");
@@ -60,32 +61,38 @@ int main(int argc, char** argv) {
   std::string out;
   std::string scenarios_csv, engines_csv, variants_csv;
   double dt = 0.0, duration = 0.0;
-  auto* run = app.add_subcommand("run", "run scenes on engines; write results.csv, trajectories and metadata");
-  run->add_option("-s,--scenario", options.scenarios, "built-in scenario(s) to run (default: all)")->delimiter(',');
-  run->add_option("--scene", options.scene_files, "scene file(s) in JSON (see docs/scene-format.md)")->check(CLI::ExistingFile);
-  run->add_option("-e,--engine", options.engines, "engine(s) to run (default: all)")->delimiter(',');
-  run->add_option("--variant", options.variants, "variant(s) to run (default: all)")->delimiter(',');
-  run->add_option("--dt", dt, "override every scene's fixed time step (s)")->check(CLI::PositiveNumber);
-  run->add_option("--duration", duration, "override every scene's simulated time (s)")->check(CLI::PositiveNumber);
+  auto* run = app.add_subcommand(
+      "run", "run scenes on engines; write results.csv, trajectories and metadata");
+  run->add_option("-s,--scenario", options.scenarios, "built-in scenario(s) to run (default: all)")
+      ->delimiter(',');
+  run->add_option("--scene", options.scene_files,
+                  "scene file(s) in JSON (see docs/scene-format.md)")
+      ->check(CLI::ExistingFile);
+  run->add_option("-e,--engine", options.engines, "engine(s) to run (default: all)")
+      ->delimiter(',');
+  run->add_option("--variant", options.variants, "variant(s) to run (default: all)")
+      ->delimiter(',');
+  run->add_option("--dt", dt, "override every scene's fixed time step (s)")
+      ->check(CLI::PositiveNumber);
+  run->add_option("--duration", duration, "override every scene's simulated time (s)")
+      ->check(CLI::PositiveNumber);
   run->add_option("-o,--out", out, "results folder (default: results/<timestamp>)");
-  run->add_option("--timeout", options.timeout_seconds, "seconds before a job is killed and recorded as timeout")
-      ->capture_default_str()->check(CLI::PositiveNumber);
-  run->add_option("--budget", options.timing_budget, "seconds of measured stepping per job (repeats)")
-      ->capture_default_str()->check(CLI::NonNegativeNumber);
+  run->add_option("--timeout", options.timeout_seconds,
+                  "seconds before a job is killed and recorded as timeout")
+      ->capture_default_str()
+      ->check(CLI::PositiveNumber);
+  run->add_option("--budget", options.timing_budget,
+                  "seconds of measured stepping per job (repeats)")
+      ->capture_default_str()
+      ->check(CLI::NonNegativeNumber);
 
   auto* check = app.add_subcommand("check", "validate scene files and print what is wrong");
   std::vector<std::string> check_files;
   check->add_option("files", check_files, "scene files")->required();
 
   WorkerJob job;
-  auto* worker = app.add_subcommand("worker", "(internal) run one job and write its result");
+  auto* worker = add_worker_subcommand(app, job);
   worker->group("");  // hidden from --help
-  worker->add_option("--scene", job.scene_path)->required();
-  worker->add_option("--engine", job.engine)->required();
-  worker->add_option("--variant", job.variant)->required();
-  worker->add_option("--every", job.every_steps);
-  worker->add_option("--budget", job.timing_budget);
-  worker->add_option("--out", job.out_path)->required();
 
   CLI11_PARSE(app, argc, argv);
   const fs::path self = self_path(argv[0]);
@@ -116,7 +123,8 @@ int main(int argc, char** argv) {
   try {
     const int failures = run_suite(options, self);
     std::cout << "results: " << fs::absolute(options.out).string() << "/results.csv\n";
-    if (failures) std::cerr << failures << " job(s) crashed, timed out or failed: see the status column\n";
+    if (failures)
+      std::cerr << failures << " job(s) crashed, timed out or failed: see the status column\n";
     return 0;
   } catch (const RunError& e) {
     std::cerr << "physbench: " << e.what() << '\n';

@@ -17,15 +17,24 @@ namespace physbench {
 std::string ChildOutcome::describe() const {
   std::ostringstream out;
   switch (kind) {
-    case Kind::Exited: out << "exit code " << exit_code; break;
-    case Kind::Signalled: out << "killed by signal " << signal << " (" << strsignal(signal) << ")"; break;
-    case Kind::TimedOut: out << "timed out after " << wall_seconds << " s"; break;
-    case Kind::FailedToStart: out << "could not start"; break;
+    case Kind::Exited:
+      out << "exit code " << exit_code;
+      break;
+    case Kind::Signalled:
+      out << "killed by signal " << signal << " (" << strsignal(signal) << ")";
+      break;
+    case Kind::TimedOut:
+      out << "timed out after " << wall_seconds << " s";
+      break;
+    case Kind::FailedToStart:
+      out << "could not start";
+      break;
   }
   return out.str();
 }
 
-ChildOutcome run_child(const std::vector<std::string>& argv, const std::string& log_path, double timeout_seconds) {
+ChildOutcome run_child(const std::vector<std::string>& argv, const std::string& log_path,
+                       double timeout_seconds) {
   using Clock = std::chrono::steady_clock;
   ChildOutcome outcome;
   std::vector<char*> args;
@@ -71,7 +80,8 @@ ChildOutcome run_child(const std::vector<std::string>& argv, const std::string& 
     outcome.kind = ChildOutcome::Kind::Signalled;
     outcome.signal = WTERMSIG(status);
   } else {
-    outcome.kind = WEXITSTATUS(status) == 127 ? ChildOutcome::Kind::FailedToStart : ChildOutcome::Kind::Exited;
+    outcome.kind =
+        WEXITSTATUS(status) == 127 ? ChildOutcome::Kind::FailedToStart : ChildOutcome::Kind::Exited;
     outcome.exit_code = WEXITSTATUS(status);
   }
   return outcome;

@@ -35,13 +35,14 @@ using nlohmann::json;
 std::vector<EngineVariant> engine_catalog(const fs::path& self) {
   std::vector<EngineVariant> catalog;
   for (const EngineInfo& info : linked_engines())
-    for (const std::string& v : info.variants) catalog.push_back({info.name, v, info.version, self});
+    for (const std::string& v : info.variants)
+      catalog.push_back({info.name, v, info.version, self});
 #ifdef PHYSBENCH_HAVE_BULLET64
   // the double-precision Bullet build lives in its own executable beside this one
   for (std::size_t i = 0; i < catalog.size(); ++i)
     if (catalog[i].engine == "bullet") {
-      catalog.insert(catalog.begin() + i + 1,
-                     {"bullet", "double", catalog[i].version, self.parent_path() / "physbench-bullet64"});
+      catalog.insert(catalog.begin() + i + 1, {"bullet", "double", catalog[i].version,
+                                               self.parent_path() / "physbench-bullet64"});
       break;
     }
 #endif
@@ -55,7 +56,8 @@ namespace {
 std::string csv_field(const std::string& text) {
   if (text.find_first_of(",\"\n") == std::string::npos) return text;
   std::string quoted = "\"";
-  for (char c : text) quoted += (c == '"') ? std::string("\"\"") : std::string(1, c == '\n' ? ' ' : c);
+  for (char c : text)
+    quoted += (c == '"') ? std::string("\"\"") : std::string(1, c == '\n' ? ' ' : c);
   return quoted + "\"";
 }
 
@@ -114,17 +116,21 @@ struct JobPaths {
   fs::path scene, result, log;
 };
 
-RunResult run_job(const EngineVariant& ev, const JobPaths& paths, int every_steps, double timing_budget,
-                  double timeout) {
-  const std::vector<std::string> argv = {ev.host.string(), "worker", "--scene", paths.scene.string(),
-                                         "--engine", ev.engine, "--variant", ev.variant,
-                                         "--every", std::to_string(every_steps), "--budget",
-                                         number(timing_budget), "--out", paths.result.string()};
+RunResult run_job(const EngineVariant& ev, const JobPaths& paths, int every_steps,
+                  double timing_budget, double timeout) {
+  const std::vector<std::string> argv = {ev.host.string(), "worker",
+                                         "--scene",        paths.scene.string(),
+                                         "--engine",       ev.engine,
+                                         "--variant",      ev.variant,
+                                         "--every",        std::to_string(every_steps),
+                                         "--budget",       number(timing_budget),
+                                         "--out",          paths.result.string()};
   fs::remove(paths.result);
   const ChildOutcome outcome = run_child(argv, paths.log.string(), timeout);
   RunResult result;
   result.engine_version = ev.version;
-  if (outcome.kind == ChildOutcome::Kind::Exited && outcome.exit_code == 0 && fs::exists(paths.result)) {
+  if (outcome.kind == ChildOutcome::Kind::Exited && outcome.exit_code == 0 &&
+      fs::exists(paths.result)) {
     std::ifstream in(paths.result);
     try {
       return result_from_json(json::parse(in));
@@ -135,9 +141,15 @@ RunResult run_job(const EngineVariant& ev, const JobPaths& paths, int every_step
     }
   }
   switch (outcome.kind) {
-    case ChildOutcome::Kind::TimedOut: result.status = Status::Timeout; break;
-    case ChildOutcome::Kind::Signalled: result.status = Status::Crashed; break;
-    default: result.status = Status::Error; break;
+    case ChildOutcome::Kind::TimedOut:
+      result.status = Status::Timeout;
+      break;
+    case ChildOutcome::Kind::Signalled:
+      result.status = Status::Crashed;
+      break;
+    default:
+      result.status = Status::Error;
+      break;
   }
   result.message = outcome.describe();
   const std::string tail = tail_of_file(paths.log.string(), 3);
@@ -147,20 +159,46 @@ RunResult run_job(const EngineVariant& ev, const JobPaths& paths, int every_step
 
 // ---- the results folder -------------------------------------------------------------------------
 
-const std::vector<std::string> kColumns = {
-    "scenario", "engine", "variant", "status", "dt", "duration", "steps", "bodies", "repeats",
-    "wall_s_median", "steps_per_s", "steps_per_s_min", "steps_per_s_max", "body_steps_per_s", "realtime_factor",
-    "position_err_rms", "position_err_max", "position_err_final",
-    "orientation_err_rms", "orientation_err_max", "orientation_err_final",
-    "energy_drift_max", "energy_drift_final", "linear_momentum_drift_max", "linear_momentum_drift_final",
-    "angular_momentum_drift_max", "angular_momentum_drift_final",
-    "reference", "reference_self_error", "trajectory", "message"};
+const std::vector<std::string> kColumns = {"scenario",
+                                           "engine",
+                                           "variant",
+                                           "status",
+                                           "dt",
+                                           "duration",
+                                           "steps",
+                                           "bodies",
+                                           "repeats",
+                                           "wall_s_median",
+                                           "steps_per_s",
+                                           "steps_per_s_min",
+                                           "steps_per_s_max",
+                                           "body_steps_per_s",
+                                           "realtime_factor",
+                                           "position_err_rms",
+                                           "position_err_max",
+                                           "position_err_final",
+                                           "orientation_err_rms",
+                                           "orientation_err_max",
+                                           "orientation_err_final",
+                                           "energy_drift_max",
+                                           "energy_drift_final",
+                                           "linear_momentum_drift_max",
+                                           "linear_momentum_drift_final",
+                                           "angular_momentum_drift_max",
+                                           "angular_momentum_drift_final",
+                                           "reference",
+                                           "reference_self_error",
+                                           "trajectory",
+                                           "message"};
 
 void write_trajectory_csv(const fs::path& path, const Trajectory& run, const ErrorSeries& series) {
   std::ofstream out(path);
-  out << "time,body,px,py,pz,qw,qx,qy,qz,vx,vy,vz,wx,wy,wz,position_err,orientation_err,energy_drift,"
+  out << "time,body,px,py,pz,qw,qx,qy,qz,vx,vy,vz,wx,wy,wz,position_err,orientation_err,energy_"
+         "drift,"
          "linear_momentum_drift,angular_momentum_drift\n";
-  auto at = [](const std::vector<double>& v, std::size_t k) { return k < v.size() ? number(v[k]) : std::string(); };
+  auto at = [](const std::vector<double>& v, std::size_t k) {
+    return k < v.size() ? number(v[k]) : std::string();
+  };
   for (std::size_t k = 0; k < run.samples.size(); ++k) {
     const Sample& s = run.samples[k];
     for (std::size_t b = 0; b < s.bodies.size(); ++b) {
@@ -182,7 +220,7 @@ void write_trajectory_csv(const fs::path& path, const Trajectory& run, const Err
 struct ReferenceRun {
   bool available = false;
   std::string failure;
-  Trajectory trajectory;     // converged: the dt/divisor run
+  Trajectory trajectory;             // converged: the dt/divisor run
   double self_error = std::nan("");  // converged: difference to the dt/(2·divisor) run
 };
 
@@ -200,14 +238,17 @@ int run_suite(const RunOptions& options, const fs::path& self) {
   auto known_engines = [&] {
     std::string names;
     for (const EngineVariant& ev : catalog)
-      if (names.find(ev.engine) == std::string::npos) names += (names.empty() ? "" : ", ") + ev.engine;
+      if (names.find(ev.engine) == std::string::npos)
+        names += (names.empty() ? "" : ", ") + ev.engine;
     return names;
   };
   for (const std::string& e : options.engines)
-    if (std::none_of(catalog.begin(), catalog.end(), [&](const EngineVariant& ev) { return ev.engine == e; }))
+    if (std::none_of(catalog.begin(), catalog.end(),
+                     [&](const EngineVariant& ev) { return ev.engine == e; }))
       throw RunError("unknown engine '" + e + "' (this build has: " + known_engines() + ")");
   for (const std::string& v : options.variants)
-    if (std::none_of(catalog.begin(), catalog.end(), [&](const EngineVariant& ev) { return ev.variant == v; }))
+    if (std::none_of(catalog.begin(), catalog.end(),
+                     [&](const EngineVariant& ev) { return ev.variant == v; }))
       throw RunError("unknown variant '" + v + "' (see `physbench list`)");
 
   std::vector<PreparedScene> scenes;
@@ -218,7 +259,8 @@ int run_suite(const RunOptions& options, const fs::path& self) {
     const Scenario* scenario = find_scenario(name);
     if (!scenario) {
       std::string names;
-      for (const Scenario& s : physbench::scenarios()) names += (names.empty() ? "" : ", ") + s.name;
+      for (const Scenario& s : physbench::scenarios())
+        names += (names.empty() ? "" : ", ") + s.name;
       throw RunError("unknown scenario '" + name + "' (built in: " + names + ")");
     }
     scenes.push_back({scenario->build(), scenario->question, {}});
@@ -242,7 +284,8 @@ int run_suite(const RunOptions& options, const fs::path& self) {
 
   std::vector<EngineVariant> jobs_engines;
   for (const EngineVariant& ev : catalog)
-    if (selected(options.engines, ev.engine) && selected(options.variants, ev.variant)) jobs_engines.push_back(ev);
+    if (selected(options.engines, ev.engine) && selected(options.variants, ev.variant))
+      jobs_engines.push_back(ev);
   if (jobs_engines.empty()) throw RunError("no engine variant matches the filters given");
 
   // ---- the results folder; results.csv appears only when complete
@@ -258,19 +301,23 @@ int run_suite(const RunOptions& options, const fs::path& self) {
   json metadata;
   metadata["created"] = timestamp_utc();
   metadata["command"] = options.command_line;
-  metadata["git_commit"] = read_first_line(std::string("git -C '") + PHYSBENCH_SOURCE_DIR + "' rev-parse HEAD 2>/dev/null");
+  metadata["git_commit"] = read_first_line(std::string("git -C '") + PHYSBENCH_SOURCE_DIR +
+                                           "' rev-parse HEAD 2>/dev/null");
   utsname uts{};
   uname(&uts);
   metadata["machine"] = {{"cpu", cpu_model()},
                          {"logical_cores", sysconf(_SC_NPROCESSORS_ONLN)},
-                         {"memory_gib", std::round(double(sysconf(_SC_PHYS_PAGES)) * double(sysconf(_SC_PAGE_SIZE)) / (1 << 30))},
+                         {"memory_gib", std::round(double(sysconf(_SC_PHYS_PAGES)) *
+                                                   double(sysconf(_SC_PAGE_SIZE)) / (1 << 30))},
                          {"os", std::string(uts.sysname) + " " + uts.release},
                          {"hostname", uts.nodename}};
   metadata["build"] = PHYSBENCH_BUILD_INFO;
   metadata["compiler"] = std::string("g++ ") + __VERSION__;
-  metadata["timing"] = {{"budget_s", options.timing_budget},
-                        {"note", "each job: one warm-up run that records the trajectory, then timed repeats on a "
-                                 "fresh world until the budget is spent (at least 3); steps/s is the median"}};
+  metadata["timing"] = {
+      {"budget_s", options.timing_budget},
+      {"note",
+       "each job: one warm-up run that records the trajectory, then timed repeats on a "
+       "fresh world until the budget is spent (at least 3); steps/s is the median"}};
   metadata["engines"] = json::object();
   metadata["scenarios"] = json::object();
 
@@ -291,13 +338,17 @@ int run_suite(const RunOptions& options, const fs::path& self) {
       for (int factor : {1, 2}) {
         const int divisor = scene.reference.dt_divisor * factor;
         const Scene fine = refined(scene, divisor);
-        const fs::path file = out / "scenes" / (safe_name(scene.name) + ".reference-dt-over-" + std::to_string(divisor) + ".json");
+        const fs::path file =
+            out / "scenes" /
+            (safe_name(scene.name) + ".reference-dt-over-" + std::to_string(divisor) + ".json");
         save_scene_file(fine, file.string());
         std::cerr << "  reference for " << scene.name << ": rtp rk4 at dt/" << divisor << "\n";
-        const RunResult r = run_job(rtp_rk4, {file, work / "reference.json", work / "reference.log"}, every * divisor,
-                                    0.0, options.timeout_seconds);
+        const RunResult r =
+            run_job(rtp_rk4, {file, work / "reference.json", work / "reference.log"},
+                    every * divisor, 0.0, options.timeout_seconds);
         if (r.status != Status::Ok) {
-          reference.failure = "reference run (rtp rk4 at dt/" + std::to_string(divisor) + ") " + to_string(r.status) + ": " + r.message;
+          reference.failure = "reference run (rtp rk4 at dt/" + std::to_string(divisor) + ") " +
+                              to_string(r.status) + ": " + r.message;
           break;
         }
         runs.push_back(r.trajectory);
@@ -328,15 +379,18 @@ int run_suite(const RunOptions& options, const fs::path& self) {
     for (const EngineVariant& ev : jobs_engines) {
       ++done;
       const std::string job = safe_name(scene.name + "__" + ev.engine + "__" + ev.variant);
-      std::cerr << "[" << done << "/" << total << "] " << scene.name << "  " << ev.engine << "/" << ev.variant << " ... " << std::flush;
-      RunResult r = run_job(ev, {p.file, work / (job + ".json"), work / (job + ".log")}, every, options.timing_budget,
-                            options.timeout_seconds);
+      std::cerr << "[" << done << "/" << total << "] " << scene.name << "  " << ev.engine << "/"
+                << ev.variant << " ... " << std::flush;
+      RunResult r = run_job(ev, {p.file, work / (job + ".json"), work / (job + ".log")}, every,
+                            options.timing_budget, options.timeout_seconds);
 
       json& engine_meta = metadata["engines"][ev.engine];
-      if (r.status != Status::Unsupported && r.status != Status::Crashed && r.status != Status::Timeout) {
+      if (r.status != Status::Unsupported && r.status != Status::Crashed &&
+          r.status != Status::Timeout) {
         engine_meta["version"] = r.engine_version;
         json settings = json::array();
-        for (const Setting& s : r.settings) settings.push_back({{"name", s.name}, {"value", s.value}, {"why", s.why}});
+        for (const Setting& s : r.settings)
+          settings.push_back({{"name", s.name}, {"value", s.value}, {"why", s.why}});
         engine_meta["variants"][ev.variant] = settings;
       }
 
@@ -366,7 +420,8 @@ int run_suite(const RunOptions& options, const fs::path& self) {
           row["realtime_factor"] = number(scene.duration / wall);
           if (r.status == Status::Exploded) {
             // the run stopped early: its speed is not comparable
-            for (const char* key : {"steps_per_s", "steps_per_s_min", "steps_per_s_max", "body_steps_per_s", "realtime_factor"})
+            for (const char* key : {"steps_per_s", "steps_per_s_min", "steps_per_s_max",
+                                    "body_steps_per_s", "realtime_factor"})
               row[key] = "";
           }
         }
@@ -377,13 +432,17 @@ int run_suite(const RunOptions& options, const fs::path& self) {
             ballistic = ballistic_reference(scene, r.trajectory);
             against = &ballistic;
           } else if (scene.reference.kind == ReferenceKind::Converged) {
-            if (reference.available) against = &reference.trajectory;
-            else message += (message.empty() ? "" : "; ") + reference.failure;
+            if (reference.available)
+              against = &reference.trajectory;
+            else
+              message += (message.empty() ? "" : "; ") + reference.failure;
           }
           Scene measured = scene;
           if (!against) {
             // without a reference only the invariants can be judged
-            std::erase_if(measured.probe.metrics, [](Metric m) { return m == Metric::Position || m == Metric::Orientation; });
+            std::erase_if(measured.probe.metrics, [](Metric m) {
+              return m == Metric::Position || m == Metric::Orientation;
+            });
           }
           const ErrorSeries series = compare(measured, r.trajectory, against);
           const ErrorSummary summary = summarise(series);
@@ -405,17 +464,22 @@ int run_suite(const RunOptions& options, const fs::path& self) {
           message += (message.empty() ? "" : "; ") + std::string("metrics failed: ") + e.what();
         }
       }
-      if (r.status == Status::Crashed || r.status == Status::Timeout || r.status == Status::Error) ++failures;
+      if (r.status == Status::Crashed || r.status == Status::Timeout || r.status == Status::Error)
+        ++failures;
       row["status"] = to_string(r.status);
       row["message"] = message;
-      for (std::size_t i = 0; i < kColumns.size(); ++i) csv << (i ? "," : "") << csv_field(row[kColumns[i]]);
+      for (std::size_t i = 0; i < kColumns.size(); ++i)
+        csv << (i ? "," : "") << csv_field(row[kColumns[i]]);
       csv << '\n';
 
       std::cerr << row["status"];
       if (!row["steps_per_s"].empty()) std::cerr << "  " << row["steps_per_s"] << " steps/s";
-      if (!row["position_err_max"].empty()) std::cerr << "  pos err max " << row["position_err_max"] << " m";
-      if (!row["orientation_err_max"].empty()) std::cerr << "  orient err max " << row["orientation_err_max"] << " rad";
-      if (!row["energy_drift_max"].empty()) std::cerr << "  energy drift " << row["energy_drift_max"];
+      if (!row["position_err_max"].empty())
+        std::cerr << "  pos err max " << row["position_err_max"] << " m";
+      if (!row["orientation_err_max"].empty())
+        std::cerr << "  orient err max " << row["orientation_err_max"] << " rad";
+      if (!row["energy_drift_max"].empty())
+        std::cerr << "  energy drift " << row["energy_drift_max"];
       if (r.status != Status::Ok) std::cerr << "  (" << message << ")";
       std::cerr << '\n';
     }

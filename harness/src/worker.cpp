@@ -17,11 +17,13 @@ json result_to_json(const RunResult& r) {
   doc["message"] = r.message;
   doc["engine_version"] = r.engine_version;
   doc["settings"] = json::array();
-  for (const Setting& s : r.settings) doc["settings"].push_back({{"name", s.name}, {"value", s.value}, {"why", s.why}});
+  for (const Setting& s : r.settings)
+    doc["settings"].push_back({{"name", s.name}, {"value", s.value}, {"why", s.why}});
   doc["steps"] = r.steps;
   doc["wall_seconds"] = r.wall_seconds;
   doc["bodies"] = r.trajectory.bodies;
-  // one row per sample: time, then 13 numbers per body (position, quaternion wxyz, velocity, angular velocity)
+  // one row per sample: time, then 13 numbers per body (position, quaternion wxyz, velocity,
+  // angular velocity)
   json samples = json::array();
   for (const Sample& s : r.trajectory.samples) {
     json row = json::array({s.time});
@@ -49,7 +51,8 @@ RunResult result_from_json(const json& doc) {
   r.message = doc.at("message").get<std::string>();
   r.engine_version = doc.at("engine_version").get<std::string>();
   for (const json& s : doc.at("settings"))
-    r.settings.push_back({s.at("name").get<std::string>(), s.at("value").get<std::string>(), s.at("why").get<std::string>()});
+    r.settings.push_back({s.at("name").get<std::string>(), s.at("value").get<std::string>(),
+                          s.at("why").get<std::string>()});
   r.steps = doc.at("steps").get<long>();
   r.wall_seconds = doc.at("wall_seconds").get<std::vector<double>>();
   r.trajectory.bodies = doc.at("bodies").get<std::vector<int>>();

@@ -41,7 +41,8 @@ TEST(Process, ReportsAMissingProgram) {
   const std::string log = log_file();
   const ChildOutcome o = run_child({"/nonexistent/physbench-worker"}, log, 10.0);
   EXPECT_EQ(o.kind, ChildOutcome::Kind::FailedToStart);
-  EXPECT_NE(tail_of_file(log, 1).find("cannot run /nonexistent/physbench-worker"), std::string::npos);
+  EXPECT_NE(tail_of_file(log, 1).find("cannot run /nonexistent/physbench-worker"),
+            std::string::npos);
 }
 
 TEST(WorkerResult, JsonRoundTripKeepsStatesAndNan) {

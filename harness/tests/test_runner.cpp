@@ -51,10 +51,14 @@ std::vector<std::map<std::string, std::string>> read_rows(const fs::path& csv) {
     bool quoted = false;
     for (std::size_t i = 0; i < line.size(); ++i) {
       const char c = line[i];
-      if (quoted && c == '"' && i + 1 < line.size() && line[i + 1] == '"') field += '"', ++i;
-      else if (c == '"') quoted = !quoted;
-      else if (c == ',' && !quoted) fields.push_back(field), field.clear();
-      else field += c;
+      if (quoted && c == '"' && i + 1 < line.size() && line[i + 1] == '"')
+        field += '"', ++i;
+      else if (c == '"')
+        quoted = !quoted;
+      else if (c == ',' && !quoted)
+        fields.push_back(field), field.clear();
+      else
+        field += c;
     }
     fields.push_back(field);
     return fields;
@@ -71,24 +75,31 @@ std::vector<std::map<std::string, std::string>> read_rows(const fs::path& csv) {
   return rows;
 }
 
-const std::map<std::string, std::string>* find_row(const std::vector<std::map<std::string, std::string>>& rows,
-                                                    const std::string& engine, const std::string& variant) {
+const std::map<std::string, std::string>* find_row(
+    const std::vector<std::map<std::string, std::string>>& rows, const std::string& engine,
+    const std::string& variant) {
   for (const auto& r : rows)
     if (r.at("engine") == engine && r.at("variant") == variant) return &r;
   return nullptr;
 }
 
-#if defined(PHYSBENCH_HAVE_BULLET) && defined(PHYSBENCH_HAVE_ODE) && defined(PHYSBENCH_HAVE_BOX2D) && \
-    defined(PHYSBENCH_HAVE_MUJOCO)
+#if defined(PHYSBENCH_HAVE_BULLET) && defined(PHYSBENCH_HAVE_ODE) && \
+    defined(PHYSBENCH_HAVE_BOX2D) && defined(PHYSBENCH_HAVE_MUJOCO)
 TEST(Runner, ProjectileOnEveryEngineVariant) {
   const fs::path dir = fresh_dir("all_engines");
-  const Invocation inv = physbench({"run", "--scenario", "projectile-planar", "--budget", "0.01", "--out", (dir / "r").string()}, dir);
+  const Invocation inv = physbench(
+      {"run", "--scenario", "projectile-planar", "--budget", "0.01", "--out", (dir / "r").string()},
+      dir);
   ASSERT_EQ(inv.outcome.kind, ChildOutcome::Kind::Exited) << inv.output;
   ASSERT_EQ(inv.outcome.exit_code, 0) << inv.output;
   const auto rows = read_rows(dir / "r" / "results.csv");
-  for (const auto& [engine, variant] : std::vector<std::pair<std::string, std::string>>{
-           {"rtp", "rk4"}, {"bullet", "float"}, {"bullet", "double"}, {"ode", "quickstep"}, {"box2d", "default"},
-           {"mujoco", "euler"}}) {
+  for (const auto& [engine, variant] :
+       std::vector<std::pair<std::string, std::string>>{{"rtp", "rk4"},
+                                                        {"bullet", "float"},
+                                                        {"bullet", "double"},
+                                                        {"ode", "quickstep"},
+                                                        {"box2d", "default"},
+                                                        {"mujoco", "euler"}}) {
     const auto* row = find_row(rows, engine, variant);
     ASSERT_NE(row, nullptr) << "no row for " << engine << "/" << variant;
     EXPECT_EQ(row->at("status"), "ok") << engine << "/" << variant << ": " << row->at("message");
@@ -109,7 +120,8 @@ TEST(Runner, ProjectileOnEveryEngineVariant) {
 #ifdef PHYSBENCH_HAVE_BOX2D
 TEST(Runner, UnsupportedSceneIsARowWithItsReason) {
   const fs::path dir = fresh_dir("unsupported");
-  const Invocation inv = physbench({"run", "-s", "projectile", "-e", "box2d", "--out", (dir / "r").string()}, dir);
+  const Invocation inv =
+      physbench({"run", "-s", "projectile", "-e", "box2d", "--out", (dir / "r").string()}, dir);
   ASSERT_EQ(inv.outcome.exit_code, 0) << inv.output;
   const auto rows = read_rows(dir / "r" / "results.csv");
   ASSERT_EQ(rows.size(), 1u);
@@ -120,11 +132,13 @@ TEST(Runner, UnsupportedSceneIsARowWithItsReason) {
 
 TEST(Runner, RunawaySceneIsRecordedAsExploded) {
   const fs::path dir = fresh_dir("exploded");
-  std::ofstream(dir / "runaway.json") << R"({"name": "runaway", "dt": 0.01, "duration": 1, "collisions": false,
+  std::ofstream(dir / "runaway.json")
+      << R"({"name": "runaway", "dt": 0.01, "duration": 1, "collisions": false,
     "bodies": [{"shape": {"type": "sphere", "radius": 0.1}, "mass": 1, "linear_velocity": [1e8, 0, 0]}],
     "probe": {"metrics": ["energy"]}})";
-  const Invocation inv =
-      physbench({"run", "--scene", (dir / "runaway.json").string(), "-e", "rtp", "--out", (dir / "r").string()}, dir);
+  const Invocation inv = physbench({"run", "--scene", (dir / "runaway.json").string(), "-e", "rtp",
+                                    "--out", (dir / "r").string()},
+                                   dir);
   ASSERT_EQ(inv.outcome.exit_code, 0) << inv.output;
   const auto rows = read_rows(dir / "r" / "results.csv");
   ASSERT_EQ(rows.size(), 3u);  // rk4, midpoint, euler
@@ -147,19 +161,28 @@ TEST(Runner, MalformedSceneFileNamesTheFieldAndWritesNothing) {
   const fs::path dir = fresh_dir("malformed");
   std::ofstream(dir / "bad.json") << R"({"name": "bad", "dt": 0.01, "duration": 1,
     "bodies": [{"shape": {"type": "box", "half_extents": [1, 1, 1]}, "mass": "heavy"}]})";
-  const Invocation inv = physbench({"run", "--scene", (dir / "bad.json").string(), "--out", (dir / "r").string()}, dir);
+  const Invocation inv = physbench(
+      {"run", "--scene", (dir / "bad.json").string(), "--out", (dir / "r").string()}, dir);
   EXPECT_EQ(inv.outcome.exit_code, 2);
-  EXPECT_NE(inv.output.find("bad.json: bodies[0].mass: expected a number"), std::string::npos) << inv.output;
+  EXPECT_NE(inv.output.find("bad.json: bodies[0].mass: expected a number"), std::string::npos)
+      << inv.output;
   EXPECT_FALSE(fs::exists(dir / "r" / "results.csv"));
 }
 
 TEST(Runner, SceneFileRunsTheSameAsTheBuiltInScenario) {
   // a scene written out by one run and read back by another gives the same trajectory
   const fs::path dir = fresh_dir("scene_file");
-  ASSERT_EQ(physbench({"run", "-s", "tumbling-box", "-e", "rtp", "--variant", "rk4", "--budget", "0", "--out",
-                       (dir / "a").string()}, dir).outcome.exit_code, 0);
-  ASSERT_EQ(physbench({"run", "--scene", (dir / "a" / "scenes" / "tumbling-box.json").string(), "-e", "rtp",
-                       "--variant", "rk4", "--budget", "0", "--out", (dir / "b").string()}, dir).outcome.exit_code, 0);
+  ASSERT_EQ(physbench({"run", "-s", "tumbling-box", "-e", "rtp", "--variant", "rk4", "--budget",
+                       "0", "--out", (dir / "a").string()},
+                      dir)
+                .outcome.exit_code,
+            0);
+  ASSERT_EQ(
+      physbench({"run", "--scene", (dir / "a" / "scenes" / "tumbling-box.json").string(), "-e",
+                 "rtp", "--variant", "rk4", "--budget", "0", "--out", (dir / "b").string()},
+                dir)
+          .outcome.exit_code,
+      0);
   const auto a = read_rows(dir / "a" / "results.csv"), b = read_rows(dir / "b" / "results.csv");
   ASSERT_EQ(a.size(), 1u);
   ASSERT_EQ(b.size(), 1u);

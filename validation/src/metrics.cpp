@@ -24,7 +24,8 @@ Invariants invariants_of(const Scene& scene, const std::vector<int>& bodies, con
     const Mat3 inertia_world =
         rotation * principal_inertia(spec.shape, spec.mass).asDiagonal() * rotation.transpose();
     const Vec3 spin_momentum = inertia_world * s.angular_velocity;
-    const double kinetic = 0.5 * spec.mass * s.linear_velocity.squaredNorm() + 0.5 * s.angular_velocity.dot(spin_momentum);
+    const double kinetic = 0.5 * spec.mass * s.linear_velocity.squaredNorm() +
+                           0.5 * s.angular_velocity.dot(spin_momentum);
     inv.kinetic += kinetic;
     inv.energy += kinetic - spec.mass * scene.gravity.dot(s.position);
     inv.linear_momentum += spec.mass * s.linear_velocity;
@@ -77,7 +78,8 @@ double orientation_angle(const Quat& a, const Quat& b) {
 ErrorSeries compare(const Scene& scene, const Trajectory& run, const Trajectory* reference) {
   const bool position = wants(scene, Metric::Position);
   const bool orientation = wants(scene, Metric::Orientation);
-  if ((position || orientation) && !reference) throw std::invalid_argument("compare: the scene needs a reference");
+  if ((position || orientation) && !reference)
+    throw std::invalid_argument("compare: the scene needs a reference");
   if (reference && reference->samples.size() < run.samples.size())
     throw std::invalid_argument("compare: the reference has fewer samples than the run");
 
@@ -85,7 +87,8 @@ ErrorSeries compare(const Scene& scene, const Trajectory& run, const Trajectory*
   if (run.samples.empty()) return series;
   const Invariants initial = invariants_of(scene, run.bodies, run.samples.front());
   const double energy_scale = initial.kinetic > 0.0 ? initial.kinetic : 1.0;
-  const double angular_scale = initial.angular_momentum.norm() > 0.0 ? initial.angular_momentum.norm() : 1.0;
+  const double angular_scale =
+      initial.angular_momentum.norm() > 0.0 ? initial.angular_momentum.norm() : 1.0;
 
   for (std::size_t k = 0; k < run.samples.size(); ++k) {
     const Sample& s = run.samples[k];
@@ -96,18 +99,23 @@ ErrorSeries compare(const Scene& scene, const Trajectory& run, const Trajectory*
         throw std::invalid_argument("compare: sample times differ from the reference's");
       double worst_position = 0.0, worst_orientation = 0.0;
       for (std::size_t b = 0; b < s.bodies.size(); ++b) {
-        worst_position = std::max(worst_position, (s.bodies[b].position - r.bodies[b].position).norm());
-        worst_orientation = std::max(worst_orientation, orientation_angle(r.bodies[b].orientation, s.bodies[b].orientation));
+        worst_position =
+            std::max(worst_position, (s.bodies[b].position - r.bodies[b].position).norm());
+        worst_orientation = std::max(
+            worst_orientation, orientation_angle(r.bodies[b].orientation, s.bodies[b].orientation));
       }
       if (position) series.position_error.push_back(worst_position);
       if (orientation) series.orientation_error.push_back(worst_orientation);
     }
     const Invariants now = invariants_of(scene, run.bodies, s);
-    if (wants(scene, Metric::Energy)) series.energy_drift.push_back(std::abs(now.energy - initial.energy) / energy_scale);
+    if (wants(scene, Metric::Energy))
+      series.energy_drift.push_back(std::abs(now.energy - initial.energy) / energy_scale);
     if (wants(scene, Metric::LinearMomentum))
-      series.linear_momentum_drift.push_back((now.linear_momentum - initial.linear_momentum).norm());
+      series.linear_momentum_drift.push_back(
+          (now.linear_momentum - initial.linear_momentum).norm());
     if (wants(scene, Metric::AngularMomentum))
-      series.angular_momentum_drift.push_back((now.angular_momentum - initial.angular_momentum).norm() / angular_scale);
+      series.angular_momentum_drift.push_back(
+          (now.angular_momentum - initial.angular_momentum).norm() / angular_scale);
   }
   return series;
 }
@@ -117,8 +125,10 @@ ErrorSummary summarise(const ErrorSeries& series) {
   if (!series.position_error.empty()) summary.position = summary_of(series.position_error);
   if (!series.orientation_error.empty()) summary.orientation = summary_of(series.orientation_error);
   if (!series.energy_drift.empty()) summary.energy = summary_of(series.energy_drift);
-  if (!series.linear_momentum_drift.empty()) summary.linear_momentum = summary_of(series.linear_momentum_drift);
-  if (!series.angular_momentum_drift.empty()) summary.angular_momentum = summary_of(series.angular_momentum_drift);
+  if (!series.linear_momentum_drift.empty())
+    summary.linear_momentum = summary_of(series.linear_momentum_drift);
+  if (!series.angular_momentum_drift.empty())
+    summary.angular_momentum = summary_of(series.angular_momentum_drift);
   return summary;
 }
 
@@ -132,12 +142,14 @@ Trajectory ballistic_reference(const Scene& scene, const Trajectory& sampled_at)
       const BodySpec& b = scene.bodies[index];
       BodyState state;
       if (b.mass > 0.0) {
-        state.position = b.position + b.linear_velocity * at.time + 0.5 * scene.gravity * at.time * at.time;
+        state.position =
+            b.position + b.linear_velocity * at.time + 0.5 * scene.gravity * at.time * at.time;
         state.linear_velocity = b.linear_velocity + scene.gravity * at.time;
       } else {
         state.position = b.position;
       }
-      state.orientation = b.orientation;  // not part of the closed form: the scene asks no orientation metric
+      state.orientation =
+          b.orientation;  // not part of the closed form: the scene asks no orientation metric
       s.bodies.push_back(state);
     }
     reference.samples.push_back(std::move(s));

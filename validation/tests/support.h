@@ -27,19 +27,22 @@ inline Trajectory converged_reference(const Scene& scene, int divisor) {
   return simulate(rtp_engine_info(), "rk4", refined(scene, divisor), options).trajectory;
 }
 
-inline Measured measure(const std::string& engine_name, const std::string& variant, const Scene& scene) {
+inline Measured measure(const std::string& engine_name, const std::string& variant,
+                        const Scene& scene) {
   SimulateOptions options;
   options.timing_budget = 0.0;  // tests measure accuracy, never speed
   Measured m;
   m.run = simulate(engine(engine_name), variant, scene, options);
   if (m.run.status != Status::Ok) {
-    ADD_FAILURE() << engine_name << "/" << variant << " on " << scene.name << ": " << to_string(m.run.status) << " "
-                  << m.run.message;
+    ADD_FAILURE() << engine_name << "/" << variant << " on " << scene.name << ": "
+                  << to_string(m.run.status) << " " << m.run.message;
     return m;
   }
   Trajectory reference;
-  if (scene.reference.kind == ReferenceKind::Ballistic) reference = ballistic_reference(scene, m.run.trajectory);
-  if (scene.reference.kind == ReferenceKind::Converged) reference = converged_reference(scene, scene.reference.dt_divisor);
+  if (scene.reference.kind == ReferenceKind::Ballistic)
+    reference = ballistic_reference(scene, m.run.trajectory);
+  if (scene.reference.kind == ReferenceKind::Converged)
+    reference = converged_reference(scene, scene.reference.dt_divisor);
   m.summary = summarise(compare(scene, m.run.trajectory, &reference));
   return m;
 }

@@ -14,7 +14,8 @@ using namespace physbench;
 using physbench::testing::measure;
 
 std::optional<double> metric_value(const ErrorSummary& s, const std::string& metric) {
-  auto pick = [](const std::optional<SeriesSummary>& series, const std::string& part) -> std::optional<double> {
+  auto pick = [](const std::optional<SeriesSummary>& series,
+                 const std::string& part) -> std::optional<double> {
     if (!series) return std::nullopt;
     if (part == "rms") return series->rms;
     if (part == "max") return series->max;
@@ -36,15 +37,18 @@ TEST(Gates, RtpStaysWithinItsAccuracyBaselines) {
   const nlohmann::json baselines = nlohmann::json::parse(in);
   ASSERT_FALSE(baselines.at("gates").empty());
   for (const auto& gate : baselines.at("gates")) {
-    const std::string scenario = gate.at("scenario"), variant = gate.at("variant"), metric = gate.at("metric");
+    const std::string scenario = gate.at("scenario"), variant = gate.at("variant"),
+                      metric = gate.at("metric");
     const Scenario* s = find_scenario(scenario);
     ASSERT_NE(s, nullptr) << "baseline names an unknown scenario " << scenario;
     const auto measured = metric_value(measure("rtp", variant, s->build()).summary, metric);
     ASSERT_TRUE(measured) << scenario << " does not measure " << metric;
-    const double limit = std::max(gate.at("baseline").get<double>() * gate.at("factor").get<double>(),
-                                  gate.at("floor").get<double>());
-    EXPECT_LE(*measured, limit) << "gate " << scenario << "/rtp/" << variant << " " << metric << ": measured "
-                                << *measured << ", baseline " << gate.at("baseline") << ", limit " << limit;
+    const double limit =
+        std::max(gate.at("baseline").get<double>() * gate.at("factor").get<double>(),
+                 gate.at("floor").get<double>());
+    EXPECT_LE(*measured, limit) << "gate " << scenario << "/rtp/" << variant << " " << metric
+                                << ": measured " << *measured << ", baseline "
+                                << gate.at("baseline") << ", limit " << limit;
   }
 }
 

@@ -13,13 +13,13 @@ using physbench::testing::measure;
 // a projectile with a general orientation and spin: frame conversions have nowhere to hide
 Scene turned_projectile(bool planar) {
   Scene scene = planar ? projectile_planar_scene() : projectile_scene();
-  scene.bodies[0].orientation =
-      planar ? Quat(Eigen::AngleAxisd(0.8, Vec3::UnitZ())) : Quat(Eigen::AngleAxisd(0.8, Vec3(1, 2, 3).normalized()));
+  scene.bodies[0].orientation = planar ? Quat(Eigen::AngleAxisd(0.8, Vec3::UnitZ()))
+                                       : Quat(Eigen::AngleAxisd(0.8, Vec3(1, 2, 3).normalized()));
   return scene;
 }
 
-void expect_initial_state_read_back(const std::string& engine, const std::string& variant, bool planar,
-                                    double tolerance) {
+void expect_initial_state_read_back(const std::string& engine, const std::string& variant,
+                                    bool planar, double tolerance) {
   const Scene scene = turned_projectile(planar);
   const RunResult r = measure(engine, variant, scene).run;
   ASSERT_FALSE(r.trajectory.samples.empty());
@@ -32,20 +32,25 @@ void expect_initial_state_read_back(const std::string& engine, const std::string
 }
 
 // semi-implicit Euler under constant gravity ends ½ g dt T behind the parabola
-void expect_semi_implicit_signature(const std::string& engine, const std::string& variant, bool planar,
-                                    double tolerance) {
+void expect_semi_implicit_signature(const std::string& engine, const std::string& variant,
+                                    bool planar, double tolerance) {
   const Scene scene = planar ? projectile_planar_scene() : projectile_scene();
   const auto m = measure(engine, variant, scene);
   ASSERT_TRUE(m.summary.position);
-  EXPECT_NEAR(m.summary.position->final, 0.5 * scene.gravity.norm() * scene.dt * scene.duration, tolerance)
+  EXPECT_NEAR(m.summary.position->final, 0.5 * scene.gravity.norm() * scene.dt * scene.duration,
+              tolerance)
       << engine << "/" << variant;
 }
 
 TEST(Rtp, ReadsBackTheInitialState) { expect_initial_state_read_back("rtp", "rk4", false, 1e-12); }
 
 #ifdef PHYSBENCH_HAVE_BULLET
-TEST(Bullet, ReadsBackTheInitialState) { expect_initial_state_read_back("bullet", "float", false, 1e-6); }
-TEST(Bullet, ProjectileShowsSemiImplicitEuler) { expect_semi_implicit_signature("bullet", "float", false, 1e-4); }
+TEST(Bullet, ReadsBackTheInitialState) {
+  expect_initial_state_read_back("bullet", "float", false, 1e-6);
+}
+TEST(Bullet, ProjectileShowsSemiImplicitEuler) {
+  expect_semi_implicit_signature("bullet", "float", false, 1e-4);
+}
 TEST(Bullet, GyroscopicTorqueIsOnSoTheBoxFlips) {
   // without the gyroscopic term ω stays constant and the intermediate-axis spin never reverses
   const auto run = measure("bullet", "float", tumbling_box_scene()).run.trajectory;
@@ -57,8 +62,12 @@ TEST(Bullet, GyroscopicTorqueIsOnSoTheBoxFlips) {
 #endif
 
 #ifdef PHYSBENCH_HAVE_ODE
-TEST(Ode, ReadsBackTheInitialState) { expect_initial_state_read_back("ode", "quickstep", false, 1e-12); }
-TEST(Ode, ProjectileShowsSemiImplicitEuler) { expect_semi_implicit_signature("ode", "step", false, 1e-9); }
+TEST(Ode, ReadsBackTheInitialState) {
+  expect_initial_state_read_back("ode", "quickstep", false, 1e-12);
+}
+TEST(Ode, ProjectileShowsSemiImplicitEuler) {
+  expect_semi_implicit_signature("ode", "step", false, 1e-9);
+}
 TEST(Ode, BothSteppersAgreeOnAFreeBody) {
   // with no constraints there is nothing for the two solvers to differ on
   const Scene scene = tumbling_box_scene();
@@ -66,12 +75,16 @@ TEST(Ode, BothSteppersAgreeOnAFreeBody) {
   const auto exact = measure("ode", "step", scene).run.trajectory;
   ASSERT_EQ(quick.samples.size(), exact.samples.size());
   for (std::size_t k = 0; k < quick.samples.size(); ++k)
-    ASSERT_LT(orientation_angle(quick.samples[k].bodies[0].orientation, exact.samples[k].bodies[0].orientation), 1e-12);
+    ASSERT_LT(orientation_angle(quick.samples[k].bodies[0].orientation,
+                                exact.samples[k].bodies[0].orientation),
+              1e-12);
 }
 #endif
 
 #ifdef PHYSBENCH_HAVE_BOX2D
-TEST(Box2d, ReadsBackTheInitialState) { expect_initial_state_read_back("box2d", "default", true, 1e-6); }
+TEST(Box2d, ReadsBackTheInitialState) {
+  expect_initial_state_read_back("box2d", "default", true, 1e-6);
+}
 TEST(Box2d, PlanarProjectileShowsSemiImplicitEuler) {
   expect_semi_implicit_signature("box2d", "default", true, 1e-4);
 }

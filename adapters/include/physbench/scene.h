@@ -6,13 +6,12 @@
 // this same structure; built-in scenarios create it in C++ and scene files in JSON.
 #pragma once
 
+#include <Eigen/Core>
+#include <Eigen/Geometry>
 #include <optional>
 #include <stdexcept>
 #include <string>
 #include <vector>
-
-#include <Eigen/Core>
-#include <Eigen/Geometry>
 
 namespace physbench {
 
@@ -32,13 +31,13 @@ struct Shape {
 struct BodySpec {
   std::string name;
   Shape shape;
-  double mass = 1.0;                      // kg; 0 = static
-  Vec3 position = Vec3::Zero();           // centre of mass, world (m)
-  Quat orientation = Quat::Identity();    // body to world
-  Vec3 linear_velocity = Vec3::Zero();    // world (m/s)
-  Vec3 angular_velocity = Vec3::Zero();   // world (rad/s)
-  double friction = 0.5;                  // Coulomb coefficient of the pair, as the scene means it
-  double restitution = 0.0;               // coefficient of the pair, as the scene means it
+  double mass = 1.0;                     // kg; 0 = static
+  Vec3 position = Vec3::Zero();          // centre of mass, world (m)
+  Quat orientation = Quat::Identity();   // body to world
+  Vec3 linear_velocity = Vec3::Zero();   // world (m/s)
+  Vec3 angular_velocity = Vec3::Zero();  // world (rad/s)
+  double friction = 0.5;                 // Coulomb coefficient of the pair, as the scene means it
+  double restitution = 0.0;              // coefficient of the pair, as the scene means it
 };
 
 // Hooke spring plus damping between a body point and a world point or another body's point
@@ -62,8 +61,8 @@ enum class ReferenceKind {
 enum class Metric { Position, Orientation, Energy, LinearMomentum, AngularMomentum };
 
 struct Probe {
-  std::vector<int> bodies;        // empty: every dynamic body
-  double interval = 1.0 / 60.0;   // s between samples (rounded to whole steps)
+  std::vector<int> bodies;       // empty: every dynamic body
+  double interval = 1.0 / 60.0;  // s between samples (rounded to whole steps)
   std::vector<Metric> metrics = {Metric::Position};
 };
 
@@ -86,6 +85,7 @@ struct Scene {
   Reference reference;
 
   long step_count() const;                 // duration / dt, rounded
+  bool has_contacts() const;               // collisions on and at least two bodies that could touch
   int probe_every_steps() const;           // interval / dt, rounded, at least 1
   std::vector<int> probed_bodies() const;  // probe.bodies, or every dynamic body
 };

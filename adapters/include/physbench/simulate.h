@@ -24,21 +24,21 @@ struct Trajectory {
 };
 
 struct SimulateOptions {
-  int every_steps = 0;             // steps between samples; 0: the scene's probe interval
-  double timing_budget = 0.3;      // s: timed repeats go on until this much stepping is measured
+  int every_steps = 0;         // steps between samples; 0: the scene's probe interval
+  double timing_budget = 0.3;  // s: timed repeats go on until this much stepping is measured
   int min_timed_repeats = 3;
   int max_timed_repeats = 50;
-  double explosion_distance = 1e6; // m from the origin: a body beyond it has exploded
+  double explosion_distance = 1e6;  // m from the origin: a body beyond it has exploded
 };
 
 struct RunResult {
   Status status = Status::Ok;
-  std::string message;             // why, for anything but ok
+  std::string message;  // why, for anything but ok
   std::string engine_version;
   std::vector<Setting> settings;
-  long steps = 0;                  // steps per run
+  long steps = 0;                    // steps per run
   std::vector<double> wall_seconds;  // stepping time of each timed repeat (s)
-  Trajectory trajectory;           // from the first run
+  Trajectory trajectory;             // from the first run
 };
 
 // A first run records the trajectory and warms caches; timed repeats then rebuild the world

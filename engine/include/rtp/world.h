@@ -24,12 +24,12 @@ enum class Integrator : std::uint8_t {
 
 // a body to create; principal axes of inertia are the body's axes
 struct BodyDef {
-  Vec3 position = Vec3::Zero();               // centre of mass, world (m)
-  Quat orientation = Quat::Identity();        // body to world
-  Vec3 linear_velocity = Vec3::Zero();        // world (m/s)
-  Vec3 angular_velocity = Vec3::Zero();       // world (rad/s)
-  double mass = 1.0;                          // kg; 0 makes the body static
-  Vec3 principal_inertia = Vec3::Ones();      // body frame diagonal (kg m²)
+  Vec3 position = Vec3::Zero();           // centre of mass, world (m)
+  Quat orientation = Quat::Identity();    // body to world
+  Vec3 linear_velocity = Vec3::Zero();    // world (m/s)
+  Vec3 angular_velocity = Vec3::Zero();   // world (rad/s)
+  double mass = 1.0;                      // kg; 0 makes the body static
+  Vec3 principal_inertia = Vec3::Ones();  // body frame diagonal (kg m²)
 };
 
 // the primary state the integrators advance (104 bytes: 13 doubles)
@@ -76,7 +76,8 @@ struct StepProfile {
 
 class World {
  public:
-  explicit World(Vec3 gravity = Vec3(0.0, -9.81, 0.0), Integrator integrator = Integrator::RungeKutta4);
+  explicit World(Vec3 gravity = Vec3(0.0, -9.81, 0.0),
+                 Integrator integrator = Integrator::RungeKutta4);
 
   BodyId add_body(const BodyDef& def);
   void add_spring(const SpringDef& def);

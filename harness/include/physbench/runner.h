@@ -23,14 +23,15 @@ struct EngineVariant {
 std::vector<EngineVariant> engine_catalog(const std::filesystem::path& self);
 
 struct RunOptions {
-  std::vector<std::string> scenarios;  // names; empty: every built-in (unless scene files are given)
+  std::vector<std::string>
+      scenarios;  // names; empty: every built-in (unless scene files are given)
   std::vector<std::string> scene_files;
-  std::vector<std::string> engines;    // empty: every engine
-  std::vector<std::string> variants;   // empty: every variant
+  std::vector<std::string> engines;   // empty: every engine
+  std::vector<std::string> variants;  // empty: every variant
   std::optional<double> dt, duration;
   std::filesystem::path out;
   double timeout_seconds = 300.0;
-  double timing_budget = 0.3;          // s of measured stepping per job
+  double timing_budget = 0.3;  // s of measured stepping per job
   std::string command_line;
 };
 

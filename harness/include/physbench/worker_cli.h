@@ -1,0 +1,21 @@
+// The worker subcommand's options, shared by physbench and physbench-bullet64.
+#pragma once
+
+#include <CLI/CLI.hpp>
+
+#include "physbench/worker.h"
+
+namespace physbench {
+
+inline CLI::App* add_worker_subcommand(CLI::App& app, WorkerJob& job) {
+  auto* worker = app.add_subcommand("worker", "(internal) run one job and write its result");
+  worker->add_option("--scene", job.scene_path, "scene file")->required();
+  worker->add_option("--engine", job.engine)->required();
+  worker->add_option("--variant", job.variant)->required();
+  worker->add_option("--every", job.every_steps, "steps between samples");
+  worker->add_option("--budget", job.timing_budget, "seconds of timed stepping");
+  worker->add_option("--out", job.out_path, "result file (JSON)")->required();
+  return worker;
+}
+
+}  // namespace physbench
