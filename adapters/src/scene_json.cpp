@@ -84,7 +84,8 @@ class Field {
     return path_.empty() ? key : path_ + "." + key;
   }
   std::string type_of() const {
-    if (value_.is_string()) return "\"" + value_.get<std::string>() + "\"";
+    // the JSON text of a string is the string quoted (and it avoids GCC 12's false -Wrestrict)
+    if (value_.is_string()) return value_.dump();
     return value_.type_name();
   }
   const json& value_;
