@@ -162,6 +162,7 @@ RunResult run_job(const EngineVariant& ev, const JobPaths& paths, int every_step
 const std::vector<std::string> kColumns = {"scenario",
                                            "engine",
                                            "variant",
+                                           "engine_version",
                                            "status",
                                            "dt",
                                            "duration",
@@ -398,6 +399,7 @@ int run_suite(const RunOptions& options, const fs::path& self) {
       row["scenario"] = scene.name;
       row["engine"] = ev.engine;
       row["variant"] = ev.variant;
+      row["engine_version"] = r.engine_version;
       row["dt"] = number(scene.dt);
       row["duration"] = number(scene.duration);
       row["steps"] = std::to_string(scene.step_count());
