@@ -5,6 +5,7 @@
 #include <cmath>
 
 #include "physbench/registry.h"
+#include "physbench/springs.h"
 
 namespace physbench {
 
@@ -18,6 +19,7 @@ double angle_about_z(const Quat& q) { return 2.0 * std::atan2(q.z(), q.w()); }
 class Box2dEngine final : public Engine {
  public:
   void load(const Scene& scene) override {
+    scene_ = scene;
     dt_ = scene.dt;
     world_ = std::make_unique<b2World>(b2Vec2(float(scene.gravity.x()), float(scene.gravity.y())));
     world_->SetAllowSleeping(false);
@@ -58,7 +60,17 @@ class Box2dEngine final : public Engine {
     }
   }
 
-  void step() override { world_->Step(float(dt_), kVelocityIterations, kPositionIterations); }
+  void step() override {
+    // springs as external forces from the state at the start of the step; Box2D clears them after
+    if (!scene_.springs.empty())
+      apply_spring_forces(
+          scene_, [this](int b) { return body_state(b); },
+          [this](int b, const Vec3& f, const Vec3& p) {
+            bodies_[b]->ApplyForce(b2Vec2(float(f.x()), float(f.y())),
+                                   b2Vec2(float(p.x()), float(p.y())), true);
+          });
+    world_->Step(float(dt_), kVelocityIterations, kPositionIterations);
+  }
 
   BodyState body_state(int index) const override {
     const b2Body* body = bodies_[index];
@@ -70,6 +82,7 @@ class Box2dEngine final : public Engine {
   }
 
  private:
+  Scene scene_;
   double dt_ = 0.0;
   std::unique_ptr<b2World> world_;
   std::vector<b2Body*> bodies_;  // owned by world_
@@ -85,7 +98,6 @@ EngineInfo box2d_engine_info() {
                  std::to_string(b2_version.revision) + " (as the library reports it)";
   info.unsupported = [](const Scene& scene, const std::string&) -> std::optional<std::string> {
     if (!scene.planar) return "Box2D is a 2D engine: the scene is not marked planar";
-    if (!scene.springs.empty()) return "springs are not mapped onto Box2D yet";
     if (scene.has_contacts())
       return "contact scenes are not mapped onto Box2D yet (its 1 cm polygon skin is not "
              "compensated)";
@@ -113,6 +125,8 @@ EngineInfo box2d_engine_info() {
         {"collision mask", "0 when the scene has collisions off",
          "model only what the scene needs"},
         {"precision", "float", "Box2D computes in single precision"},
+        {"springs", "external force (ApplyForce at the attachment point), once per step",
+         "the scene's spring law from the state at the start of the step"},
     };
   };
   return info;

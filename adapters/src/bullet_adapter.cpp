@@ -7,6 +7,7 @@
 #include <cmath>
 
 #include "physbench/registry.h"
+#include "physbench/springs.h"
 
 namespace physbench {
 
@@ -35,6 +36,7 @@ class BulletEngine final : public Engine {
   }
 
   void load(const Scene& scene) override {
+    scene_ = scene;
     dt_ = scene.dt;
     configuration_ = std::make_unique<btDefaultCollisionConfiguration>();
     dispatcher_ = std::make_unique<btCollisionDispatcher>(configuration_.get());
@@ -89,6 +91,14 @@ class BulletEngine final : public Engine {
   }
 
   void step() override {
+    // springs as external forces from the state at the start of the step; Bullet clears them after
+    if (!scene_.springs.empty())
+      apply_spring_forces(
+          scene_, [this](int b) { return body_state(b); },
+          [this](int b, const Vec3& force, const Vec3& point) {
+            btRigidBody& body = *bodies_[b];
+            body.applyForce(to_bt(force), to_bt(point) - body.getCenterOfMassPosition());
+          });
     // maxSubSteps = 0: exactly one internal step of dt, no accumulator or interpolation
     world_->stepSimulation(btScalar(dt_), 0);
   }
@@ -102,6 +112,7 @@ class BulletEngine final : public Engine {
   }
 
  private:
+  Scene scene_;
   double dt_ = 0.0;
   std::unique_ptr<btDefaultCollisionConfiguration> configuration_;
   std::unique_ptr<btCollisionDispatcher> dispatcher_;
@@ -124,7 +135,6 @@ EngineInfo bullet_engine_info() {
                         const std::string& variant) -> std::optional<std::string> {
     if (variant != kVariant)
       return "this executable links Bullet's " + std::string(kVariant) + " build, not " + variant;
-    if (!scene.springs.empty()) return "springs are not mapped onto Bullet yet";
     if (scene.has_contacts())
       return "contact scenes are not mapped onto Bullet yet (the contact settings table is not "
              "written)";
@@ -148,6 +158,9 @@ EngineInfo bullet_engine_info() {
         {"collision mask", "0 when the scene has collisions off",
          "model only what the scene needs"},
         {"broadphase", "btDbvtBroadphase", "Bullet's recommended default"},
+        {"springs", "external force (applyForce at the attachment point), once per step",
+         "the scene's spring law from the state at the start of the step; Bullet's own springs are "
+         "constraints"},
     };
   };
   return info;

@@ -2,6 +2,7 @@
 #include <ode/ode.h>
 
 #include "physbench/registry.h"
+#include "physbench/springs.h"
 
 #ifndef PHYSBENCH_ODE_VERSION
 #define PHYSBENCH_ODE_VERSION "unknown"
@@ -30,13 +31,14 @@ class OdeEngine final : public Engine {
     ensure_ode_initialised();
     // dWorldQuickStep shuffles constraint order with ODE's global generator: seed every run
     dRandSetSeed(0);
+    scene_ = scene;
     dt_ = scene.dt;
     world_ = dWorldCreate();
     dWorldSetGravity(world_, scene.gravity.x(), scene.gravity.y(), scene.gravity.z());
     dWorldSetAutoDisableFlag(world_, 0);
     for (const BodySpec& b : scene.bodies) {
       if (b.mass == 0.0) {
-        // static bodies are geometry only in ODE; with no contacts yet they do nothing
+        // static bodies are geometry only in ODE; with no contacts yet they are only a pose
         bodies_.push_back(nullptr);
         continue;
       }
@@ -59,6 +61,13 @@ class OdeEngine final : public Engine {
   }
 
   void step() override {
+    // springs as external forces from the state at the start of the step; ODE clears them after
+    if (!scene_.springs.empty())
+      apply_spring_forces(
+          scene_, [this](int b) { return body_state(b); },
+          [this](int b, const Vec3& f, const Vec3& p) {
+            dBodyAddForceAtPos(bodies_[b], f.x(), f.y(), f.z(), p.x(), p.y(), p.z());
+          });
     if (quick_step_)
       dWorldQuickStep(world_, dt_);
     else
@@ -67,7 +76,9 @@ class OdeEngine final : public Engine {
 
   BodyState body_state(int index) const override {
     dBodyID body = bodies_[index];
-    if (!body) return {};
+    if (!body)
+      return {scene_.bodies[index].position, scene_.bodies[index].orientation, Vec3::Zero(),
+              Vec3::Zero()};
     const dReal* p = dBodyGetPosition(body);
     const dReal* q = dBodyGetQuaternion(body);
     const dReal* v = dBodyGetLinearVel(body);
@@ -78,6 +89,7 @@ class OdeEngine final : public Engine {
 
  private:
   bool quick_step_;
+  Scene scene_;
   double dt_ = 0.0;
   dWorldID world_ = nullptr;
   std::vector<dBodyID> bodies_;
@@ -92,7 +104,6 @@ EngineInfo ode_engine_info() {
   ensure_ode_initialised();
   info.version = std::string(PHYSBENCH_ODE_VERSION) + " (" + dGetConfiguration() + ")";
   info.unsupported = [](const Scene& scene, const std::string&) -> std::optional<std::string> {
-    if (!scene.springs.empty()) return "springs are not mapped onto ODE yet";
     if (scene.has_contacts())
       return "contact scenes are not mapped onto ODE yet (the contact settings table is not "
              "written)";
@@ -111,6 +122,8 @@ EngineInfo ode_engine_info() {
         {"auto-disable", "off (world and every body)", "sleeping off in every engine"},
         {"gyroscopic mode", "on", "stated explicitly; ODE's default"},
         {"mass properties", "from the scene (dMassSetParameters)", "same inertia in every engine"},
+        {"springs", "external force (dBodyAddForceAtPos), once per step",
+         "the scene's spring law from the state at the start of the step"},
     };
   };
   return info;

@@ -55,6 +55,8 @@ const char* to_string(ReferenceKind kind) {
       return "none";
     case ReferenceKind::Ballistic:
       return "ballistic";
+    case ReferenceKind::Oscillator:
+      return "oscillator";
     case ReferenceKind::Converged:
       return "converged";
   }
@@ -196,6 +198,28 @@ void validate(const Scene& scene) {
   if (needs_reference && scene.reference.kind == ReferenceKind::None)
     fail("reference.kind",
          "metrics position/orientation need a reference (ballistic or converged)");
+  if (scene.reference.kind == ReferenceKind::Oscillator) {
+    // the closed form holds while the motion stays on the spring's line
+    const auto dynamic = scene.probed_bodies();
+    if (dynamic.size() != 1 || scene.springs.size() != 1)
+      fail("reference.kind", "oscillator needs one dynamic body and one spring");
+    const SpringSpec& s = scene.springs[0];
+    const BodySpec& b = scene.bodies[dynamic[0]];
+    const std::string at = "bodies[" + std::to_string(dynamic[0]) + "]";
+    if (s.body_a != dynamic[0] || s.body_b != -1 || s.local_point_a.norm() != 0.0)
+      fail("springs[0]",
+           "oscillator needs a spring from the body's centre (local_point_a 0) to a world anchor");
+    const Vec3 line = b.position - s.point_b;
+    if (line.norm() == 0.0) fail(at + ".position", "must not sit on the anchor");
+    const Vec3 u = line.normalized();
+    if (b.linear_velocity.cross(u).norm() > 1e-12 * std::max(1.0, b.linear_velocity.norm()))
+      fail(at + ".linear_velocity", "must lie along the spring for the oscillator reference");
+    if (scene.gravity.cross(u).norm() > 1e-12 * std::max(1.0, scene.gravity.norm()))
+      fail("gravity", "must lie along the spring (or be zero) for the oscillator reference");
+    for (Metric m : scene.probe.metrics)
+      if (m == Metric::Orientation)
+        fail("probe.metrics", "the oscillator reference has no orientation");
+  }
   if (scene.reference.kind == ReferenceKind::Ballistic) {
     if (!scene.springs.empty()) fail("reference.kind", "ballistic holds only without springs");
     for (Metric m : scene.probe.metrics)

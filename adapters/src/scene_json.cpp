@@ -242,11 +242,13 @@ Scene scene_from_json(const json& document, const std::string& source) {
         scene.reference.kind = ReferenceKind::None;
       else if (kind == "ballistic")
         scene.reference.kind = ReferenceKind::Ballistic;
+      else if (kind == "oscillator")
+        scene.reference.kind = ReferenceKind::Oscillator;
       else if (kind == "converged")
         scene.reference.kind = ReferenceKind::Converged;
       else
         reference.member("kind").fail("unknown reference \"" + kind +
-                                      "\" (known: none, ballistic, converged)");
+                                      "\" (known: none, ballistic, oscillator, converged)");
       if (reference.has("dt_divisor"))
         scene.reference.dt_divisor = reference.member("dt_divisor").integer();
     }

@@ -428,11 +428,11 @@ int run_suite(const RunOptions& options, const fs::path& self) {
           }
         }
         try {
-          Trajectory ballistic;
+          Trajectory closed_form;
           const Trajectory* against = nullptr;
-          if (scene.reference.kind == ReferenceKind::Ballistic) {
-            ballistic = ballistic_reference(scene, r.trajectory);
-            against = &ballistic;
+          if (has_analytic_reference(scene)) {
+            closed_form = analytic_reference(scene, r.trajectory);
+            against = &closed_form;
           } else if (scene.reference.kind == ReferenceKind::Converged) {
             if (reference.available)
               against = &reference.trajectory;

@@ -157,6 +157,70 @@ Trajectory ballistic_reference(const Scene& scene, const Trajectory& sampled_at)
   return reference;
 }
 
+Trajectory oscillator_reference(const Scene& scene, const Trajectory& sampled_at) {
+  const SpringSpec& spring = scene.springs.at(0);
+  const int index = spring.body_a;
+  const BodySpec& b = scene.bodies[index];
+  const Vec3 u = (b.position - spring.point_b).normalized();
+  const double m = b.mass, k = spring.stiffness, c = spring.damping;
+  // y = s − s*, with s* the equilibrium length under gravity
+  const double equilibrium = spring.rest_length + m * scene.gravity.dot(u) / k;
+  const double y0 = (b.position - spring.point_b).norm() - equilibrium;
+  const double v0 = b.linear_velocity.dot(u);
+  const double omega0 = std::sqrt(k / m), zeta = c / (2.0 * std::sqrt(k * m));
+
+  // y(t) and y'(t) for the three damping regimes
+  auto solve = [&](double t, double& y, double& v) {
+    if (zeta < 1.0 - 1e-9) {
+      const double wd = omega0 * std::sqrt(1.0 - zeta * zeta), decay = std::exp(-zeta * omega0 * t);
+      const double A = y0, B = (v0 + zeta * omega0 * y0) / wd;
+      y = decay * (A * std::cos(wd * t) + B * std::sin(wd * t));
+      v = decay * ((-A * wd + B * -zeta * omega0) * std::sin(wd * t) +
+                   (B * wd - zeta * omega0 * A) * std::cos(wd * t));
+    } else if (zeta > 1.0 + 1e-9) {
+      const double root = omega0 * std::sqrt(zeta * zeta - 1.0);
+      const double r1 = -zeta * omega0 + root, r2 = -zeta * omega0 - root;
+      const double A = (v0 - r2 * y0) / (r1 - r2), B = y0 - A;
+      y = A * std::exp(r1 * t) + B * std::exp(r2 * t);
+      v = A * r1 * std::exp(r1 * t) + B * r2 * std::exp(r2 * t);
+    } else {
+      const double A = y0, B = v0 + omega0 * y0, decay = std::exp(-omega0 * t);
+      y = (A + B * t) * decay;
+      v = (B - omega0 * (A + B * t)) * decay;
+    }
+  };
+
+  Trajectory reference;
+  reference.bodies = sampled_at.bodies;
+  for (const Sample& at : sampled_at.samples) {
+    double y = 0.0, v = 0.0;
+    solve(at.time, y, v);
+    Sample s;
+    s.time = at.time;
+    BodyState state;
+    state.position = spring.point_b + (equilibrium + y) * u;
+    state.linear_velocity = v * u;
+    state.orientation = b.orientation;  // not part of the closed form
+    s.bodies.push_back(state);
+    reference.samples.push_back(std::move(s));
+  }
+  return reference;
+}
+
+bool has_analytic_reference(const Scene& scene) {
+  return scene.reference.kind == ReferenceKind::Ballistic ||
+         scene.reference.kind == ReferenceKind::Oscillator;
+}
+
+Trajectory analytic_reference(const Scene& scene, const Trajectory& sampled_at) {
+  if (scene.reference.kind == ReferenceKind::Ballistic)
+    return ballistic_reference(scene, sampled_at);
+  if (scene.reference.kind == ReferenceKind::Oscillator)
+    return oscillator_reference(scene, sampled_at);
+  throw std::invalid_argument(std::string("no closed form for reference kind ") +
+                              to_string(scene.reference.kind));
+}
+
 Scene refined(const Scene& scene, int divisor) {
   Scene fine = scene;
   fine.dt = scene.dt / divisor;

@@ -39,8 +39,7 @@ inline Measured measure(const std::string& engine_name, const std::string& varia
     return m;
   }
   Trajectory reference;
-  if (scene.reference.kind == ReferenceKind::Ballistic)
-    reference = ballistic_reference(scene, m.run.trajectory);
+  if (has_analytic_reference(scene)) reference = analytic_reference(scene, m.run.trajectory);
   if (scene.reference.kind == ReferenceKind::Converged)
     reference = converged_reference(scene, scene.reference.dt_divisor);
   m.summary = summarise(compare(scene, m.run.trajectory, &reference));

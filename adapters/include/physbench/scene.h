@@ -53,9 +53,10 @@ struct SpringSpec {
 
 // what the harness compares each engine's trajectory with
 enum class ReferenceKind {
-  None,       // invariants only (energy, momenta)
-  Ballistic,  // closed form x0 + v0 t + ½ g t² for every body's centre of mass
-  Converged,  // rtp RK4 at dt / divisor, shown converged by halving once more
+  None,        // invariants only (energy, momenta)
+  Ballistic,   // closed form x0 + v0 t + ½ g t² for every body's centre of mass
+  Oscillator,  // closed form of one body on one spring to a world anchor, moving along the spring
+  Converged,   // rtp RK4 at dt / divisor, shown converged by halving once more
 };
 
 enum class Metric { Position, Orientation, Energy, LinearMomentum, AngularMomentum };

@@ -39,6 +39,14 @@ ErrorSummary summarise(const ErrorSeries& series);
 // the closed-form free-flight trajectory of every probed body's centre of mass
 Trajectory ballistic_reference(const Scene& scene, const Trajectory& sampled_at);
 
+// the closed-form motion of one body on one damped spring to a world anchor, along the spring:
+// m s'' = −k (s − L₀) − c s' + m g·u, under-, critically or over-damped
+Trajectory oscillator_reference(const Scene& scene, const Trajectory& sampled_at);
+
+// ballistic or oscillator, whichever the scene names; throws for the other kinds
+Trajectory analytic_reference(const Scene& scene, const Trajectory& sampled_at);
+bool has_analytic_reference(const Scene& scene);
+
 // the scene as the converged reference runs it: dt / divisor
 Scene refined(const Scene& scene, int divisor);
 

@@ -14,7 +14,13 @@ struct Scenario {
   std::string name;
   std::string question;  // what the scenario answers, for `physbench list` and the report
   std::function<Scene()> build;
+  // time steps the default suite sweeps for the speed-against-error picture; empty: only the
+  // scene's own
+  std::vector<double> sweep_dt = {};
 };
+
+// 1/30 … 1/960 s: the sweep of the integrator scenarios
+std::vector<double> standard_dt_sweep();
 
 const std::vector<Scenario>& scenarios();
 const Scenario* find_scenario(const std::string& name);
@@ -23,5 +29,8 @@ const Scenario* find_scenario(const std::string& name);
 Scene projectile_scene();
 Scene projectile_planar_scene();
 Scene tumbling_box_scene();
+Scene spring_oscillator_scene(double damping = 0.0);
+Scene spring_cube_scene();
+Scene spring_chain_scene(int links = 8);
 
 }  // namespace physbench

@@ -1,0 +1,42 @@
+#include "physbench/springs.h"
+
+namespace physbench {
+
+SpringForce spring_force(const SpringSpec& spring, const BodyState& a, const BodyState* b) {
+  SpringForce f;
+  f.point_a = a.position + a.orientation * spring.local_point_a;
+  Vec3 velocity_b = Vec3::Zero();
+  f.point_b = spring.point_b;
+  if (b) {
+    f.point_b = b->position + b->orientation * spring.point_b;
+    velocity_b = b->linear_velocity + b->angular_velocity.cross(f.point_b - b->position);
+  }
+  const Vec3 velocity_a = a.linear_velocity + a.angular_velocity.cross(f.point_a - a.position);
+  const Vec3 delta = f.point_a - f.point_b;
+  const double length = delta.norm();
+  // a spring of zero length has no direction: it pulls along nothing
+  if (length <= 1e-12) return f;
+  const Vec3 direction = delta / length;
+  const double extension_rate = direction.dot(velocity_a - velocity_b);
+  f.force_on_a =
+      -(spring.stiffness * (length - spring.rest_length) + spring.damping * extension_rate) *
+      direction;
+  return f;
+}
+
+void apply_spring_forces(const Scene& scene, const StateOf& state_of, const ApplyForceAt& apply) {
+  for (const SpringSpec& spring : scene.springs) {
+    const BodyState a = state_of(spring.body_a);
+    BodyState b_state;
+    const BodyState* b = nullptr;
+    if (spring.body_b >= 0) {
+      b_state = state_of(spring.body_b);
+      b = &b_state;
+    }
+    const SpringForce f = spring_force(spring, a, b);
+    if (scene.bodies[spring.body_a].mass > 0.0) apply(spring.body_a, f.force_on_a, f.point_a);
+    if (b && scene.bodies[spring.body_b].mass > 0.0) apply(spring.body_b, -f.force_on_a, f.point_b);
+  }
+}
+
+}  // namespace physbench
