@@ -71,6 +71,12 @@ def fmt(value, digits: int = 3) -> str:
     return html.escape(str(value))
 
 
+def is_nominal(meta: dict, row) -> bool:
+    """Whether a row ran at its scenario's own step (a swept scenario has rows at other steps too)."""
+    own = meta.get("scenarios", {}).get(row["scenario"], {}).get("dt")
+    return own is None or abs(row["dt"] - own) <= 1e-6 * own
+
+
 def figure_html(fig: go.Figure) -> str:
     fig.update_layout(template="plotly_white", margin=dict(l=60, r=20, t=50, b=50), height=420,
                       legend=dict(font=dict(size=11)))
@@ -112,21 +118,67 @@ def throughput_chart(rows: pd.DataFrame) -> str | None:
     return figure_html(fig)
 
 
-def speed_error_chart(rows: pd.DataFrame, error_column: str, error_title: str) -> str | None:
-    ok = rows[rows["steps_per_s"].notna() & rows[error_column].notna()] if error_column in rows else rows.iloc[0:0]
-    if ok.empty:
+def headline_metric(rows: pd.DataFrame) -> tuple[str, str] | None:
+    """The scenario's first error metric: (results.csv column, title)."""
+    for _, title, _, summary in SERIES:
+        if summary in rows and rows[summary].notna().any():
+            return summary, title.split(" against")[0].split(" |")[0]
+    return None
+
+
+def convergence_order(points: pd.DataFrame, error_column: str) -> float | None:
+    """Least-squares slope of log(error) against log(dt): the measured order of accuracy."""
+    valid = points[(points[error_column] > 1e-13) & points["dt"].notna()]
+    if valid["dt"].nunique() < 3:
         return None
-    cost = ok["wall_s_median"] / ok["duration"]  # wall seconds per simulated second
+    x, y = valid["dt"].map(math.log), valid[error_column].map(math.log)
+    mx, my = x.mean(), y.mean()
+    denominator = ((x - mx) ** 2).sum()
+    return float(((x - mx) * (y - my)).sum() / denominator) if denominator > 0 else None
+
+
+def pareto_front(points: pd.DataFrame, error_column: str) -> pd.DataFrame:
+    """Points no other point beats on both cost and error."""
+    ordered = points.sort_values(["cost", error_column])
+    keep, best = [], math.inf
+    for index, row in ordered.iterrows():
+        if row[error_column] < best:
+            keep.append(index)
+            best = row[error_column]
+    return ordered.loc[keep]
+
+
+def speed_error(rows: pd.DataFrame) -> tuple[str | None, list[dict]]:
+    """Error against cost (wall s per simulated s), one curve per engine/variant over the dt sweep,
+    the Pareto front dashed, each curve's measured order in its legend; and the front as a table."""
+    metric = headline_metric(rows)
+    if metric is None:
+        return None, []
+    error_column, error_title = metric
+    points = rows[(rows["status"] == "ok") & rows["steps_per_s"].notna() & rows[error_column].notna()].copy()
+    if points.empty:
+        return None, []
+    points["cost"] = points["wall_s_median"] / points["duration"]
+    swept = points["dt"].nunique() > 1
     fig = go.Figure()
-    for (_, row), c in zip(ok.iterrows(), cost):
-        fig.add_trace(go.Scatter(x=[c], y=[max(row[error_column], 1e-16)], mode="markers+text", name=row["label"],
-                                 text=[row["label"]], textposition="top center", marker=dict(size=11)))
-    fig.update_layout(title=f"Speed against error: {error_title} vs wall time per simulated second",
-                      xaxis_title="wall s per simulated s (lower is faster)",
-                      yaxis_title="max error", showlegend=False)
+    for label, curve in points.groupby("label", sort=False):
+        curve = curve.sort_values("cost")
+        order = convergence_order(curve, error_column) if swept else None
+        name = f"{label} (order {order:.2f})" if order is not None else label
+        fig.add_trace(go.Scatter(
+            x=curve["cost"], y=curve[error_column].clip(lower=1e-16), mode="lines+markers", name=name,
+            text=[f"dt = 1/{1 / dt:.0f} s" for dt in curve["dt"]],
+            hovertemplate="%{text}<br>cost %{x:.3g}<br>error %{y:.3g}"))
+    front = pareto_front(points, error_column)
+    fig.add_trace(go.Scatter(x=front["cost"], y=front[error_column].clip(lower=1e-16), mode="lines",
+                             name="Pareto front", line=dict(dash="dash", color="black", width=1)))
+    fig.update_layout(title=f"Speed against error: max {error_title.lower()} against cost",
+                      xaxis_title="wall s per simulated s (lower is faster)", yaxis_title="max error")
     fig.update_xaxes(type="log", exponentformat="power")
     fig.update_yaxes(type="log", exponentformat="power")
-    return figure_html(fig)
+    table = [dict(label=r["label"], dt=f"1/{1 / r['dt']:.0f}", cost=fmt(r["cost"]), error=fmt(r[error_column]))
+             for _, r in front.iterrows()]
+    return figure_html(fig), table
 
 
 TEMPLATE = jinja2.Template("""<!doctype html>
@@ -160,9 +212,14 @@ TEMPLATE = jinja2.Template("""<!doctype html>
 {% for s in scenarios %}<section><h2>{{ s.name }}</h2>
 <p>{{ s.description }}<br><em>{{ s.question }}</em></p>
 <p class="note">dt {{ s.dt }} s · {{ s.duration }} s simulated · reference: {{ s.reference }}
-{% if s.self_error %} · reference changes by {{ s.self_error }} when its step is halved (its own error){% endif %}
-{% if s.scene_file %} · scene file: <code>{{ s.scene_file }}</code>{% endif %}</p>
+{% if s.self_error %} · reference changes by at most {{ s.self_error }} when its step is halved (its own error){% endif %}
+{% if s.sweep %}<br>speed against error swept over dt = {{ s.sweep }} s; the charts above the sweep use dt {{ s.dt }} s{% endif %}
+ · scene files in <code>scenes/</code></p>
 {% for chart in s.charts %}{{ chart | safe }}{% endfor %}
+{% if s.front %}<table><tr><th class="l" colspan="4">Pareto front: nothing else is both faster and more accurate</th></tr>
+<tr><th class="l">engine/variant</th><th>dt (s)</th><th>wall s per simulated s</th><th>max error</th></tr>
+{% for p in s.front %}<tr><td class="l">{{ p.label }}</td><td>{{ p.dt }}</td><td>{{ p.cost }}</td><td>{{ p.error }}</td></tr>{% endfor %}
+</table>{% endif %}
 {% if s.unsupported %}<p class="note">Not run: {% for u in s.unsupported %}<br>{{ u }}{% endfor %}</p>{% endif %}
 </section>{% endfor %}
 
@@ -182,8 +239,9 @@ def build_report(folder: Path) -> Path:
     present = [(c, t) for c, t, _, summary in SERIES if summary in results and results[summary].notna().any()]
     summary_columns = [(c, f"{c.replace('_', ' ')} max") for c, _ in present]
 
+    nominal = results[[is_nominal(meta, r) for _, r in results.iterrows()]]
     summary_rows = []
-    for _, r in results.iterrows():
+    for _, r in nominal.iterrows():
         spread = ""
         if pd.notna(r["steps_per_s"]):
             spread = f"{fmt(r['steps_per_s_min'])}–{fmt(r['steps_per_s_max'])}"
@@ -197,28 +255,33 @@ def build_report(folder: Path) -> Path:
     scenarios = []
     for name, rows in results.groupby("scenario", sort=False):
         info = meta.get("scenarios", {}).get(name, {})
+        own = rows[[is_nominal(meta, r) for _, r in rows.iterrows()]]
         charts = []
         for column, title, unit, summary in SERIES:
-            if summary in rows and rows[summary].notna().any():
-                chart = error_over_time(folder, rows, column, title, unit)
+            if summary in own and own[summary].notna().any():
+                chart = error_over_time(folder, own, column, title, unit)
                 if chart:
                     charts.append(chart)
-        chart = throughput_chart(rows)
+        chart = throughput_chart(own)
         if chart:
             charts.append(chart)
-        for column, title, unit, summary in SERIES:
-            if summary in rows and rows[summary].notna().any():
-                chart = speed_error_chart(rows, summary, title.split(" against")[0].lower())
-                if chart:
-                    charts.append(chart)
-                break  # the scenario's first metric is its headline error
-        self_error = info.get("reference_self_error")
+        chart, front = speed_error(rows)
+        if chart:
+            charts.append(chart)
+        self_errors = info.get("reference_self_error")
+        if isinstance(self_errors, dict):
+            values = [v for v in self_errors.values() if isinstance(v, (int, float))]
+            self_error = max(values) if values else None
+        else:
+            self_error = self_errors if isinstance(self_errors, (int, float)) else None
+        sweep = sorted(info.get("sweep_dt", []))
         scenarios.append(dict(
             name=name, description=info.get("description", ""), question=info.get("question", ""),
             dt=fmt(info.get("dt")), duration=fmt(info.get("duration")), reference=info.get("reference", ""),
-            self_error=fmt(self_error) if isinstance(self_error, (int, float)) else "",
-            scene_file=info.get("scene_file", ""), charts=charts,
-            unsupported=[f"{r['label']}: {r['message']}" for _, r in rows.iterrows() if r["status"] == "unsupported"]))
+            self_error=fmt(self_error) if self_error is not None else "",
+            sweep=", ".join(f"1/{1 / dt:.0f}" for dt in sweep) if len(sweep) > 1 else "",
+            charts=charts, front=front,
+            unsupported=[f"{r['label']}: {r['message']}" for _, r in own.iterrows() if r["status"] == "unsupported"]))
 
     engines = []
     for name, info in meta.get("engines", {}).items():

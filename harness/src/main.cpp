@@ -76,6 +76,13 @@ int main(int argc, char** argv) {
       ->check(CLI::PositiveNumber);
   run->add_option("--duration", duration, "override every scene's simulated time (s)")
       ->check(CLI::PositiveNumber);
+  std::vector<double> sweep_hz;
+  run->add_option("--sweep-hz", sweep_hz,
+                  "sweep every scene over these step rates (Hz), e.g. 30,60,120 (default: each "
+                  "scenario's own sweep)")
+      ->delimiter(',')
+      ->check(CLI::PositiveNumber);
+  run->add_flag("--no-sweep", options.no_sweep, "run each scene at its own step only");
   run->add_option("-o,--out", out, "results folder (default: results/<timestamp>)");
   run->add_option("--timeout", options.timeout_seconds,
                   "seconds before a job is killed and recorded as timeout")
@@ -117,6 +124,7 @@ int main(int argc, char** argv) {
   }
 
   if (dt > 0.0) options.dt = dt;
+  for (double hz : sweep_hz) options.sweep_dt.push_back(1.0 / hz);
   if (duration > 0.0) options.duration = duration;
   options.out = out.empty() ? default_out_dir() : out;
   for (int i = 0; i < argc; ++i) options.command_line += (i ? " " : "") + std::string(argv[i]);

@@ -68,6 +68,13 @@ std::string number(double value) {
   return out.str();
 }
 
+// every bit of a double, for values that are matched rather than read
+std::string exact(double value) {
+  std::ostringstream out;
+  out << std::setprecision(17) << value;
+  return out.str();
+}
+
 double median(std::vector<double> values) {
   if (values.empty()) return std::nan("");
   std::sort(values.begin(), values.end());
@@ -228,8 +235,47 @@ struct ReferenceRun {
 struct PreparedScene {
   Scene scene;
   std::string question;
-  fs::path file;
+  std::vector<double> dts;  // the scene's own step first when it is swept
 };
+
+// "120hz" for a step that is a whole rate, else the step in seconds
+std::string step_tag(double dt) {
+  const double rate = 1.0 / dt;
+  if (std::abs(rate - std::round(rate)) < 1e-9 * rate)
+    return std::to_string(std::lround(rate)) + "hz";
+  return number(dt) + "s";
+}
+
+// the converged reference: rtp RK4 at dt/divisor, and again at dt/(2·divisor) to show it converged
+ReferenceRun converged_reference(const Scene& scene, const std::string& tag, const fs::path& out,
+                                 const fs::path& work, const fs::path& self, double timeout) {
+  ReferenceRun reference;
+  const EngineVariant rtp_rk4{"rtp", "rk4", rtp_engine_info().version, self};
+  std::vector<Trajectory> runs;
+  for (int factor : {1, 2}) {
+    const int divisor = scene.reference.dt_divisor * factor;
+    const fs::path file =
+        out / "scenes" / (tag + ".reference-dt-over-" + std::to_string(divisor) + ".json");
+    save_scene_file(refined(scene, divisor), file.string());
+    std::cerr << "  reference for " << tag << ": rtp rk4 at dt/" << divisor << "\n";
+    const RunResult r = run_job(rtp_rk4, {file, work / "reference.json", work / "reference.log"},
+                                scene.probe_every_steps() * divisor, 0.0, timeout);
+    if (r.status != Status::Ok) {
+      reference.failure = "reference run (rtp rk4 at dt/" + std::to_string(divisor) + ") " +
+                          to_string(r.status) + ": " + r.message;
+      return reference;
+    }
+    runs.push_back(r.trajectory);
+  }
+  reference.available = true;
+  reference.trajectory = runs[0];
+  // converged when halving the step once more changes the answer by this little
+  Scene check = scene;
+  check.probe.metrics = {Metric::Position, Metric::Orientation};
+  const ErrorSummary self_check = summarise(compare(check, runs[0], &runs[1]));
+  reference.self_error = std::max(self_check.position->max, self_check.orientation->max);
+  return reference;
+}
 
 }  // namespace
 
@@ -264,7 +310,9 @@ int run_suite(const RunOptions& options, const fs::path& self) {
         names += (names.empty() ? "" : ", ") + s.name;
       throw RunError("unknown scenario '" + name + "' (built in: " + names + ")");
     }
-    scenes.push_back({scenario->build(), scenario->question, {}});
+    PreparedScene p{scenario->build(), scenario->question, {}};
+    p.dts = scenario->sweep_dt;
+    scenes.push_back(std::move(p));
   }
   for (const std::string& file : options.scene_files) {
     try {
@@ -276,10 +324,20 @@ int run_suite(const RunOptions& options, const fs::path& self) {
   for (PreparedScene& p : scenes) {
     if (options.dt) p.scene.dt = *options.dt;
     if (options.duration) p.scene.duration = *options.duration;
-    try {
-      validate(p.scene);
-    } catch (const SceneError& e) {
-      throw RunError(p.scene.name + " with the overrides given: " + e.what());
+    if (!options.sweep_dt.empty()) p.dts = options.sweep_dt;
+    if (options.dt || options.no_sweep) p.dts.clear();
+    // the scene's own step first; the sweep's other steps after it
+    std::erase_if(p.dts, [&](double dt) { return std::abs(dt - p.scene.dt) < 1e-12 * p.scene.dt; });
+    p.dts.insert(p.dts.begin(), p.scene.dt);
+    for (double dt : p.dts) {
+      Scene instance = p.scene;
+      instance.dt = dt;
+      try {
+        validate(instance);
+      } catch (const SceneError& e) {
+        throw RunError(p.scene.name + " at dt = " + number(dt) +
+                       " with the overrides given: " + e.what());
+      }
     }
   }
 
@@ -323,167 +381,149 @@ int run_suite(const RunOptions& options, const fs::path& self) {
   metadata["scenarios"] = json::object();
 
   int failures = 0;
-  const std::size_t total = scenes.size() * jobs_engines.size();
-  std::size_t done = 0;
-  for (PreparedScene& p : scenes) {
-    const Scene& scene = p.scene;
-    p.file = out / "scenes" / (safe_name(scene.name) + ".json");
-    save_scene_file(scene, p.file.string());
-    const int every = scene.probe_every_steps();
+  std::size_t total = 0, done = 0;
+  for (const PreparedScene& p : scenes) total += p.dts.size() * jobs_engines.size();
+  for (const PreparedScene& p : scenes) {
+    json& scenario_meta = metadata["scenarios"][p.scene.name];
+    scenario_meta = {{"description", p.scene.description},
+                     {"question", p.question},
+                     {"dt", p.scene.dt},
+                     {"sweep_dt", p.dts},
+                     {"duration", p.scene.duration},
+                     {"planar", p.scene.planar},
+                     {"reference", to_string(p.scene.reference.kind)},
+                     {"reference_dt_divisor", p.scene.reference.dt_divisor},
+                     {"reference_self_error", json::object()},
+                     {"scene_file", json::object()}};
+    for (double dt : p.dts) {
+      Scene scene = p.scene;
+      scene.dt = dt;
+      // one file per step when the scene is swept, else the scene's own name
+      const std::string tag =
+          safe_name(p.dts.size() > 1 ? scene.name + ".dt-" + step_tag(dt) : scene.name);
+      const fs::path scene_file = out / "scenes" / (tag + ".json");
+      save_scene_file(scene, scene_file.string());
+      const int every = scene.probe_every_steps();
 
-    // ---- the reference this scene compares with
-    ReferenceRun reference;
-    if (scene.reference.kind == ReferenceKind::Converged) {
-      const EngineVariant rtp_rk4{"rtp", "rk4", rtp_engine_info().version, self};
-      std::vector<Trajectory> runs;
-      for (int factor : {1, 2}) {
-        const int divisor = scene.reference.dt_divisor * factor;
-        const Scene fine = refined(scene, divisor);
-        const fs::path file =
-            out / "scenes" /
-            (safe_name(scene.name) + ".reference-dt-over-" + std::to_string(divisor) + ".json");
-        save_scene_file(fine, file.string());
-        std::cerr << "  reference for " << scene.name << ": rtp rk4 at dt/" << divisor << "\n";
-        const RunResult r =
-            run_job(rtp_rk4, {file, work / "reference.json", work / "reference.log"},
-                    every * divisor, 0.0, options.timeout_seconds);
-        if (r.status != Status::Ok) {
-          reference.failure = "reference run (rtp rk4 at dt/" + std::to_string(divisor) + ") " +
-                              to_string(r.status) + ": " + r.message;
-          break;
+      // ---- the reference this scene compares with
+      ReferenceRun reference;
+      if (scene.reference.kind == ReferenceKind::Converged)
+        reference = converged_reference(scene, tag, out, work, self, options.timeout_seconds);
+      scenario_meta["reference_self_error"][number(dt)] = reference.self_error;
+      scenario_meta["scene_file"][number(dt)] = fs::relative(scene_file, out).string();
+
+      int dynamic_bodies = 0;
+      for (const BodySpec& b : scene.bodies) dynamic_bodies += b.mass > 0.0;
+
+      for (const EngineVariant& ev : jobs_engines) {
+        ++done;
+        const std::string job = tag + "__" + safe_name(ev.engine + "__" + ev.variant);
+        std::cerr << "[" << done << "/" << total << "] " << tag << "  " << ev.engine << "/"
+                  << ev.variant << " ... " << std::flush;
+        RunResult r = run_job(ev, {scene_file, work / (job + ".json"), work / (job + ".log")},
+                              every, options.timing_budget, options.timeout_seconds);
+
+        json& engine_meta = metadata["engines"][ev.engine];
+        if (r.status != Status::Unsupported && r.status != Status::Crashed &&
+            r.status != Status::Timeout) {
+          engine_meta["version"] = r.engine_version;
+          json settings = json::array();
+          for (const Setting& s : r.settings)
+            settings.push_back({{"name", s.name}, {"value", s.value}, {"why", s.why}});
+          engine_meta["variants"][ev.variant] = settings;
         }
-        runs.push_back(r.trajectory);
-      }
-      if (runs.size() == 2) {
-        reference.available = true;
-        reference.trajectory = runs[0];
-        // converged when halving the step once more changes the answer by this little
-        Scene check = scene;
-        check.probe.metrics = {Metric::Position, Metric::Orientation};
-        const ErrorSummary self_check = summarise(compare(check, runs[0], &runs[1]));
-        reference.self_error = std::max(self_check.position->max, self_check.orientation->max);
-      }
-    }
-    metadata["scenarios"][scene.name] = {{"description", scene.description},
-                                         {"question", p.question},
-                                         {"dt", scene.dt},
-                                         {"duration", scene.duration},
-                                         {"planar", scene.planar},
-                                         {"reference", to_string(scene.reference.kind)},
-                                         {"reference_dt_divisor", scene.reference.dt_divisor},
-                                         {"reference_self_error", reference.self_error},
-                                         {"scene_file", fs::relative(p.file, out).string()}};
 
-    int dynamic_bodies = 0;
-    for (const BodySpec& b : scene.bodies) dynamic_bodies += b.mass > 0.0;
+        std::map<std::string, std::string> row;
+        row["scenario"] = scene.name;
+        row["engine"] = ev.engine;
+        row["variant"] = ev.variant;
+        row["engine_version"] = r.engine_version;
+        row["dt"] = exact(scene.dt);  // full precision: rows are matched to their scenario's step
+        row["duration"] = number(scene.duration);
+        row["steps"] = std::to_string(scene.step_count());
+        row["bodies"] = std::to_string(dynamic_bodies);
+        row["reference"] = to_string(scene.reference.kind);
+        row["reference_self_error"] = number(reference.self_error);
+        std::string message = r.message;
 
-    for (const EngineVariant& ev : jobs_engines) {
-      ++done;
-      const std::string job = safe_name(scene.name + "__" + ev.engine + "__" + ev.variant);
-      std::cerr << "[" << done << "/" << total << "] " << scene.name << "  " << ev.engine << "/"
-                << ev.variant << " ... " << std::flush;
-      RunResult r = run_job(ev, {p.file, work / (job + ".json"), work / (job + ".log")}, every,
-                            options.timing_budget, options.timeout_seconds);
-
-      json& engine_meta = metadata["engines"][ev.engine];
-      if (r.status != Status::Unsupported && r.status != Status::Crashed &&
-          r.status != Status::Timeout) {
-        engine_meta["version"] = r.engine_version;
-        json settings = json::array();
-        for (const Setting& s : r.settings)
-          settings.push_back({{"name", s.name}, {"value", s.value}, {"why", s.why}});
-        engine_meta["variants"][ev.variant] = settings;
-      }
-
-      std::map<std::string, std::string> row;
-      row["scenario"] = scene.name;
-      row["engine"] = ev.engine;
-      row["variant"] = ev.variant;
-      row["engine_version"] = r.engine_version;
-      row["dt"] = number(scene.dt);
-      row["duration"] = number(scene.duration);
-      row["steps"] = std::to_string(scene.step_count());
-      row["bodies"] = std::to_string(dynamic_bodies);
-      row["reference"] = to_string(scene.reference.kind);
-      row["reference_self_error"] = number(reference.self_error);
-      std::string message = r.message;
-
-      if (r.status == Status::Ok || r.status == Status::Exploded) {
-        if (!r.wall_seconds.empty()) {
-          const double wall = median(r.wall_seconds);
-          const double steps = static_cast<double>(r.steps);
-          const auto [lo, hi] = std::minmax_element(r.wall_seconds.begin(), r.wall_seconds.end());
-          row["repeats"] = std::to_string(r.wall_seconds.size());
-          row["wall_s_median"] = number(wall);
-          row["steps_per_s"] = number(steps / wall);
-          row["steps_per_s_min"] = number(steps / *hi);
-          row["steps_per_s_max"] = number(steps / *lo);
-          row["body_steps_per_s"] = number(steps * dynamic_bodies / wall);
-          row["realtime_factor"] = number(scene.duration / wall);
-          if (r.status == Status::Exploded) {
-            // the run stopped early: its speed is not comparable
-            for (const char* key : {"steps_per_s", "steps_per_s_min", "steps_per_s_max",
-                                    "body_steps_per_s", "realtime_factor"})
-              row[key] = "";
+        if (r.status == Status::Ok || r.status == Status::Exploded) {
+          if (!r.wall_seconds.empty()) {
+            const double wall = median(r.wall_seconds);
+            const double steps = static_cast<double>(r.steps);
+            const auto [lo, hi] = std::minmax_element(r.wall_seconds.begin(), r.wall_seconds.end());
+            row["repeats"] = std::to_string(r.wall_seconds.size());
+            row["wall_s_median"] = number(wall);
+            row["steps_per_s"] = number(steps / wall);
+            row["steps_per_s_min"] = number(steps / *hi);
+            row["steps_per_s_max"] = number(steps / *lo);
+            row["body_steps_per_s"] = number(steps * dynamic_bodies / wall);
+            row["realtime_factor"] = number(scene.duration / wall);
+            if (r.status == Status::Exploded) {
+              // the run stopped early: its speed is not comparable
+              for (const char* key : {"steps_per_s", "steps_per_s_min", "steps_per_s_max",
+                                      "body_steps_per_s", "realtime_factor"})
+                row[key] = "";
+            }
+          }
+          try {
+            Trajectory closed_form;
+            const Trajectory* against = nullptr;
+            if (has_analytic_reference(scene)) {
+              closed_form = analytic_reference(scene, r.trajectory);
+              against = &closed_form;
+            } else if (scene.reference.kind == ReferenceKind::Converged) {
+              if (reference.available)
+                against = &reference.trajectory;
+              else
+                message += (message.empty() ? "" : "; ") + reference.failure;
+            }
+            Scene measured = scene;
+            if (!against) {
+              // without a reference only the invariants can be judged
+              std::erase_if(measured.probe.metrics, [](Metric m) {
+                return m == Metric::Position || m == Metric::Orientation;
+              });
+            }
+            const ErrorSeries series = compare(measured, r.trajectory, against);
+            const ErrorSummary summary = summarise(series);
+            auto put = [&](const char* prefix, const std::optional<SeriesSummary>& s,
+                           bool with_rms) {
+              if (!s) return;
+              if (with_rms) row[std::string(prefix) + "_rms"] = number(s->rms);
+              row[std::string(prefix) + "_max"] = number(s->max);
+              row[std::string(prefix) + "_final"] = number(s->final);
+            };
+            put("position_err", summary.position, true);
+            put("orientation_err", summary.orientation, true);
+            put("energy_drift", summary.energy, false);
+            put("linear_momentum_drift", summary.linear_momentum, false);
+            put("angular_momentum_drift", summary.angular_momentum, false);
+            const fs::path trajectory = out / "trajectories" / (job + ".csv");
+            write_trajectory_csv(trajectory, r.trajectory, series);
+            row["trajectory"] = fs::relative(trajectory, out).string();
+          } catch (const std::exception& e) {
+            message += (message.empty() ? "" : "; ") + std::string("metrics failed: ") + e.what();
           }
         }
-        try {
-          Trajectory closed_form;
-          const Trajectory* against = nullptr;
-          if (has_analytic_reference(scene)) {
-            closed_form = analytic_reference(scene, r.trajectory);
-            against = &closed_form;
-          } else if (scene.reference.kind == ReferenceKind::Converged) {
-            if (reference.available)
-              against = &reference.trajectory;
-            else
-              message += (message.empty() ? "" : "; ") + reference.failure;
-          }
-          Scene measured = scene;
-          if (!against) {
-            // without a reference only the invariants can be judged
-            std::erase_if(measured.probe.metrics, [](Metric m) {
-              return m == Metric::Position || m == Metric::Orientation;
-            });
-          }
-          const ErrorSeries series = compare(measured, r.trajectory, against);
-          const ErrorSummary summary = summarise(series);
-          auto put = [&](const char* prefix, const std::optional<SeriesSummary>& s, bool with_rms) {
-            if (!s) return;
-            if (with_rms) row[std::string(prefix) + "_rms"] = number(s->rms);
-            row[std::string(prefix) + "_max"] = number(s->max);
-            row[std::string(prefix) + "_final"] = number(s->final);
-          };
-          put("position_err", summary.position, true);
-          put("orientation_err", summary.orientation, true);
-          put("energy_drift", summary.energy, false);
-          put("linear_momentum_drift", summary.linear_momentum, false);
-          put("angular_momentum_drift", summary.angular_momentum, false);
-          const fs::path trajectory = out / "trajectories" / (job + ".csv");
-          write_trajectory_csv(trajectory, r.trajectory, series);
-          row["trajectory"] = fs::relative(trajectory, out).string();
-        } catch (const std::exception& e) {
-          message += (message.empty() ? "" : "; ") + std::string("metrics failed: ") + e.what();
-        }
-      }
-      if (r.status == Status::Crashed || r.status == Status::Timeout || r.status == Status::Error)
-        ++failures;
-      row["status"] = to_string(r.status);
-      row["message"] = message;
-      for (std::size_t i = 0; i < kColumns.size(); ++i)
-        csv << (i ? "," : "") << csv_field(row[kColumns[i]]);
-      csv << '\n';
+        if (r.status == Status::Crashed || r.status == Status::Timeout || r.status == Status::Error)
+          ++failures;
+        row["status"] = to_string(r.status);
+        row["message"] = message;
+        for (std::size_t i = 0; i < kColumns.size(); ++i)
+          csv << (i ? "," : "") << csv_field(row[kColumns[i]]);
+        csv << '\n';
 
-      std::cerr << row["status"];
-      if (!row["steps_per_s"].empty()) std::cerr << "  " << row["steps_per_s"] << " steps/s";
-      if (!row["position_err_max"].empty())
-        std::cerr << "  pos err max " << row["position_err_max"] << " m";
-      if (!row["orientation_err_max"].empty())
-        std::cerr << "  orient err max " << row["orientation_err_max"] << " rad";
-      if (!row["energy_drift_max"].empty())
-        std::cerr << "  energy drift " << row["energy_drift_max"];
-      if (r.status != Status::Ok) std::cerr << "  (" << message << ")";
-      std::cerr << '\n';
+        std::cerr << row["status"];
+        if (!row["steps_per_s"].empty()) std::cerr << "  " << row["steps_per_s"] << " steps/s";
+        if (!row["position_err_max"].empty())
+          std::cerr << "  pos err max " << row["position_err_max"] << " m";
+        if (!row["orientation_err_max"].empty())
+          std::cerr << "  orient err max " << row["orientation_err_max"] << " rad";
+        if (!row["energy_drift_max"].empty())
+          std::cerr << "  energy drift " << row["energy_drift_max"];
+        if (r.status != Status::Ok) std::cerr << "  (" << message << ")";
+        std::cerr << '\n';
+      }
     }
   }
 

@@ -2,6 +2,7 @@
 // errors with no results file for bad input.
 #include <gtest/gtest.h>
 
+#include <algorithm>
 #include <filesystem>
 #include <fstream>
 #include <map>
@@ -172,8 +173,8 @@ TEST(Runner, MalformedSceneFileNamesTheFieldAndWritesNothing) {
 TEST(Runner, SceneFileRunsTheSameAsTheBuiltInScenario) {
   // a scene written out by one run and read back by another gives the same trajectory
   const fs::path dir = fresh_dir("scene_file");
-  ASSERT_EQ(physbench({"run", "-s", "tumbling-box", "-e", "rtp", "--variant", "rk4", "--budget",
-                       "0", "--out", (dir / "a").string()},
+  ASSERT_EQ(physbench({"run", "-s", "tumbling-box", "--no-sweep", "-e", "rtp", "--variant", "rk4",
+                       "--budget", "0", "--out", (dir / "a").string()},
                       dir)
                 .outcome.exit_code,
             0);
@@ -188,6 +189,30 @@ TEST(Runner, SceneFileRunsTheSameAsTheBuiltInScenario) {
   ASSERT_EQ(b.size(), 1u);
   EXPECT_EQ(a[0].at("orientation_err_max"), b[0].at("orientation_err_max"));
   EXPECT_EQ(a[0].at("energy_drift_max"), b[0].at("energy_drift_max"));
+}
+
+TEST(Runner, DtSweepGivesARowPerStepAndRk4ConvergesAtFourthOrder) {
+  const fs::path dir = fresh_dir("sweep");
+  const Invocation inv =
+      physbench({"run", "-s", "spring-oscillator", "-e", "rtp", "--variant", "rk4", "--sweep-hz",
+                 "60,120,240", "--budget", "0", "--out", (dir / "r").string()},
+                dir);
+  ASSERT_EQ(inv.outcome.exit_code, 0) << inv.output;
+  auto rows = read_rows(dir / "r" / "results.csv");
+  ASSERT_EQ(rows.size(), 3u);
+  std::sort(rows.begin(), rows.end(), [](const auto& a, const auto& b) {
+    return std::stod(a.at("dt")) > std::stod(b.at("dt"));
+  });
+  // each halving of dt divides RK4's error by about 2⁴
+  for (std::size_t i = 0; i + 1 < rows.size(); ++i) {
+    const double ratio =
+        std::stod(rows[i].at("position_err_max")) / std::stod(rows[i + 1].at("position_err_max"));
+    EXPECT_GT(ratio, 12.0) << "dt " << rows[i].at("dt");
+    EXPECT_LT(ratio, 20.0) << "dt " << rows[i].at("dt");
+  }
+  for (const char* tag : {"60hz", "120hz", "240hz"})
+    EXPECT_TRUE(
+        fs::exists(dir / "r" / "scenes" / ("spring-oscillator.dt-" + std::string(tag) + ".json")));
 }
 
 }  // namespace

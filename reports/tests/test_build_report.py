@@ -83,3 +83,21 @@ def test_broken_metadata_is_named(results, tmp_path):
     (copy / "metadata.json").write_text("{ not json")
     with pytest.raises(build_report.ReportError, match="metadata.json: not valid JSON"):
         build_report.build_report(copy)
+
+
+def test_swept_scenario_gets_a_pareto_front_and_measured_orders(results):
+    page = build_report.build_report(results).read_text()
+    tumbling = page.split("<h2>tumbling-box</h2>")[1].split("<section>")[0]
+    assert "Pareto front: nothing else is both faster and more accurate" in tumbling
+    assert re.search(r"rtp/rk4 \(order [0-9.]+\)", tumbling)
+    # projectile is not swept: one point per engine, no order to measure
+    projectile = page.split("<h2>projectile</h2>")[1].split("<section>")[0]
+    assert "(order " not in projectile
+
+
+def test_convergence_order_and_front_on_known_points():
+    points = pd.DataFrame({"dt": [0.1, 0.05, 0.025], "err": [1.0, 1 / 16, 1 / 256]})
+    assert build_report.convergence_order(points, "err") == pytest.approx(4.0)
+    costs = pd.DataFrame({"cost": [1.0, 2.0, 3.0, 4.0], "err": [0.5, 0.6, 0.1, 0.01]})
+    front = build_report.pareto_front(costs, "err")
+    assert list(front["cost"]) == [1.0, 3.0, 4.0]  # (2.0, 0.6) is beaten by (1.0, 0.5)
