@@ -37,6 +37,16 @@ Vec3 principal_inertia(const Shape& shape, double mass) {
   return Vec3::Zero();
 }
 
+std::optional<int> symmetry_axis(const Vec3& inertia) {
+  auto equal = [](double a, double b) {
+    return std::abs(a - b) <= 1e-12 * std::max(std::abs(a), std::abs(b));
+  };
+  if (equal(inertia.x(), inertia.y())) return 2;
+  if (equal(inertia.x(), inertia.z())) return 1;
+  if (equal(inertia.y(), inertia.z())) return 0;
+  return std::nullopt;
+}
+
 const char* to_string(ShapeKind kind) {
   switch (kind) {
     case ShapeKind::Box:
@@ -222,9 +232,15 @@ void validate(const Scene& scene) {
   }
   if (scene.reference.kind == ReferenceKind::Ballistic) {
     if (!scene.springs.empty()) fail("reference.kind", "ballistic holds only without springs");
-    for (Metric m : scene.probe.metrics)
-      if (m == Metric::Orientation)
-        fail("probe.metrics", "the ballistic reference has no orientation");
+    const bool orientation = std::find(scene.probe.metrics.begin(), scene.probe.metrics.end(),
+                                       Metric::Orientation) != scene.probe.metrics.end();
+    for (int i = 0; orientation && i < body_count; ++i) {
+      const BodySpec& b = scene.bodies[i];
+      if (b.mass > 0.0 && !symmetry_axis(principal_inertia(b.shape, b.mass)))
+        fail("probe.metrics",
+             "the ballistic orientation is closed-form only for symmetric tops; bodies[" +
+                 std::to_string(i) + "] has three different principal moments");
+    }
   }
 }
 

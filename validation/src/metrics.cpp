@@ -132,6 +132,32 @@ ErrorSummary summarise(const ErrorSeries& series) {
   return summary;
 }
 
+namespace {
+
+// The torque-free symmetric top in closed form (Goldstein, Classical Mechanics, §5.6; Landau &
+// Lifshitz, Mechanics, §33): the angular momentum L is fixed in space, and the body turns about
+// L at φ' = |L| / I⊥ while spinning about its own symmetry axis e₃ at ψ' = ω₃ (I⊥ − I₃) / I⊥:
+//   R(t) = Rot(L̂, φ' t) · R(0) · Rot(e₃, ψ' t)
+// which gives ω = φ' L̂ + ψ' R e₃ = I_world⁻¹ L at every t. Returns R(t) and ω(t).
+Quat torque_free_top(const BodySpec& b, int axis, double t, Vec3& angular_velocity) {
+  const Vec3 inertia = principal_inertia(b.shape, b.mass);
+  const double perpendicular = inertia[(axis + 1) % 3], along = inertia[axis];
+  const Mat3 rotation = b.orientation.toRotationMatrix();
+  const Vec3 momentum = rotation * inertia.asDiagonal() * rotation.transpose() * b.angular_velocity;
+  const Vec3 e3 = Vec3::Unit(axis);
+  const double spin = (b.orientation.conjugate() * b.angular_velocity)[axis];  // ω₃, constant
+  const double precession = momentum.norm() / perpendicular;
+  const double body_spin = spin * (perpendicular - along) / perpendicular;
+  const Vec3 axis_of_momentum = momentum.norm() > 0.0 ? Vec3(momentum.normalized()) : Vec3::UnitX();
+  const Quat q = (Quat(Eigen::AngleAxisd(precession * t, axis_of_momentum)) * b.orientation *
+                  Quat(Eigen::AngleAxisd(body_spin * t, e3)))
+                     .normalized();
+  angular_velocity = precession * axis_of_momentum + body_spin * (q * e3);
+  return q;
+}
+
+}  // namespace
+
 Trajectory ballistic_reference(const Scene& scene, const Trajectory& sampled_at) {
   Trajectory reference;
   reference.bodies = sampled_at.bodies;
@@ -148,8 +174,10 @@ Trajectory ballistic_reference(const Scene& scene, const Trajectory& sampled_at)
       } else {
         state.position = b.position;
       }
-      state.orientation =
-          b.orientation;  // not part of the closed form: the scene asks no orientation metric
+      state.orientation = b.orientation;
+      if (b.mass > 0.0)
+        if (const auto axis = symmetry_axis(principal_inertia(b.shape, b.mass)))
+          state.orientation = torque_free_top(b, *axis, at.time, state.angular_velocity);
       s.bodies.push_back(state);
     }
     reference.samples.push_back(std::move(s));

@@ -99,4 +99,21 @@ TEST(References, DzhanibekovFlipHappens) {
   EXPECT_TRUE(reversed);
 }
 
+TEST(References, SymmetricTopClosedFormAgreesWithTheConvergedRun) {
+  // two independent answers to one question: Goldstein's closed form and rtp RK4 at dt/64
+  Scene scene = symmetric_top_scene();
+  SimulateOptions options;
+  options.timing_budget = 0.0;
+  const Trajectory converged = physbench::testing::converged_reference(scene, 64);
+  const Trajectory closed_form = ballistic_reference(scene, converged);
+  scene.probe.metrics = {Metric::Orientation};
+  EXPECT_LT(summarise(compare(scene, converged, &closed_form)).orientation->max, 1e-9);
+  // and the top really precesses: its symmetry axis sweeps a cone of half-angle about 0.13 rad
+  const Vec3 start = closed_form.samples.front().bodies[0].orientation * Vec3::UnitY();
+  double widest = 0.0;
+  for (const Sample& s : closed_form.samples)
+    widest = std::max(widest, (s.bodies[0].orientation * Vec3::UnitY() - start).norm());
+  EXPECT_GT(widest, 0.2);
+}
+
 }  // namespace

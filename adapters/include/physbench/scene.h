@@ -54,7 +54,8 @@ struct SpringSpec {
 // what the harness compares each engine's trajectory with
 enum class ReferenceKind {
   None,        // invariants only (energy, momenta)
-  Ballistic,   // closed form x0 + v0 t + ½ g t² for every body's centre of mass
+  Ballistic,   // closed-form free flight: x0 + v0 t + ½ g t² for every centre of mass, and the
+               // torque-free rotation of bodies with two equal principal moments (symmetric tops)
   Oscillator,  // closed form of one body on one spring to a world anchor, moving along the spring
   Converged,   // rtp RK4 at dt / divisor, shown converged by halving once more
 };
@@ -93,6 +94,10 @@ struct Scene {
 
 // mass properties of a shape of the given mass: principal inertia in the body frame (kg m²)
 Vec3 principal_inertia(const Shape& shape, double mass);
+
+// the body axis (0, 1, 2) of a symmetric top — the one whose moment differs from the two equal
+// others, any axis when all three are equal — or nullopt when all three differ
+std::optional<int> symmetry_axis(const Vec3& principal_inertia);
 
 // Throws SceneError naming the first invalid field ("bodies[2].mass: must be >= 0, got -1").
 void validate(const Scene& scene);

@@ -29,6 +29,7 @@ const Scenario* find_scenario(const std::string& name);
 Scene projectile_scene();
 Scene projectile_planar_scene();
 Scene tumbling_box_scene();
+Scene symmetric_top_scene();
 Scene spring_oscillator_scene(double damping = 0.0);
 Scene spring_cube_scene();
 Scene spring_chain_scene(int links = 8);
