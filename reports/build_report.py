@@ -181,6 +181,41 @@ def speed_error(rows: pd.DataFrame) -> tuple[str | None, list[dict]]:
     return figure_html(fig), table
 
 
+def stability_maps(results: pd.DataFrame, meta: dict) -> list[dict]:
+    """One table per scenario family: engine/variant against (parameter, dt), each cell the run's
+    stability class (stable, unstable, over-damped, exploded) or its status when it did not run."""
+    families = {}
+    for name, info in meta.get("scenarios", {}).items():
+        if info.get("family"):
+            families.setdefault(info["family"], []).append((info.get("parameter"), name, info))
+    maps = []
+    for family, members in families.items():
+        members.sort(key=lambda m: m[0])
+        columns = []  # (scenario, dt, parameter text, dt text)
+        for parameter, name, info in members:
+            for dt in sorted(info.get("sweep_dt", [info.get("dt")]), reverse=True):
+                columns.append((name, dt, f"{parameter:g}", f"1/{1 / dt:.0f}"))
+        rows = []
+        for label in results[results["scenario"].isin([m[1] for m in members])]["label"].unique():
+            cells = []
+            for name, dt, _, _ in columns:
+                hit = results[(results["scenario"] == name) & (results["label"] == label) &
+                              ((results["dt"] - dt).abs() <= 1e-6 * dt)]
+                if hit.empty:
+                    cells.append(("", ""))
+                    continue
+                row = hit.iloc[0]
+                stability = row.get("stability")
+                text = stability if isinstance(stability, str) and stability else row["status"]
+                cells.append((text, text.replace(" ", "-")))
+            rows.append(dict(label=label, cells=cells))
+        parameter_name = members[0][2].get("parameter_name", "parameter")
+        description = members[0][2].get("question", "")
+        maps.append(dict(name=family, parameter_name=parameter_name, description=description, columns=columns,
+                         rows=rows, groups=[(f"{p:g}", sum(1 for c in columns if c[0] == n)) for p, n, _ in members]))
+    return maps
+
+
 TEMPLATE = jinja2.Template("""<!doctype html>
 <html lang="en"><head><meta charset="utf-8">
 <title>physbench report {{ meta.created }}</title>
@@ -192,6 +227,8 @@ TEMPLATE = jinja2.Template("""<!doctype html>
  th { background: #f0f0f0; } td.l, th.l { text-align: left; }
  .ok { color: #176a17; } .exploded, .crashed, .timeout, .error { color: #b00; font-weight: bold; }
  .unsupported { color: #777; } .note { color: #555; font-size: 0.9em; }
+ td.stable { background: #dff0d8; } td.unstable, td.exploded { background: #f2dede; }
+ td.over-damped { background: #fcf8e3; }
  section { border-top: 2px solid #ddd; margin-top: 2em; }
 </style></head><body>
 <h1>physbench report</h1>
@@ -223,6 +260,15 @@ TEMPLATE = jinja2.Template("""<!doctype html>
 {% if s.unsupported %}<p class="note">Not run: {% for u in s.unsupported %}<br>{{ u }}{% endfor %}</p>{% endif %}
 </section>{% endfor %}
 
+{% for f in families %}<section><h2>Stability map: {{ f.name }}</h2>
+<p>{{ f.description }}</p>
+<p class="note">stable: energy bounded; unstable: it grows (or exceeds 20× its start); over-damped: an undamped
+system lost over half its energy; exploded: the state became non-finite or ran away.</p>
+<table><tr><th class="l">{{ f.parameter_name }} →</th>{% for p, n in f.groups %}<th colspan="{{ n }}">{{ p }}</th>{% endfor %}</tr>
+<tr><th class="l">engine/variant \\ dt (s)</th>{% for c in f.columns %}<th>{{ c[3] }}</th>{% endfor %}</tr>
+{% for r in f.rows %}<tr><td class="l">{{ r.label }}</td>{% for text, css in r.cells %}<td class="{{ css }}">{{ text }}</td>{% endfor %}</tr>{% endfor %}
+</table></section>{% endfor %}
+
 <section><h2>Engine settings</h2>
 <p class="note">Every setting an adapter changes from its engine's defaults, as the adapter states it.</p>
 {% for e in engines %}<h3>{{ e.name }} <small>{{ e.version }}</small></h3>
@@ -239,7 +285,9 @@ def build_report(folder: Path) -> Path:
     present = [(c, t) for c, t, _, summary in SERIES if summary in results and results[summary].notna().any()]
     summary_columns = [(c, f"{c.replace('_', ' ')} max") for c, _ in present]
 
-    nominal = results[[is_nominal(meta, r) for _, r in results.iterrows()]]
+    # the summary holds each scenario at its own step; families appear as their stability maps
+    in_family = {n for n, i in meta.get("scenarios", {}).items() if i.get("family")}
+    nominal = results[[is_nominal(meta, r) and r["scenario"] not in in_family for _, r in results.iterrows()]]
     summary_rows = []
     for _, r in nominal.iterrows():
         spread = ""
@@ -255,6 +303,8 @@ def build_report(folder: Path) -> Path:
     scenarios = []
     for name, rows in results.groupby("scenario", sort=False):
         info = meta.get("scenarios", {}).get(name, {})
+        if info.get("family"):
+            continue  # shown as its family's stability map
         own = rows[[is_nominal(meta, r) for _, r in rows.iterrows()]]
         charts = []
         for column, title, unit, summary in SERIES:
@@ -283,13 +333,15 @@ def build_report(folder: Path) -> Path:
             charts=charts, front=front,
             unsupported=[f"{r['label']}: {r['message']}" for _, r in own.iterrows() if r["status"] == "unsupported"]))
 
+    families = stability_maps(results, meta)
+
     engines = []
     for name, info in meta.get("engines", {}).items():
         variants = [dict(name=v, settings=s) for v, s in info.get("variants", {}).items()]
         engines.append(dict(name=name, version=info.get("version", ""), variants=variants))
 
     page = TEMPLATE.render(meta=meta, plotlyjs=plotly.offline.get_plotlyjs(), summary_columns=summary_columns,
-                           summary_rows=summary_rows, scenarios=scenarios, engines=engines)
+                           summary_rows=summary_rows, scenarios=scenarios, families=families, engines=engines)
     out = folder / "index.html"
     partial = folder / "index.html.partial"
     partial.write_text(page, encoding="utf-8")

@@ -190,6 +190,10 @@ const std::vector<std::string> kColumns = {"scenario",
                                            "orientation_err_final",
                                            "energy_drift_max",
                                            "energy_drift_final",
+                                           "energy_change_final",
+                                           "stability",
+                                           "family",
+                                           "parameter",
                                            "linear_momentum_drift_max",
                                            "linear_momentum_drift_final",
                                            "angular_momentum_drift_max",
@@ -207,6 +211,9 @@ void write_trajectory_csv(const fs::path& path, const Trajectory& run, const Err
   auto at = [](const std::vector<double>& v, std::size_t k) {
     return k < v.size() ? number(v[k]) : std::string();
   };
+  auto at_abs = [](const std::vector<double>& v, std::size_t k) {
+    return k < v.size() ? number(std::abs(v[k])) : std::string();
+  };
   for (std::size_t k = 0; k < run.samples.size(); ++k) {
     const Sample& s = run.samples[k];
     for (std::size_t b = 0; b < s.bodies.size(); ++b) {
@@ -219,7 +226,7 @@ void write_trajectory_csv(const fs::path& path, const Trajectory& run, const Err
       for (int i = 0; i < 3; ++i) out << ',' << number(st.angular_velocity[i]);
       // the error series are per sample (worst body), repeated on each body's row
       out << ',' << at(series.position_error, k) << ',' << at(series.orientation_error, k) << ','
-          << at(series.energy_drift, k) << ',' << at(series.linear_momentum_drift, k) << ','
+          << at_abs(series.energy_change, k) << ',' << at(series.linear_momentum_drift, k) << ','
           << at(series.angular_momentum_drift, k) << '\n';
     }
   }
@@ -236,6 +243,9 @@ struct PreparedScene {
   Scene scene;
   std::string question;
   std::vector<double> dts;  // the scene's own step first when it is swept
+  std::string family;       // scenarios that map one parameter, e.g. stiff-spring
+  std::string parameter_name;
+  double parameter = std::nan("");
 };
 
 // "120hz" for a step that is a whole rate, else the step in seconds
@@ -310,8 +320,8 @@ int run_suite(const RunOptions& options, const fs::path& self) {
         names += (names.empty() ? "" : ", ") + s.name;
       throw RunError("unknown scenario '" + name + "' (built in: " + names + ")");
     }
-    PreparedScene p{scenario->build(), scenario->question, {}};
-    p.dts = scenario->sweep_dt;
+    PreparedScene p{scenario->build(), scenario->question,       scenario->sweep_dt,
+                    scenario->family,  scenario->parameter_name, scenario->parameter};
     scenes.push_back(std::move(p));
   }
   for (const std::string& file : options.scene_files) {
@@ -394,6 +404,9 @@ int run_suite(const RunOptions& options, const fs::path& self) {
                      {"reference", to_string(p.scene.reference.kind)},
                      {"reference_dt_divisor", p.scene.reference.dt_divisor},
                      {"reference_self_error", json::object()},
+                     {"family", p.family},
+                     {"parameter_name", p.parameter_name},
+                     {"parameter", p.parameter},
                      {"scene_file", json::object()}};
     for (double dt : p.dts) {
       Scene scene = p.scene;
@@ -438,6 +451,8 @@ int run_suite(const RunOptions& options, const fs::path& self) {
         row["engine"] = ev.engine;
         row["variant"] = ev.variant;
         row["engine_version"] = r.engine_version;
+        row["family"] = p.family;
+        row["parameter"] = number(p.parameter);
         row["dt"] = exact(scene.dt);  // full precision: rows are matched to their scenario's step
         row["duration"] = number(scene.duration);
         row["steps"] = std::to_string(scene.step_count());
@@ -496,6 +511,10 @@ int run_suite(const RunOptions& options, const fs::path& self) {
             put("position_err", summary.position, true);
             put("orientation_err", summary.orientation, true);
             put("energy_drift", summary.energy, false);
+            if (summary.energy_change_final)
+              row["energy_change_final"] = number(*summary.energy_change_final);
+            row["stability"] =
+                r.status == Status::Exploded ? "exploded" : stability_of(scene, series);
             put("linear_momentum_drift", summary.linear_momentum, false);
             put("angular_momentum_drift", summary.angular_momentum, false);
             const fs::path trajectory = out / "trajectories" / (job + ".csv");

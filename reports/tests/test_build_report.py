@@ -102,3 +102,21 @@ def test_convergence_order_and_front_on_known_points():
     costs = pd.DataFrame({"cost": [1.0, 2.0, 3.0, 4.0], "err": [0.5, 0.6, 0.1, 0.01]})
     front = build_report.pareto_front(costs, "err")
     assert list(front["cost"]) == [1.0, 3.0, 4.0]  # (2.0, 0.6) is beaten by (1.0, 0.5)
+
+
+def test_stability_map_classifies_every_run_of_a_family(tmp_path):
+    if not PHYSBENCH:
+        pytest.skip("PHYSBENCH_EXE is not set (CTest sets it)")
+    out = tmp_path / "r"
+    subprocess.run([PHYSBENCH, "run", "-s", "stiff-spring-k1e2,stiff-spring-k1e4", "-e", "rtp", "--budget", "0",
+                    "--out", str(out)], check=True, capture_output=True)
+    page = build_report.build_report(out).read_text()
+    table = page.split("Stability map: stiff-spring")[1].split("</table>")[0]
+    # 2 stiffnesses x 4 steps x 3 rtp variants, each with a class
+    cells = re.findall(r'<td class="(stable|unstable|over-damped|exploded)">', table)
+    assert len(cells) == 24
+    # the family's scenarios are not repeated as sections or summary rows
+    assert "<h2>stiff-spring-k1e2</h2>" not in page
+    # midpoint cannot hold k = 1e4 at dt = 1/30: its cell says so
+    midpoint = table.split("rtp/midpoint")[1].split("</tr>")[0]
+    assert "exploded" in midpoint or "unstable" in midpoint

@@ -8,7 +8,7 @@ namespace physbench {
 namespace {
 
 struct Invariants {
-  double energy = 0.0, kinetic = 0.0;
+  double energy = 0.0, kinetic = 0.0, spring_potential = 0.0;
   Vec3 linear_momentum = Vec3::Zero(), angular_momentum = Vec3::Zero();
 };
 
@@ -43,6 +43,7 @@ Invariants invariants_of(const Scene& scene, const std::vector<int>& bodies, con
       pb = b->position + b->orientation * spring.point_b;
     }
     const double extension = (pa - pb).norm() - spring.rest_length;
+    inv.spring_potential += 0.5 * spring.stiffness * extension * extension;
     inv.energy += 0.5 * spring.stiffness * extension * extension;
   }
   return inv;
@@ -86,7 +87,9 @@ ErrorSeries compare(const Scene& scene, const Trajectory& run, const Trajectory*
   ErrorSeries series;
   if (run.samples.empty()) return series;
   const Invariants initial = invariants_of(scene, run.bodies, run.samples.front());
-  const double energy_scale = initial.kinetic > 0.0 ? initial.kinetic : 1.0;
+  // the energy in play: kinetic plus spring, not the gravitational part, whose zero is arbitrary
+  const double in_play = initial.kinetic + initial.spring_potential;
+  const double energy_scale = in_play > 0.0 ? in_play : 1.0;
   const double angular_scale =
       initial.angular_momentum.norm() > 0.0 ? initial.angular_momentum.norm() : 1.0;
 
@@ -109,7 +112,7 @@ ErrorSeries compare(const Scene& scene, const Trajectory& run, const Trajectory*
     }
     const Invariants now = invariants_of(scene, run.bodies, s);
     if (wants(scene, Metric::Energy))
-      series.energy_drift.push_back(std::abs(now.energy - initial.energy) / energy_scale);
+      series.energy_change.push_back((now.energy - initial.energy) / energy_scale);
     if (wants(scene, Metric::LinearMomentum))
       series.linear_momentum_drift.push_back(
           (now.linear_momentum - initial.linear_momentum).norm());
@@ -124,7 +127,12 @@ ErrorSummary summarise(const ErrorSeries& series) {
   ErrorSummary summary;
   if (!series.position_error.empty()) summary.position = summary_of(series.position_error);
   if (!series.orientation_error.empty()) summary.orientation = summary_of(series.orientation_error);
-  if (!series.energy_drift.empty()) summary.energy = summary_of(series.energy_drift);
+  if (!series.energy_change.empty()) {
+    std::vector<double> drift;
+    for (double change : series.energy_change) drift.push_back(std::abs(change));
+    summary.energy = summary_of(drift);
+    summary.energy_change_final = series.energy_change.back();
+  }
   if (!series.linear_momentum_drift.empty())
     summary.linear_momentum = summary_of(series.linear_momentum_drift);
   if (!series.angular_momentum_drift.empty())
@@ -247,6 +255,23 @@ Trajectory analytic_reference(const Scene& scene, const Trajectory& sampled_at) 
     return oscillator_reference(scene, sampled_at);
   throw std::invalid_argument(std::string("no closed form for reference kind ") +
                               to_string(scene.reference.kind));
+}
+
+std::string stability_of(const Scene& scene, const ErrorSeries& series) {
+  if (series.energy_change.size() < 4) return "";
+  for (const SpringSpec& s : scene.springs)
+    if (s.damping > 0.0) return "";
+  const std::size_t half = series.energy_change.size() / 2;
+  double first = 0.0, second = 0.0;
+  for (std::size_t k = 0; k < series.energy_change.size(); ++k) {
+    const double in_play = 1.0 + series.energy_change[k];
+    if (!std::isfinite(in_play)) return "unstable";
+    (k < half ? first : second) = std::max(k < half ? first : second, in_play);
+  }
+  // growing, or ever ten-odd times the energy it started with (bounded only by a clamp, say)
+  if (second > 2.0 * first || std::max(first, second) > 20.0) return "unstable";
+  if (second < 0.5) return "over-damped";
+  return "stable";
 }
 
 Scene refined(const Scene& scene, int divisor) {

@@ -1,5 +1,8 @@
 #include "physbench/scenarios.h"
 
+#include <cmath>
+#include <sstream>
+
 namespace physbench {
 
 Scene projectile_scene() {
@@ -190,33 +193,69 @@ Scene symmetric_top_scene() {
   return scene;
 }
 
+Scene stiff_spring_scene(double stiffness) {
+  // "1e4" for a power of ten, else the number as it prints
+  std::ostringstream k;
+  const long power = std::lround(std::log10(stiffness));
+  if (std::abs(std::pow(10.0, power) - stiffness) < 1e-9 * stiffness)
+    k << "1e" << power;
+  else
+    k << stiffness;
+  Scene scene = spring_oscillator_scene(0.0);
+  scene.name = "stiff-spring-k" + k.str();
+  scene.description =
+      "the oscillator of spring-oscillator at k = " + k.str() +
+      " N/m: a hard case for explicit integrators (stable, unstable or over-damped)";
+  scene.springs[0].stiffness = stiffness;
+  scene.duration = 5.0;
+  return scene;
+}
+
 std::vector<double> standard_dt_sweep() {
   return {1.0 / 30.0, 1.0 / 60.0, 1.0 / 120.0, 1.0 / 240.0, 1.0 / 480.0, 1.0 / 960.0};
 }
 
 const std::vector<Scenario>& scenarios() {
-  static const std::vector<Scenario> list = {
-      {"projectile", "how far does each integrator put a thrown box from the closed-form parabola?",
-       projectile_scene},
-      {"projectile-planar", "the same question in the plane, so Box2D can answer it",
-       projectile_planar_scene},
-      {"tumbling-box",
-       "does each engine keep a free body's energy and angular momentum, and follow the converged "
-       "tumble?",
-       tumbling_box_scene, standard_dt_sweep()},
-      {"symmetric-top", "does each engine precess a spinning top at the closed-form rate?",
-       symmetric_top_scene, standard_dt_sweep()},
-      {"spring-oscillator",
-       "how far from the closed-form oscillation does each integrator drift, and at what cost?",
-       [] { return spring_oscillator_scene(0.0); }, standard_dt_sweep()},
-      {"spring-oscillator-damped", "the same with damping (ζ = 0.1): is the decay rate right?",
-       [] { return spring_oscillator_scene(2.0); }},
-      {"spring-cube",
-       "a spring at a body point: does the torque r × F turn the cube as the converged run does?",
-       spring_cube_scene},
-      {"spring-chain", "coupled springs: how does error grow along a chain?",
-       [] { return spring_chain_scene(8); }},
-  };
+  static const std::vector<Scenario> list = [] {
+    std::vector<Scenario> all = {
+        {"projectile",
+         "how far does each integrator put a thrown box from the closed-form parabola?",
+         projectile_scene},
+        {"projectile-planar", "the same question in the plane, so Box2D can answer it",
+         projectile_planar_scene},
+        {"tumbling-box",
+         "does each engine keep a free body's energy and angular momentum, and follow the "
+         "converged "
+         "tumble?",
+         tumbling_box_scene, standard_dt_sweep()},
+        {"symmetric-top", "does each engine precess a spinning top at the closed-form rate?",
+         symmetric_top_scene, standard_dt_sweep()},
+        {"spring-oscillator",
+         "how far from the closed-form oscillation does each integrator drift, and at what cost?",
+         [] { return spring_oscillator_scene(0.0); }, standard_dt_sweep()},
+        {"spring-oscillator-damped", "the same with damping (ζ = 0.1): is the decay rate right?",
+         [] { return spring_oscillator_scene(2.0); }},
+        {"spring-cube",
+         "a spring at a body point: does the torque r × F turn the cube as the converged run does?",
+         spring_cube_scene},
+        {"spring-chain", "coupled springs: how does error grow along a chain?",
+         [] { return spring_chain_scene(8); }},
+    };
+    // the stiff-spring stability map: k × dt, every engine and variant
+    for (double k : {1e2, 1e3, 1e4, 1e5, 1e6}) {
+      Scenario s;
+      s.name = stiff_spring_scene(k).name;
+      s.question =
+          "which engines and integrators hold a stiff spring at this k, over dt = 1/30 … 1/240?";
+      s.build = [k] { return stiff_spring_scene(k); };
+      s.sweep_dt = {1.0 / 30.0, 1.0 / 60.0, 1.0 / 120.0, 1.0 / 240.0};
+      s.family = "stiff-spring";
+      s.parameter_name = "stiffness k (N/m)";
+      s.parameter = k;
+      all.push_back(s);
+    }
+    return all;
+  }();
   return list;
 }
 

@@ -117,3 +117,45 @@ TEST(References, SymmetricTopClosedFormAgreesWithTheConvergedRun) {
 }
 
 }  // namespace
+
+namespace {
+
+using namespace physbench;
+
+ErrorSeries energy_series(std::vector<double> changes) {
+  ErrorSeries s;
+  s.energy_change = std::move(changes);
+  return s;
+}
+
+TEST(Stability, ClassesFromTheEnergyInPlay) {
+  const Scene scene = spring_oscillator_scene(0.0);
+  EXPECT_EQ(stability_of(scene, energy_series({0, 0.3, -0.2, 0.3, -0.2, 0.3})), "stable");
+  EXPECT_EQ(stability_of(scene, energy_series({0, 0.5, 1, 2, 4, 8})), "unstable");  // growing
+  EXPECT_EQ(stability_of(scene, energy_series({0, 25, 25, 25, 25, 25})),
+            "unstable");  // 26x, bounded
+  EXPECT_EQ(stability_of(scene, energy_series({0, -0.3, -0.6, -0.8, -0.9, -0.95})), "over-damped");
+  EXPECT_EQ(stability_of(scene, energy_series({0, 0.1, std::nan(""), 0, 0, 0})), "unstable");
+  // a damped scene loses energy by design: no class
+  EXPECT_EQ(stability_of(spring_oscillator_scene(2.0), energy_series({0, -0.5, -0.8, -0.9})), "");
+}
+
+TEST(Stability, StiffSpringMatchesTheKnownReferencePoints) {
+  // k = 1e4 N/m, m = 1 kg, dt = 1/120 (ω dt = 0.83): midpoint blows up, semi-implicit Euler holds,
+  // RK4 holds but loses energy (its amplification factor is below one there)
+  Scene scene = stiff_spring_scene(1e4);
+  scene.dt = 1.0 / 120.0;
+  auto run_class = [&](const std::string& variant) {
+    SimulateOptions options;
+    options.timing_budget = 0.0;
+    const RunResult r = simulate(rtp_engine_info(), variant, scene, options);
+    if (r.status == Status::Exploded) return std::string("exploded");
+    const Trajectory reference = analytic_reference(scene, r.trajectory);
+    return stability_of(scene, compare(scene, r.trajectory, &reference));
+  };
+  EXPECT_EQ(run_class("euler"), "stable");
+  EXPECT_NE(run_class("midpoint"), "stable");
+  EXPECT_EQ(run_class("rk4"), "over-damped");
+}
+
+}  // namespace

@@ -3,7 +3,8 @@
 // Definitions (docs/metrics.md):
 //   position error      |x − x_ref| of the worst probed body (m)
 //   orientation error   angle of q_ref⁻¹ q of the worst probed body (rad)
-//   energy drift        |E(t) − E(0)| / KE(0); E = kinetic + gravitational + spring potential
+//   energy change       (E(t) − E(0)) / (KE(0) + spring PE(0)), signed; energy drift is its size
+//                       E = kinetic + gravitational + spring potential
 //   linear momentum     |P(t) − P(0)| (kg m/s)
 //   angular momentum    |L(t) − L(0)| / |L(0)| about the world origin (absolute when L(0) = 0)
 #pragma once
@@ -19,7 +20,7 @@ namespace physbench {
 struct ErrorSeries {
   std::vector<double> time;
   // one entry per sample; empty when the scene does not ask for the metric
-  std::vector<double> position_error, orientation_error, energy_drift, linear_momentum_drift,
+  std::vector<double> position_error, orientation_error, energy_change, linear_momentum_drift,
       angular_momentum_drift;
 };
 
@@ -29,7 +30,15 @@ struct SeriesSummary {
 
 struct ErrorSummary {
   std::optional<SeriesSummary> position, orientation, energy, linear_momentum, angular_momentum;
+  std::optional<double> energy_change_final;  // signed: > 0 gained, < 0 lost
 };
+
+// How a conservative scene behaves, from its energy in play e(t) = 1 + energy change:
+// "unstable" when the second half of the run peaks more than twice as high as the first (the
+// energy grows) or e ever exceeds 20 (bounded only by something like a velocity clamp), "over-damped" when the second half stays under half the start although nothing
+// dissipates, else "stable" (a symplectic method's bounded wobble is stable). "" when the scene
+// has damping or no energy metric.
+std::string stability_of(const Scene& scene, const ErrorSeries& series);
 
 // reference may be null when the scene asks only for invariants; samples are matched by index
 // and must share their times

@@ -17,6 +17,10 @@ struct Scenario {
   // time steps the default suite sweeps for the speed-against-error picture; empty: only the
   // scene's own
   std::vector<double> sweep_dt = {};
+  // scenarios that map one parameter share a family (a stability map's rows)
+  std::string family = {};
+  std::string parameter_name = {};
+  double parameter = 0.0;
 };
 
 // 1/30 … 1/960 s: the sweep of the integrator scenarios
@@ -33,5 +37,6 @@ Scene symmetric_top_scene();
 Scene spring_oscillator_scene(double damping = 0.0);
 Scene spring_cube_scene();
 Scene spring_chain_scene(int links = 8);
+Scene stiff_spring_scene(double stiffness);
 
 }  // namespace physbench
