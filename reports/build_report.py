@@ -126,9 +126,18 @@ def headline_metric(rows: pd.DataFrame) -> tuple[str, str] | None:
     return None
 
 
-def convergence_order(points: pd.DataFrame, error_column: str) -> float | None:
-    """Least-squares slope of log(error) against log(dt): the measured order of accuracy."""
-    valid = points[(points[error_column] > 1e-13) & points["dt"].notna()]
+def convergence_order(points: pd.DataFrame, error_column: str, floors: dict[float, float] | None = None) -> float | None:
+    """Least-squares slope of log(error) against log(dt): the measured order of accuracy.
+    Points within 10x of the reference's own error at that dt (floors) or of round-off measure
+    the reference, not the method, and are left out."""
+    def above_floor(row) -> bool:
+        floor = 1e-13
+        for dt, self_error in (floors or {}).items():
+            if abs(dt - row["dt"]) <= 1e-6 * dt and isinstance(self_error, (int, float)) and not math.isnan(self_error):
+                floor = max(floor, 10 * self_error)
+        return row[error_column] > floor
+    valid = points[[above_floor(r) for _, r in points.iterrows()]] if not points.empty else points
+    valid = valid[valid["dt"].notna()]
     if valid["dt"].nunique() < 3:
         return None
     x, y = valid["dt"].map(math.log), valid[error_column].map(math.log)
@@ -148,7 +157,7 @@ def pareto_front(points: pd.DataFrame, error_column: str) -> pd.DataFrame:
     return ordered.loc[keep]
 
 
-def speed_error(rows: pd.DataFrame) -> tuple[str | None, list[dict]]:
+def speed_error(rows: pd.DataFrame, floors: dict[float, float] | None = None) -> tuple[str | None, list[dict]]:
     """Error against cost (wall s per simulated s), one curve per engine/variant over the dt sweep,
     the Pareto front dashed, each curve's measured order in its legend; and the front as a table."""
     metric = headline_metric(rows)
@@ -163,7 +172,7 @@ def speed_error(rows: pd.DataFrame) -> tuple[str | None, list[dict]]:
     fig = go.Figure()
     for label, curve in points.groupby("label", sort=False):
         curve = curve.sort_values("cost")
-        order = convergence_order(curve, error_column) if swept else None
+        order = convergence_order(curve, error_column, floors) if swept else None
         name = f"{label} (order {order:.2f})" if order is not None else label
         fig.add_trace(go.Scatter(
             x=curve["cost"], y=curve[error_column].clip(lower=1e-16), mode="lines+markers", name=name,
@@ -315,7 +324,9 @@ def build_report(folder: Path) -> Path:
         chart = throughput_chart(own)
         if chart:
             charts.append(chart)
-        chart, front = speed_error(rows)
+        self_errors = info.get("reference_self_error")
+        floors = {float(k): v for k, v in self_errors.items()} if isinstance(self_errors, dict) else None
+        chart, front = speed_error(rows, floors)
         if chart:
             charts.append(chart)
         self_errors = info.get("reference_self_error")
