@@ -60,6 +60,11 @@ class Box2dEngine final : public Engine {
     }
   }
 
+  void apply_impulse(int b, const Vec3& impulse, const Vec3& point) override {
+    bodies_[b]->ApplyLinearImpulse(b2Vec2(float(impulse.x()), float(impulse.y())),
+                                   b2Vec2(float(point.x()), float(point.y())), true);
+  }
+
   void step() override {
     // springs as external forces from the state at the start of the step; Box2D clears them after
     if (!scene_.springs.empty())

@@ -90,6 +90,11 @@ class BulletEngine final : public Engine {
     }
   }
 
+  void apply_impulse(int b, const Vec3& impulse, const Vec3& point) override {
+    btRigidBody& body = *bodies_[b];
+    body.applyImpulse(to_bt(impulse), to_bt(point) - body.getCenterOfMassPosition());
+  }
+
   void step() override {
     // springs as external forces from the state at the start of the step; Bullet clears them after
     if (!scene_.springs.empty())

@@ -12,6 +12,7 @@
 #include <stdexcept>
 
 #include "physbench/registry.h"
+#include "physbench/springs.h"
 
 namespace physbench {
 
@@ -153,6 +154,18 @@ class MujocoEngine final : public Engine {
   }
 
   void step() override { mj_step(model_, data_); }
+
+  // the velocity change, written into the free joint's qvel (angular part in the body frame)
+  void apply_impulse(int b, const Vec3& impulse, const Vec3& point) override {
+    const BodyState now = body_state(b);
+    const VelocityChange change = impulse_velocity_change(scene_.bodies[b], now, impulse, point);
+    const Vec3 local_angular = now.orientation.conjugate() * change.angular;
+    mjtNum* v = data_->qvel + model_->jnt_dofadr[model_->body_jntadr[body_of_[b]]];
+    for (int k = 0; k < 3; ++k) {
+      v[k] += change.linear[k];
+      v[3 + k] += local_angular[k];
+    }
+  }
 
   BodyState body_state(int index) const override {
     const int body = body_of_[index];

@@ -60,6 +60,15 @@ class OdeEngine final : public Engine {
     }
   }
 
+  // ODE has no impulse call: the velocity change is set directly
+  void apply_impulse(int b, const Vec3& impulse, const Vec3& point) override {
+    const BodyState now = body_state(b);
+    const VelocityChange change = impulse_velocity_change(scene_.bodies[b], now, impulse, point);
+    const Vec3 v = now.linear_velocity + change.linear, w = now.angular_velocity + change.angular;
+    dBodySetLinearVel(bodies_[b], v.x(), v.y(), v.z());
+    dBodySetAngularVel(bodies_[b], w.x(), w.y(), w.z());
+  }
+
   void step() override {
     // springs as external forces from the state at the start of the step; ODE clears them after
     if (!scene_.springs.empty())

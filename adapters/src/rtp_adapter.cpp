@@ -11,6 +11,7 @@ namespace {
 rtp::Integrator integrator_for(const std::string& variant) {
   if (variant == "euler") return rtp::Integrator::SemiImplicitEuler;
   if (variant == "midpoint") return rtp::Integrator::Midpoint;
+  if (variant == "symplectic") return rtp::Integrator::Symplectic;
   return rtp::Integrator::RungeKutta4;
 }
 
@@ -46,6 +47,10 @@ class RtpEngine final : public Engine {
 
   void step() override { world_->step(dt_); }
 
+  void apply_impulse(int body, const Vec3& impulse, const Vec3& point) override {
+    world_->apply_impulse(static_cast<rtp::BodyId>(body), impulse, point);
+  }
+
   BodyState body_state(int body) const override {
     const auto id = static_cast<rtp::BodyId>(body);
     const rtp::BodyState& s = world_->state(id);
@@ -63,7 +68,7 @@ class RtpEngine final : public Engine {
 EngineInfo rtp_engine_info() {
   EngineInfo info;
   info.name = "rtp";
-  info.variants = {"rk4", "midpoint", "euler"};
+  info.variants = {"rk4", "midpoint", "euler", "symplectic"};
   info.version = "0.1.0";
   info.unsupported = [](const Scene& scene, const std::string&) -> std::optional<std::string> {
     // rtp has no contact pipeline yet: a scene where two bodies may touch cannot be modelled
@@ -76,10 +81,13 @@ EngineInfo rtp_engine_info() {
   };
   info.settings = [](const std::string& variant) {
     std::vector<Setting> s;
-    s.push_back({"integrator",
-                 variant == "euler"      ? "semi-implicit Euler"
-                 : variant == "midpoint" ? "midpoint"
-                                         : "RK4",
+    const char* integrator =
+        variant == "euler"      ? "semi-implicit Euler, exponential-map rotation"
+        : variant == "midpoint" ? "midpoint"
+        : variant == "symplectic"
+            ? "symplectic: kick + principal-axis splitting of the free rotation"
+            : "RK4";
+    s.push_back({"integrator", integrator,
                  "the variant; momentum form, forces re-evaluated at every stage"});
     s.push_back({"precision", "double", "rtp computes in double throughout"});
     return s;

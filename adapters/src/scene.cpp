@@ -195,6 +195,23 @@ void validate(const Scene& scene) {
     require_nonnegative(at + ".rest_length", s.rest_length);
   }
 
+  for (int i = 0; i < static_cast<int>(scene.impulses.size()); ++i) {
+    const ImpulseSpec& p = scene.impulses[i];
+    const std::string at = "impulses[" + std::to_string(i) + "]";
+    require_finite(at + ".time", p.time);
+    if (p.time < 0.0 || p.time >= scene.duration)
+      fail(at + ".time", "must lie in [0, duration), got " + show(p.time));
+    if (p.body < 0 || p.body >= body_count || scene.bodies[p.body].mass == 0.0)
+      fail(at + ".body", "no dynamic body " + std::to_string(p.body));
+    require_finite(at + ".impulse", p.impulse);
+    require_finite(at + ".point", p.point);
+    if (scene.planar && (p.impulse.z() != 0.0 || p.point.z() != 0.0))
+      fail(at, "must lie in the XY plane in a planar scene");
+  }
+  if (!scene.impulses.empty() && (scene.reference.kind == ReferenceKind::Ballistic ||
+                                  scene.reference.kind == ReferenceKind::Oscillator))
+    fail("reference.kind", "the closed forms do not include impulses: use converged");
+
   require_positive("probe.interval", scene.probe.interval);
   for (int i = 0; i < static_cast<int>(scene.probe.bodies.size()); ++i) {
     const int b = scene.probe.bodies[i];

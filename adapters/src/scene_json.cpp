@@ -129,6 +129,16 @@ BodySpec read_body(const Field& f) {
   return b;
 }
 
+ImpulseSpec read_impulse(const Field& f) {
+  f.object({"time", "body", "impulse", "point"});
+  ImpulseSpec p;
+  p.time = f.member("time").number();
+  p.body = f.member("body").integer();
+  p.impulse = f.member("impulse").vec3();
+  p.point = f.member("point").vec3();
+  return p;
+}
+
 SpringSpec read_spring(const Field& f) {
   f.object({"body_a", "local_point_a", "body_b", "point_b", "stiffness", "damping", "rest_length"});
   SpringSpec s;
@@ -181,6 +191,14 @@ json to_json(const Scene& scene) {
                                 {"damping", s.damping},
                                 {"rest_length", s.rest_length}});
   }
+  if (!scene.impulses.empty()) {
+    doc["impulses"] = json::array();
+    for (const ImpulseSpec& p : scene.impulses)
+      doc["impulses"].push_back({{"time", p.time},
+                                 {"body", p.body},
+                                 {"impulse", vec(p.impulse)},
+                                 {"point", vec(p.point)}});
+  }
   json metrics = json::array();
   for (Metric m : scene.probe.metrics) metrics.push_back(to_string(m));
   doc["probe"] = {
@@ -194,7 +212,7 @@ Scene scene_from_json(const json& document, const std::string& source) {
   try {
     const Field root(document, "");
     root.object({"name", "description", "gravity", "dt", "duration", "planar", "collisions",
-                 "bodies", "springs", "probe", "reference"});
+                 "bodies", "springs", "impulses", "probe", "reference"});
     Scene scene;
     scene.name = root.member("name").string();
     if (root.has("description")) scene.description = root.member("description").string();
@@ -210,6 +228,11 @@ Scene scene_from_json(const json& document, const std::string& source) {
       const Field springs = root.member("springs");
       for (std::size_t i = 0; i < springs.array().size(); ++i)
         scene.springs.push_back(read_spring(springs.at(i)));
+    }
+    if (root.has("impulses")) {
+      const Field impulses = root.member("impulses");
+      for (std::size_t i = 0; i < impulses.array().size(); ++i)
+        scene.impulses.push_back(read_impulse(impulses.at(i)));
     }
     if (root.has("probe")) {
       const Field probe = root.member("probe");

@@ -36,10 +36,25 @@ Pass run_once(Engine& engine, const Scene& scene, const std::vector<int>& bodies
   const long steps = scene.step_count();
   Sample first = sample_of(engine, bodies, 0.0);
   if (keep) keep->samples.push_back(std::move(first));
+  // scheduled impulses by the step they precede
+  std::vector<std::pair<long, const ImpulseSpec*>> due;
+  for (const ImpulseSpec& p : scene.impulses) due.emplace_back(std::lround(p.time / scene.dt), &p);
+  std::stable_sort(due.begin(), due.end(),
+                   [](const auto& a, const auto& b) { return a.first < b.first; });
+  std::size_t next = 0;
   for (long done = 0; done < steps;) {
     const long chunk = std::min<long>(every_steps, steps - done);
     const auto start = Clock::now();
-    for (long i = 0; i < chunk; ++i) engine.step();
+    if (next == due.size()) {
+      for (long i = 0; i < chunk; ++i) engine.step();
+    } else {
+      for (long i = 0; i < chunk; ++i) {
+        for (; next < due.size() && due[next].first == done + i; ++next)
+          engine.apply_impulse(due[next].second->body, due[next].second->impulse,
+                               due[next].second->point);
+        engine.step();
+      }
+    }
     pass.stepping_seconds += std::chrono::duration<double>(Clock::now() - start).count();
     done += chunk;
     Sample s = sample_of(engine, bodies, static_cast<double>(done) * scene.dt);

@@ -39,4 +39,17 @@ void apply_spring_forces(const Scene& scene, const StateOf& state_of, const Appl
   }
 }
 
+VelocityChange impulse_velocity_change(const BodySpec& body, const BodyState& now,
+                                       const Vec3& impulse, const Vec3& world_point) {
+  VelocityChange change;
+  if (body.mass == 0.0) return change;
+  const Mat3 rotation = now.orientation.normalized().toRotationMatrix();
+  const Mat3 inverse_inertia_world =
+      rotation * principal_inertia(body.shape, body.mass).cwiseInverse().asDiagonal() *
+      rotation.transpose();
+  change.linear = impulse / body.mass;
+  change.angular = inverse_inertia_world * (world_point - now.position).cross(impulse);
+  return change;
+}
+
 }  // namespace physbench

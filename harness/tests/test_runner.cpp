@@ -142,7 +142,7 @@ TEST(Runner, RunawaySceneIsRecordedAsExploded) {
                                    dir);
   ASSERT_EQ(inv.outcome.exit_code, 0) << inv.output;
   const auto rows = read_rows(dir / "r" / "results.csv");
-  ASSERT_EQ(rows.size(), 3u);  // rk4, midpoint, euler
+  ASSERT_GE(rows.size(), 3u);  // one per rtp variant
   for (const auto& row : rows) {
     EXPECT_EQ(row.at("status"), "exploded");
     EXPECT_TRUE(row.at("steps_per_s").empty()) << "an early stop has no comparable speed";

@@ -39,6 +39,8 @@ class Engine {
   // advance one fixed step of scene.dt
   virtual void step() = 0;
   virtual BodyState body_state(int body) const = 0;
+  // an instantaneous impulse (N s) at a world point on a dynamic body, before the next step
+  virtual void apply_impulse(int body, const Vec3& impulse, const Vec3& world_point) = 0;
 };
 
 struct EngineInfo {

@@ -51,6 +51,14 @@ struct SpringSpec {
   double rest_length = 0.0;           // m
 };
 
+// an impulse at a world point at a given time: the seed's keyboard pushes, scheduled
+struct ImpulseSpec {
+  double time = 0.0;  // s; applied before the step that starts at round(time / dt)
+  int body = 0;
+  Vec3 impulse = Vec3::Zero();  // N s, world
+  Vec3 point = Vec3::Zero();    // world point of application (m)
+};
+
 // what the harness compares each engine's trajectory with
 enum class ReferenceKind {
   None,        // invariants only (energy, momenta)
@@ -83,6 +91,7 @@ struct Scene {
   bool collisions = true;                // false: bodies pass through each other and planes
   std::vector<BodySpec> bodies;
   std::vector<SpringSpec> springs;
+  std::vector<ImpulseSpec> impulses;
   Probe probe;
   Reference reference;
 

@@ -1,3 +1,6 @@
+// External loads for engines that lack a native form: the scene's spring law, and the velocity
+// change of an impulse.
+//
 // The scene's spring law, for engines that take springs as external forces: Hooke's law plus
 // damping along the line between the two attachment points, the same law rtp evaluates inside
 // its integrator (rtp/world.h). Peers apply it once per step, before stepping.
@@ -24,5 +27,14 @@ using ApplyForceAt = std::function<void(int body, const Vec3& force, const Vec3&
 // evaluates every spring of the scene from the current states and applies the forces to the
 // dynamic bodies at their world attachment points
 void apply_spring_forces(const Scene& scene, const StateOf& state_of, const ApplyForceAt& apply);
+
+// the change of linear and angular velocity (world) an impulse J at a world point p gives a body
+// with the scene's mass properties in state `now`: Δv = J / m, Δω = I_world⁻¹ ((p − x) × J)
+struct VelocityChange {
+  Vec3 linear = Vec3::Zero();
+  Vec3 angular = Vec3::Zero();
+};
+VelocityChange impulse_velocity_change(const BodySpec& body, const BodyState& now,
+                                       const Vec3& impulse, const Vec3& world_point);
 
 }  // namespace physbench

@@ -20,6 +20,9 @@ enum class Integrator : std::uint8_t {
   SemiImplicitEuler,  // momenta first, then positions from the new velocities (symplectic)
   Midpoint,           // second order: derivatives at the half step
   RungeKutta4,        // fourth order: four force evaluations per step
+  Symplectic,         // kick, then the free rotation by splitting about the principal axes
+                      // (Dullweber, Leimkuhler, McLachlan 1997): second order for free bodies,
+                      // energy error bounded, angular momentum exact, one force evaluation
 };
 
 // a body to create; principal axes of inertia are the body's axes
@@ -108,6 +111,7 @@ class World {
   void integrate_semi_implicit_euler(double dt);
   void integrate_midpoint(double dt);
   void integrate_runge_kutta4(double dt);
+  void integrate_symplectic(double dt);
   // states = base + h * rates, quaternions left unnormalised until the step ends
   void advance(const std::vector<BodyState>& base, const std::vector<BodyRate>& rates, double h,
                std::vector<BodyState>& out) const;

@@ -38,5 +38,6 @@ Scene spring_oscillator_scene(double damping = 0.0);
 Scene spring_cube_scene();
 Scene spring_chain_scene(int links = 8);
 Scene stiff_spring_scene(double stiffness);
+Scene pushed_box_scene(bool planar = false);
 
 }  // namespace physbench
