@@ -42,6 +42,36 @@ void expect_semi_implicit_signature(const std::string& engine, const std::string
       << engine << "/" << variant;
 }
 
+// Across each scheduled push of pushed-box, from the sample before to the sample after, linear
+// momentum jumps by J and angular momentum about the origin by p × J (zero gravity, one step of
+// the engine's own drift in between): a push at the wrong step, point or frame breaks one of them.
+void expect_impulses_land(const std::string& engine, const std::string& variant, bool planar,
+                          double angular_tolerance) {
+  const Scene scene = pushed_box_scene(planar);
+  const RunResult r = measure(engine, variant, scene).run;
+  const BodySpec& b = scene.bodies[0];
+  auto momenta = [&](const BodyState& s) {
+    const Mat3 rotation = s.orientation.toRotationMatrix();
+    const Vec3 p = b.mass * s.linear_velocity;
+    const Vec3 spin = rotation * principal_inertia(b.shape, b.mass).asDiagonal() *
+                      rotation.transpose() * s.angular_velocity;
+    return std::pair<Vec3, Vec3>(p, spin + s.position.cross(p));
+  };
+  for (const ImpulseSpec& push : scene.impulses) {
+    const auto after = std::find_if(r.trajectory.samples.begin(), r.trajectory.samples.end(),
+                                    [&](const Sample& x) { return x.time > push.time + 1e-9; });
+    ASSERT_TRUE(after != r.trajectory.samples.end() && after != r.trajectory.samples.begin());
+    const auto [p0, l0] = momenta(std::prev(after)->bodies[0]);
+    const auto [p1, l1] = momenta(after->bodies[0]);
+    const Vec3 expected = push.point.cross(push.impulse);
+    EXPECT_LT((p1 - p0 - push.impulse).norm(), 1e-5) << engine << " at t = " << push.time;
+    EXPECT_LT((l1 - l0 - expected).norm(), angular_tolerance * expected.norm())
+        << engine << "/" << variant << " at t = " << push.time;
+  }
+}
+
+TEST(Rtp, ImpulsesLand) { expect_impulses_land("rtp", "rk4", false, 1e-9); }
+
 TEST(Rtp, ReadsBackTheInitialState) { expect_initial_state_read_back("rtp", "rk4", false, 1e-12); }
 
 // Springs as the same force law integrated by the same method give the same trajectory: a peer's
@@ -69,6 +99,7 @@ TEST(Bullet, ReadsBackTheInitialState) {
 TEST(Bullet, SpringsMatchRtpSemiImplicitEuler) {
   expect_same_spring_trajectory_as_rtp("bullet", "float", "euler", spring_oscillator_scene(), 1e-5);
 }
+TEST(Bullet, ImpulsesLand) { expect_impulses_land("bullet", "float", false, 0.02); }
 TEST(Bullet, ProjectileShowsSemiImplicitEuler) {
   expect_semi_implicit_signature("bullet", "float", false, 1e-4);
 }
@@ -89,6 +120,7 @@ TEST(Ode, ReadsBackTheInitialState) {
 TEST(Ode, SpringsMatchRtpSemiImplicitEuler) {
   expect_same_spring_trajectory_as_rtp("ode", "step", "euler", spring_oscillator_scene(), 1e-12);
 }
+TEST(Ode, ImpulsesLand) { expect_impulses_land("ode", "step", false, 0.02); }
 TEST(Ode, ProjectileShowsSemiImplicitEuler) {
   expect_semi_implicit_signature("ode", "step", false, 1e-9);
 }
@@ -113,6 +145,7 @@ TEST(Box2d, SpringsMatchRtpSemiImplicitEuler) {
   // a chain in the plane: attachment points off the centre, so spring torques count too
   expect_same_spring_trajectory_as_rtp("box2d", "default", "euler", spring_chain_scene(4), 1e-4);
 }
+TEST(Box2d, ImpulsesLand) { expect_impulses_land("box2d", "default", true, 1e-5); }
 TEST(Box2d, PlanarProjectileShowsSemiImplicitEuler) {
   expect_semi_implicit_signature("box2d", "default", true, 1e-4);
 }
@@ -142,6 +175,7 @@ TEST(Mujoco, TendonSpringsMatchRtpAtTheSameIntegrator) {
   expect_same_spring_trajectory_as_rtp("mujoco", "euler", "euler", spring_oscillator_scene(),
                                        1e-12);
 }
+TEST(Mujoco, ImpulsesLand) { expect_impulses_land("mujoco", "rk4", false, 1e-3); }
 TEST(Mujoco, Rk4ProjectileIsExact) {
   EXPECT_LT(measure("mujoco", "rk4", projectile_scene()).summary.position->max, 1e-10);
 }
