@@ -2,6 +2,7 @@
 // rotation about z is Box2D's angle.
 #include <box2d/box2d.h>
 
+#include <cfloat>
 #include <cmath>
 
 #include "physbench/registry.h"
@@ -18,6 +19,8 @@ double angle_about_z(const Quat& q) { return 2.0 * std::atan2(q.z(), q.w()); }
 
 class Box2dEngine final : public Engine {
  public:
+  explicit Box2dEngine(bool spring_joints) : spring_joints_(spring_joints) {}
+
   void load(const Scene& scene) override {
     scene_ = scene;
     dt_ = scene.dt;
@@ -58,6 +61,28 @@ class Box2dEngine final : public Engine {
       }
       bodies_.push_back(body);
     }
+    if (spring_joints_) create_spring_joints();
+  }
+
+  // springs as Box2D's own soft distance joint: rest length, stiffness (N/m) and damping (N s/m)
+  // are the scene's; the joint is solved implicitly inside the velocity solver
+  void create_spring_joints() {
+    b2BodyDef ground_def;
+    b2Body* ground = world_->CreateBody(&ground_def);
+    for (const SpringSpec& s : scene_.springs) {
+      b2DistanceJointDef def;
+      def.bodyA = bodies_[s.body_a];
+      def.localAnchorA.Set(float(s.local_point_a.x()), float(s.local_point_a.y()));
+      def.bodyB = s.body_b >= 0 ? bodies_[s.body_b] : ground;
+      def.localAnchorB.Set(float(s.point_b.x()),
+                           float(s.point_b.y()));  // the ground sits at the origin
+      def.length = float(s.rest_length);
+      def.minLength = 0.0f;
+      def.maxLength = FLT_MAX;
+      def.stiffness = float(s.stiffness);
+      def.damping = float(s.damping);
+      world_->CreateJoint(&def);
+    }
   }
 
   void apply_impulse(int b, const Vec3& impulse, const Vec3& point) override {
@@ -67,7 +92,7 @@ class Box2dEngine final : public Engine {
 
   void step() override {
     // springs as external forces from the state at the start of the step; Box2D clears them after
-    if (!scene_.springs.empty())
+    if (!scene_.springs.empty() && !spring_joints_)
       apply_spring_forces(
           scene_, [this](int b) { return body_state(b); },
           [this](int b, const Vec3& f, const Vec3& p) {
@@ -88,6 +113,7 @@ class Box2dEngine final : public Engine {
 
  private:
   Scene scene_;
+  bool spring_joints_;
   double dt_ = 0.0;
   std::unique_ptr<b2World> world_;
   std::vector<b2Body*> bodies_;  // owned by world_
@@ -98,7 +124,7 @@ class Box2dEngine final : public Engine {
 EngineInfo box2d_engine_info() {
   EngineInfo info;
   info.name = "box2d";
-  info.variants = {"default"};
+  info.variants = {"default", "joint"};
   info.version = std::to_string(b2_version.major) + "." + std::to_string(b2_version.minor) + "." +
                  std::to_string(b2_version.revision) + " (as the library reports it)";
   info.unsupported = [](const Scene& scene, const std::string&) -> std::optional<std::string> {
@@ -118,10 +144,13 @@ EngineInfo box2d_engine_info() {
     }
     return std::nullopt;
   };
-  info.create = [](const std::string&) -> std::unique_ptr<Engine> {
-    return std::make_unique<Box2dEngine>();
+  info.applies = [](const Scene& scene, const std::string& variant) {
+    return variant != "joint" || !scene.springs.empty();
   };
-  info.settings = [](const std::string&) {
+  info.create = [](const std::string& variant) -> std::unique_ptr<Engine> {
+    return std::make_unique<Box2dEngine>(variant == "joint");
+  };
+  info.settings = [](const std::string& variant) {
     return std::vector<Setting>{
         {"velocity / position iterations", "8 / 3", "Box2D's recommended values"},
         {"allow sleeping", "false (world and bodies)", "sleeping off in every engine"},
@@ -130,8 +159,12 @@ EngineInfo box2d_engine_info() {
         {"collision mask", "0 when the scene has collisions off",
          "model only what the scene needs"},
         {"precision", "float", "Box2D computes in single precision"},
-        {"springs", "external force (ApplyForce at the attachment point), once per step",
-         "the scene's spring law from the state at the start of the step"},
+        variant == "joint"
+            ? Setting{"springs", "b2DistanceJoint: the scene's rest length, stiffness and damping",
+                      "Box2D's native spring, solved implicitly in the velocity solver"}
+            : Setting{"springs",
+                      "external force (ApplyForce at the attachment point), once per step",
+                      "the scene's spring law from the state at the start of the step"},
     };
   };
   return info;

@@ -22,7 +22,8 @@ void ensure_ode_initialised() { static OdeLibrary library; }
 
 class OdeEngine final : public Engine {
  public:
-  explicit OdeEngine(bool quick_step) : quick_step_(quick_step) {}
+  OdeEngine(bool quick_step, bool spring_joints)
+      : quick_step_(quick_step), spring_joints_(spring_joints) {}
   ~OdeEngine() override {
     if (world_) dWorldDestroy(world_);
   }
@@ -58,6 +59,7 @@ class OdeEngine final : public Engine {
       dBodySetGyroscopicMode(body, 1);
       bodies_.push_back(body);
     }
+    if (spring_joints_) create_spring_joints();
   }
 
   // ODE has no impulse call: the velocity change is set directly
@@ -71,7 +73,7 @@ class OdeEngine final : public Engine {
 
   void step() override {
     // springs as external forces from the state at the start of the step; ODE clears them after
-    if (!scene_.springs.empty())
+    if (!scene_.springs.empty() && !spring_joints_)
       apply_spring_forces(
           scene_, [this](int b) { return body_state(b); },
           [this](int b, const Vec3& f, const Vec3& p) {
@@ -97,7 +99,33 @@ class OdeEngine final : public Engine {
   }
 
  private:
+  // springs as ODE's own soft constraint: a distance joint (DBall) whose ERP and CFM give the
+  // spring's stiffness and damping at this step: ERP = h k / (h k + c), CFM = 1 / (h k + c)
+  // (ODE manual, "How to use ERP and CFM"). Implicit, so it holds at any stiffness — and damps.
+  void create_spring_joints() {
+    for (const SpringSpec& s : scene_.springs) {
+      const BodyState a = body_state(s.body_a);
+      const Vec3 point_a = a.position + a.orientation * s.local_point_a;
+      Vec3 point_b = s.point_b;
+      dBodyID body_b = nullptr;
+      if (s.body_b >= 0) {
+        const BodyState b = body_state(s.body_b);
+        point_b = b.position + b.orientation * s.point_b;
+        body_b = bodies_[s.body_b];
+      }
+      dJointID joint = dJointCreateDBall(world_, nullptr);
+      dJointAttach(joint, bodies_[s.body_a], body_b);
+      dJointSetDBallAnchor1(joint, point_a.x(), point_a.y(), point_a.z());
+      dJointSetDBallAnchor2(joint, point_b.x(), point_b.y(), point_b.z());
+      dJointSetDBallDistance(joint, s.rest_length);
+      const double hk = dt_ * s.stiffness;
+      dJointSetDBallParam(joint, dParamERP, hk / (hk + s.damping));
+      dJointSetDBallParam(joint, dParamCFM, 1.0 / (hk + s.damping));
+    }
+  }
+
   bool quick_step_;
+  bool spring_joints_;
   Scene scene_;
   double dt_ = 0.0;
   dWorldID world_ = nullptr;
@@ -109,7 +137,7 @@ class OdeEngine final : public Engine {
 EngineInfo ode_engine_info() {
   EngineInfo info;
   info.name = "ode";
-  info.variants = {"quickstep", "step"};
+  info.variants = {"quickstep", "step", "step-joint"};
   ensure_ode_initialised();
   info.version = std::string(PHYSBENCH_ODE_VERSION) + " (" + dGetConfiguration() + ")";
   info.unsupported = [](const Scene& scene, const std::string&) -> std::optional<std::string> {
@@ -119,7 +147,10 @@ EngineInfo ode_engine_info() {
     return std::nullopt;
   };
   info.create = [](const std::string& variant) -> std::unique_ptr<Engine> {
-    return std::make_unique<OdeEngine>(variant == "quickstep");
+    return std::make_unique<OdeEngine>(variant == "quickstep", variant == "step-joint");
+  };
+  info.applies = [](const Scene& scene, const std::string& variant) {
+    return variant != "step-joint" || !scene.springs.empty();
   };
   info.settings = [](const std::string& variant) {
     return std::vector<Setting>{
@@ -131,8 +162,11 @@ EngineInfo ode_engine_info() {
         {"auto-disable", "off (world and every body)", "sleeping off in every engine"},
         {"gyroscopic mode", "on", "stated explicitly; ODE's default"},
         {"mass properties", "from the scene (dMassSetParameters)", "same inertia in every engine"},
-        {"springs", "external force (dBodyAddForceAtPos), once per step",
-         "the scene's spring law from the state at the start of the step"},
+        variant == "step-joint"
+            ? Setting{"springs", "DBall joint with ERP = hk/(hk+c), CFM = 1/(hk+c)",
+                      "ODE's native spring: a soft distance constraint, implicit"}
+            : Setting{"springs", "external force (dBodyAddForceAtPos), once per step",
+                      "the scene's spring law from the state at the start of the step"},
     };
   };
   return info;

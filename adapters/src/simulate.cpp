@@ -85,13 +85,15 @@ const char* to_string(Status status) {
       return "timeout";
     case Status::Error:
       return "error";
+    case Status::NotApplicable:
+      return "not-applicable";
   }
   return "?";
 }
 
 Status status_from_string(const std::string& name) {
   for (Status s : {Status::Ok, Status::Unsupported, Status::Exploded, Status::Crashed,
-                   Status::Timeout, Status::Error})
+                   Status::Timeout, Status::Error, Status::NotApplicable})
     if (name == to_string(s)) return s;
   return Status::Error;
 }
@@ -116,6 +118,11 @@ RunResult simulate(const EngineInfo& info, const std::string& variant, const Sce
   if (std::find(info.variants.begin(), info.variants.end(), variant) == info.variants.end()) {
     result.status = Status::Error;
     result.message = "engine " + info.name + " has no variant '" + variant + "'";
+    return result;
+  }
+  if (info.applies && !info.applies(scene, variant)) {
+    result.status = Status::NotApplicable;
+    result.message = "variant " + variant + " does not apply to this scene";
     return result;
   }
   if (auto why = info.unsupported(scene, variant)) {

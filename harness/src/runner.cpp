@@ -435,6 +435,10 @@ int run_suite(const RunOptions& options, const fs::path& self) {
                   << ev.variant << " ... " << std::flush;
         RunResult r = run_job(ev, {scene_file, work / (job + ".json"), work / (job + ".log")},
                               every, options.timing_budget, options.timeout_seconds);
+        if (r.status == Status::NotApplicable) {
+          std::cerr << "not applicable here\n";
+          continue;
+        }
 
         json& engine_meta = metadata["engines"][ev.engine];
         if (r.status != Status::Unsupported && r.status != Status::Crashed &&

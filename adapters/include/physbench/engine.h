@@ -50,6 +50,9 @@ struct EngineInfo {
   // why the engine cannot model this scene in this variant, or nullopt when it can
   std::function<std::optional<std::string>(const Scene&, const std::string& variant)> unsupported;
   std::function<std::unique_ptr<Engine>(const std::string& variant)> create;
+  // false when a variant would not differ from another on this scene (a native-spring variant on
+  // a scene without springs): the run makes no row for it. Unset: every variant applies.
+  std::function<bool(const Scene&, const std::string& variant)> applies;
   std::function<std::vector<Setting>(const std::string& variant)> settings;
 };
 

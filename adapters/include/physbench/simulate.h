@@ -9,7 +9,8 @@
 
 namespace physbench {
 
-enum class Status { Ok, Unsupported, Exploded, Crashed, Timeout, Error };
+// NotApplicable: the variant would not differ from another on this scene; the run makes no row
+enum class Status { Ok, Unsupported, Exploded, Crashed, Timeout, Error, NotApplicable };
 const char* to_string(Status status);
 Status status_from_string(const std::string& name);
 
