@@ -129,6 +129,7 @@ EngineInfo box2d_engine_info() {
                  std::to_string(b2_version.revision) + " (as the library reports it)";
   info.unsupported = [](const Scene& scene, const std::string&) -> std::optional<std::string> {
     if (!scene.planar) return "Box2D is a 2D engine: the scene is not marked planar";
+    if (scene.particles) return "particle sets are not mapped onto Box2D yet";
     if (scene.has_contacts())
       return "contact scenes are not mapped onto Box2D yet (its 1 cm polygon skin is not "
              "compensated)";

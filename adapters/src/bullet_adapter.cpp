@@ -140,6 +140,7 @@ EngineInfo bullet_engine_info() {
                         const std::string& variant) -> std::optional<std::string> {
     if (variant != kVariant)
       return "this executable links Bullet's " + std::string(kVariant) + " build, not " + variant;
+    if (scene.particles) return "particle sets are not mapped onto Bullet yet";
     if (scene.has_contacts())
       return "contact scenes are not mapped onto Bullet yet (the contact settings table is not "
              "written)";

@@ -199,6 +199,7 @@ EngineInfo mujoco_engine_info() {
   info.variants = {"euler", "rk4", "implicit"};
   info.version = mj_versionString();
   info.unsupported = [](const Scene& scene, const std::string&) -> std::optional<std::string> {
+    if (scene.particles) return "particle sets are not mapped onto MuJoCo yet";
     if (scene.has_contacts())
       return "contact scenes are not mapped onto MuJoCo yet (nconmax/njmax are not sized from the "
              "scene)";

@@ -141,6 +141,7 @@ EngineInfo ode_engine_info() {
   ensure_ode_initialised();
   info.version = std::string(PHYSBENCH_ODE_VERSION) + " (" + dGetConfiguration() + ")";
   info.unsupported = [](const Scene& scene, const std::string&) -> std::optional<std::string> {
+    if (scene.particles) return "particle sets are not mapped onto ODE yet";
     if (scene.has_contacts())
       return "contact scenes are not mapped onto ODE yet (the contact settings table is not "
              "written)";

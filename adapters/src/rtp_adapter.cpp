@@ -1,5 +1,6 @@
 // rtp adapter: the scene maps one to one onto rtp's own conventions (y up, world-frame
 // angular velocity), so nothing is converted.
+#include <rtp/particles.h>
 #include <rtp/world.h>
 
 #include "physbench/registry.h"
@@ -15,9 +16,25 @@ rtp::Integrator integrator_for(const std::string& variant) {
   return rtp::Integrator::RungeKutta4;
 }
 
+rtp::ParticleIntegrator particle_integrator_for(const std::string& variant) {
+  if (variant == "euler") return rtp::ParticleIntegrator::SemiImplicitEuler;
+  if (variant == "explicit-euler") return rtp::ParticleIntegrator::ExplicitEuler;
+  return rtp::ParticleIntegrator::Midpoint;
+}
+
+// particle variants run the particle update on this many threads
+int threads_for(const std::string& variant) { return variant.ends_with("-2t") ? 2 : 1; }
+
+std::string base_variant(const std::string& variant) {
+  return variant.ends_with("-2t") ? variant.substr(0, variant.size() - 3) : variant;
+}
+
 class RtpEngine final : public Engine {
  public:
-  explicit RtpEngine(rtp::Integrator integrator) : integrator_(integrator) {}
+  explicit RtpEngine(const std::string& variant)
+      : integrator_(integrator_for(base_variant(variant))),
+        particle_integrator_(particle_integrator_for(base_variant(variant))),
+        threads_(threads_for(variant)) {}
 
   void load(const Scene& scene) override {
     dt_ = scene.dt;
@@ -43,15 +60,48 @@ class RtpEngine final : public Engine {
       def.rest_length = s.rest_length;
       world_->add_spring(def);
     }
+    body_count_ = static_cast<int>(scene.bodies.size());
+    if (scene.particles) {
+      const ParticleSetSpec& p = *scene.particles;
+      rtp::ParticleSystemDef def;
+      def.count = static_cast<std::size_t>(p.count);
+      def.spawn_min = p.spawn_min;
+      def.spawn_max = p.spawn_max;
+      def.velocity_min = p.velocity_min;
+      def.velocity_max = p.velocity_max;
+      def.gravity = scene.gravity;
+      def.drag = p.drag;
+      def.wind = p.wind;
+      def.wind_jitter = p.wind_jitter;
+      for (const ParticleAttractor& a : p.attractors)
+        def.attractors.push_back({a.position, a.strength});
+      def.softening = p.softening;
+      for (const ParticlePlaneSpec& plane : p.planes)
+        def.planes.push_back({plane.point, plane.normal});
+      def.restitution = p.restitution;
+      def.friction = p.friction;
+      def.lifetime = p.lifetime;
+      def.seed = p.seed;
+      def.integrator = particle_integrator_;
+      def.threads = threads_;
+      particles_ = std::make_unique<rtp::ParticleSystem>(def);
+    }
   }
 
-  void step() override { world_->step(dt_); }
+  void step() override {
+    if (body_count_ > 0) world_->step(dt_);
+    if (particles_) particles_->step(dt_);
+  }
 
   void apply_impulse(int body, const Vec3& impulse, const Vec3& point) override {
     world_->apply_impulse(static_cast<rtp::BodyId>(body), impulse, point);
   }
 
   BodyState body_state(int body) const override {
+    if (body >= body_count_) {
+      const std::size_t i = static_cast<std::size_t>(body - body_count_);
+      return {particles_->position(i), Quat::Identity(), particles_->velocity(i), Vec3::Zero()};
+    }
     const auto id = static_cast<rtp::BodyId>(body);
     const rtp::BodyState& s = world_->state(id);
     return {s.position, s.orientation, world_->velocity(id), world_->angular_velocity(id)};
@@ -59,6 +109,10 @@ class RtpEngine final : public Engine {
 
  private:
   rtp::Integrator integrator_;
+  rtp::ParticleIntegrator particle_integrator_;
+  int threads_;
+  int body_count_ = 0;
+  std::unique_ptr<rtp::ParticleSystem> particles_;
   double dt_ = 0.0;
   std::unique_ptr<rtp::World> world_;
 };
@@ -68,7 +122,15 @@ class RtpEngine final : public Engine {
 EngineInfo rtp_engine_info() {
   EngineInfo info;
   info.name = "rtp";
-  info.variants = {"rk4", "midpoint", "euler", "symplectic"};
+  info.variants = {"rk4", "midpoint", "euler", "symplectic", "explicit-euler", "midpoint-2t"};
+  // particles integrate by explicit Euler, semi-implicit Euler or midpoint (the seed's three);
+  // the rigid-body-only integrators do not apply to a particle scene, nor the particle-only ones
+  // to a scene without particles
+  info.applies = [](const Scene& scene, const std::string& variant) {
+    const bool particle_only = variant == "explicit-euler" || variant == "midpoint-2t";
+    const bool bodies_only = variant == "rk4" || variant == "symplectic";
+    return scene.particles ? !bodies_only : !particle_only;
+  };
   info.version = "0.1.0";
   info.unsupported = [](const Scene& scene, const std::string&) -> std::optional<std::string> {
     // rtp has no contact pipeline yet: a scene where two bodies may touch cannot be modelled
@@ -77,20 +139,24 @@ EngineInfo rtp_engine_info() {
     return std::nullopt;
   };
   info.create = [](const std::string& variant) -> std::unique_ptr<Engine> {
-    return std::make_unique<RtpEngine>(integrator_for(variant));
+    return std::make_unique<RtpEngine>(variant);
   };
   info.settings = [](const std::string& variant) {
-    std::vector<Setting> s;
+    const std::string base = base_variant(variant);
     const char* integrator =
-        variant == "euler"      ? "semi-implicit Euler, exponential-map rotation"
-        : variant == "midpoint" ? "midpoint"
-        : variant == "symplectic"
-            ? "symplectic: kick + principal-axis splitting of the free rotation"
-            : "RK4";
-    s.push_back({"integrator", integrator,
-                 "the variant; momentum form, forces re-evaluated at every stage"});
-    s.push_back({"precision", "double", "rtp computes in double throughout"});
-    return s;
+        base == "euler"            ? "semi-implicit Euler, exponential-map rotation"
+        : base == "midpoint"       ? "midpoint"
+        : base == "explicit-euler" ? "explicit Euler (particles only)"
+        : base == "symplectic" ? "symplectic: kick + principal-axis splitting of the free rotation"
+                               : "RK4";
+    return std::vector<Setting>{
+        {"integrator", integrator,
+         "the variant; momentum form for bodies, forces re-evaluated at every stage"},
+        {"precision", "double for bodies, float for particles",
+         "particles are bandwidth-bound: 24 bytes of state each"},
+        {"particle threads", std::to_string(threads_for(variant)),
+         "OpenMP threads of the particle update (-2t: two)"},
+    };
   };
   return info;
 }

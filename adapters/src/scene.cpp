@@ -15,11 +15,14 @@ int Scene::probe_every_steps() const {
 }
 
 std::vector<int> Scene::probed_bodies() const {
-  if (!probe.bodies.empty()) return probe.bodies;
-  std::vector<int> dynamic;
-  for (int i = 0; i < static_cast<int>(bodies.size()); ++i)
-    if (bodies[i].mass > 0.0) dynamic.push_back(i);
-  return dynamic;
+  std::vector<int> probed = probe.bodies;
+  if (probed.empty())
+    for (int i = 0; i < static_cast<int>(bodies.size()); ++i)
+      if (bodies[i].mass > 0.0) probed.push_back(i);
+  // probed particles follow the bodies
+  if (particles)
+    for (long p : particles->probe) probed.push_back(static_cast<int>(bodies.size() + p));
+  return probed;
 }
 
 Vec3 principal_inertia(const Shape& shape, double mass) {
@@ -67,6 +70,10 @@ const char* to_string(ReferenceKind kind) {
       return "ballistic";
     case ReferenceKind::Oscillator:
       return "oscillator";
+    case ReferenceKind::Orbit:
+      return "orbit";
+    case ReferenceKind::Bounce:
+      return "bounce";
     case ReferenceKind::Converged:
       return "converged";
   }
@@ -211,6 +218,83 @@ void validate(const Scene& scene) {
   if (!scene.impulses.empty() && (scene.reference.kind == ReferenceKind::Ballistic ||
                                   scene.reference.kind == ReferenceKind::Oscillator))
     fail("reference.kind", "the closed forms do not include impulses: use converged");
+
+  if (scene.particles) {
+    const ParticleSetSpec& p = *scene.particles;
+    const std::string at = "particles";
+    if (p.count < 1) fail(at + ".count", "must be >= 1");
+    for (auto [name, v] : {std::pair{".spawn_min", p.spawn_min},
+                           {".spawn_max", p.spawn_max},
+                           {".velocity_min", p.velocity_min},
+                           {".velocity_max", p.velocity_max},
+                           {".wind", p.wind}})
+      require_finite(at + name, v);
+    for (int k = 0; k < 3; ++k) {
+      if (p.spawn_min[k] > p.spawn_max[k]) fail(at + ".spawn_min", "must not exceed spawn_max");
+      if (p.velocity_min[k] > p.velocity_max[k])
+        fail(at + ".velocity_min", "must not exceed velocity_max");
+    }
+    require_positive(at + ".mass", p.mass);
+    require_positive(at + ".radius", p.radius);
+    require_nonnegative(at + ".drag", p.drag);
+    require_nonnegative(at + ".wind_jitter", p.wind_jitter);
+    require_positive(at + ".softening", p.softening);
+    require_nonnegative(at + ".restitution", p.restitution);
+    if (p.restitution > 1.0) fail(at + ".restitution", "must be <= 1");
+    require_nonnegative(at + ".friction", p.friction);
+    if (p.friction > 1.0)
+      fail(at + ".friction", "must be <= 1 (the fraction of tangential velocity lost)");
+    require_nonnegative(at + ".lifetime", p.lifetime);
+    for (std::size_t i = 0; i < p.attractors.size(); ++i) {
+      require_finite(at + ".attractors[" + std::to_string(i) + "].position",
+                     p.attractors[i].position);
+      require_finite(at + ".attractors[" + std::to_string(i) + "].strength",
+                     p.attractors[i].strength);
+    }
+    for (std::size_t i = 0; i < p.planes.size(); ++i) {
+      const std::string plane = at + ".planes[" + std::to_string(i) + "]";
+      require_finite(plane + ".point", p.planes[i].point);
+      require_finite(plane + ".normal", p.planes[i].normal);
+      if (std::abs(p.planes[i].normal.norm() - 1.0) > 1e-6)
+        fail(plane + ".normal", "must be a unit vector");
+    }
+    for (std::size_t i = 0; i < p.probe.size(); ++i)
+      if (p.probe[i] < 0 || p.probe[i] >= p.count)
+        fail(at + ".probe[" + std::to_string(i) + "]", "no particle " + std::to_string(p.probe[i]));
+    if (scene.planar &&
+        (p.spawn_min.z() != 0.0 || p.spawn_max.z() != 0.0 || p.velocity_min.z() != 0.0 ||
+         p.velocity_max.z() != 0.0 || p.wind.z() != 0.0))
+      fail(at, "must stay in the XY plane in a planar scene (spawn, velocity and wind z = 0)");
+    if (scene.reference.kind == ReferenceKind::Ballistic ||
+        scene.reference.kind == ReferenceKind::Oscillator)
+      fail("reference.kind",
+           "the ballistic and oscillator closed forms are for bodies, not particles");
+  }
+  if (scene.reference.kind == ReferenceKind::Orbit) {
+    if (!scene.particles || scene.particles->count != 1 ||
+        scene.particles->attractors.size() != 1 || !scene.bodies.empty())
+      fail("reference.kind", "orbit needs exactly one particle, one attractor and no bodies");
+    const ParticleSetSpec& p = *scene.particles;
+    if (p.spawn_min != p.spawn_max || p.velocity_min != p.velocity_max)
+      fail("particles",
+           "orbit needs one exact start: spawn_min = spawn_max, velocity_min = velocity_max");
+    if (p.drag != 0.0 || !p.planes.empty() || scene.gravity.norm() != 0.0)
+      fail("reference.kind", "orbit holds without drag, planes or gravity");
+  }
+  if (scene.reference.kind == ReferenceKind::Bounce) {
+    if (!scene.particles || scene.particles->count != 1 || scene.particles->planes.size() != 1 ||
+        !scene.bodies.empty())
+      fail("reference.kind", "bounce needs exactly one particle, one plane and no bodies");
+    const ParticleSetSpec& p = *scene.particles;
+    if (p.spawn_min != p.spawn_max || p.velocity_min.norm() != 0.0 || p.velocity_max.norm() != 0.0)
+      fail("particles",
+           "bounce needs one exact start at rest: spawn_min = spawn_max, velocities 0");
+    if (p.drag != 0.0 || !p.attractors.empty() ||
+        p.planes[0].normal.cross(scene.gravity).norm() > 1e-12 ||
+        p.planes[0].normal.dot(scene.gravity) >= 0.0)
+      fail("reference.kind",
+           "bounce holds without drag or attractors, with gravity into the plane");
+  }
 
   require_positive("probe.interval", scene.probe.interval);
   for (int i = 0; i < static_cast<int>(scene.probe.bodies.size()); ++i) {

@@ -129,6 +129,50 @@ BodySpec read_body(const Field& f) {
   return b;
 }
 
+ParticleSetSpec read_particles(const Field& f) {
+  f.object({"count", "spawn_min", "spawn_max", "velocity_min", "velocity_max", "mass", "radius",
+            "drag", "wind", "wind_jitter", "attractors", "softening", "planes", "restitution",
+            "friction", "lifetime", "seed", "probe"});
+  ParticleSetSpec p;
+  p.count = f.member("count").integer();
+  p.spawn_min = f.member("spawn_min").vec3();
+  p.spawn_max = f.has("spawn_max") ? f.member("spawn_max").vec3() : p.spawn_min;
+  if (f.has("velocity_min")) p.velocity_min = f.member("velocity_min").vec3();
+  p.velocity_max = f.has("velocity_max") ? f.member("velocity_max").vec3() : p.velocity_min;
+  if (f.has("mass")) p.mass = f.member("mass").number();
+  if (f.has("radius")) p.radius = f.member("radius").number();
+  if (f.has("drag")) p.drag = f.member("drag").number();
+  if (f.has("wind")) p.wind = f.member("wind").vec3();
+  if (f.has("wind_jitter")) p.wind_jitter = f.member("wind_jitter").number();
+  if (f.has("attractors")) {
+    const Field list = f.member("attractors");
+    for (std::size_t i = 0; i < list.array().size(); ++i) {
+      const Field a = list.at(i);
+      a.object({"position", "strength"});
+      p.attractors.push_back({a.member("position").vec3(), a.member("strength").number()});
+    }
+  }
+  if (f.has("softening")) p.softening = f.member("softening").number();
+  if (f.has("planes")) {
+    const Field list = f.member("planes");
+    for (std::size_t i = 0; i < list.array().size(); ++i) {
+      const Field plane = list.at(i);
+      plane.object({"point", "normal"});
+      p.planes.push_back({plane.member("point").vec3(), plane.member("normal").vec3()});
+    }
+  }
+  if (f.has("restitution")) p.restitution = f.member("restitution").number();
+  if (f.has("friction")) p.friction = f.member("friction").number();
+  if (f.has("lifetime")) p.lifetime = f.member("lifetime").number();
+  if (f.has("seed")) p.seed = static_cast<std::uint64_t>(f.member("seed").integer());
+  if (f.has("probe")) {
+    p.probe.clear();
+    const Field list = f.member("probe");
+    for (std::size_t i = 0; i < list.array().size(); ++i) p.probe.push_back(list.at(i).integer());
+  }
+  return p;
+}
+
 ImpulseSpec read_impulse(const Field& f) {
   f.object({"time", "body", "impulse", "point"});
   ImpulseSpec p;
@@ -199,6 +243,32 @@ json to_json(const Scene& scene) {
                                  {"impulse", vec(p.impulse)},
                                  {"point", vec(p.point)}});
   }
+  if (scene.particles) {
+    const ParticleSetSpec& p = *scene.particles;
+    json attractors = json::array(), planes = json::array();
+    for (const ParticleAttractor& a : p.attractors)
+      attractors.push_back({{"position", vec(a.position)}, {"strength", a.strength}});
+    for (const ParticlePlaneSpec& plane : p.planes)
+      planes.push_back({{"point", vec(plane.point)}, {"normal", vec(plane.normal)}});
+    doc["particles"] = {{"count", p.count},
+                        {"spawn_min", vec(p.spawn_min)},
+                        {"spawn_max", vec(p.spawn_max)},
+                        {"velocity_min", vec(p.velocity_min)},
+                        {"velocity_max", vec(p.velocity_max)},
+                        {"mass", p.mass},
+                        {"radius", p.radius},
+                        {"drag", p.drag},
+                        {"wind", vec(p.wind)},
+                        {"wind_jitter", p.wind_jitter},
+                        {"attractors", attractors},
+                        {"softening", p.softening},
+                        {"planes", planes},
+                        {"restitution", p.restitution},
+                        {"friction", p.friction},
+                        {"lifetime", p.lifetime},
+                        {"seed", p.seed},
+                        {"probe", p.probe}};
+  }
   json metrics = json::array();
   for (Metric m : scene.probe.metrics) metrics.push_back(to_string(m));
   doc["probe"] = {
@@ -212,7 +282,7 @@ Scene scene_from_json(const json& document, const std::string& source) {
   try {
     const Field root(document, "");
     root.object({"name", "description", "gravity", "dt", "duration", "planar", "collisions",
-                 "bodies", "springs", "impulses", "probe", "reference"});
+                 "bodies", "springs", "impulses", "particles", "probe", "reference"});
     Scene scene;
     scene.name = root.member("name").string();
     if (root.has("description")) scene.description = root.member("description").string();
@@ -229,6 +299,7 @@ Scene scene_from_json(const json& document, const std::string& source) {
       for (std::size_t i = 0; i < springs.array().size(); ++i)
         scene.springs.push_back(read_spring(springs.at(i)));
     }
+    if (root.has("particles")) scene.particles = read_particles(root.member("particles"));
     if (root.has("impulses")) {
       const Field impulses = root.member("impulses");
       for (std::size_t i = 0; i < impulses.array().size(); ++i)
@@ -265,13 +336,18 @@ Scene scene_from_json(const json& document, const std::string& source) {
         scene.reference.kind = ReferenceKind::None;
       else if (kind == "ballistic")
         scene.reference.kind = ReferenceKind::Ballistic;
+      else if (kind == "bounce")
+        scene.reference.kind = ReferenceKind::Bounce;
+      else if (kind == "orbit")
+        scene.reference.kind = ReferenceKind::Orbit;
       else if (kind == "oscillator")
         scene.reference.kind = ReferenceKind::Oscillator;
       else if (kind == "converged")
         scene.reference.kind = ReferenceKind::Converged;
       else
-        reference.member("kind").fail("unknown reference \"" + kind +
-                                      "\" (known: none, ballistic, oscillator, converged)");
+        reference.member("kind").fail(
+            "unknown reference \"" + kind +
+            "\" (known: none, ballistic, oscillator, orbit, bounce, converged)");
       if (reference.has("dt_divisor"))
         scene.reference.dt_divisor = reference.member("dt_divisor").integer();
     }

@@ -427,6 +427,8 @@ int run_suite(const RunOptions& options, const fs::path& self) {
 
       int dynamic_bodies = 0;
       for (const BodySpec& b : scene.bodies) dynamic_bodies += b.mass > 0.0;
+      // particles count as bodies here: body_steps_per_s is particle-steps/s in a particle scene
+      if (scene.particles) dynamic_bodies += static_cast<int>(scene.particles->count);
 
       for (const EngineVariant& ev : jobs_engines) {
         ++done;

@@ -16,8 +16,22 @@ Invariants invariants_of(const Scene& scene, const std::vector<int>& bodies, con
   Invariants inv;
   std::vector<const BodyState*> state_of(scene.bodies.size(), nullptr);
   for (std::size_t i = 0; i < bodies.size(); ++i) {
-    const BodySpec& spec = scene.bodies[bodies[i]];
     const BodyState& s = sample.bodies[i];
+    if (bodies[i] >= static_cast<int>(scene.bodies.size())) {
+      // a probed particle: a point mass in gravity and the attractors' softened potential
+      const ParticleSetSpec& p = *scene.particles;
+      const double kinetic = 0.5 * p.mass * s.linear_velocity.squaredNorm();
+      double potential = -p.mass * scene.gravity.dot(s.position);
+      for (const ParticleAttractor& a : p.attractors)
+        potential -= p.mass * a.strength /
+                     std::sqrt((a.position - s.position).squaredNorm() + p.softening * p.softening);
+      inv.kinetic += kinetic;
+      inv.energy += kinetic + potential;
+      inv.linear_momentum += p.mass * s.linear_velocity;
+      inv.angular_momentum += s.position.cross(p.mass * s.linear_velocity);
+      continue;
+    }
+    const BodySpec& spec = scene.bodies[bodies[i]];
     state_of[bodies[i]] = &s;
     if (spec.mass == 0.0) continue;
     const Mat3 rotation = s.orientation.normalized().toRotationMatrix();
@@ -243,8 +257,67 @@ Trajectory oscillator_reference(const Scene& scene, const Trajectory& sampled_at
   return reference;
 }
 
+Trajectory orbit_reference(const Scene& scene, const Trajectory& sampled_at) {
+  // a circular orbit: the start turns about r × v at ω = √(s / r³) (softening ε ≪ r neglected)
+  const ParticleSetSpec& p = *scene.particles;
+  const Vec3 centre = p.attractors[0].position;
+  const Vec3 r0 = p.spawn_min - centre, v0 = p.velocity_min;
+  const double omega = std::sqrt(p.attractors[0].strength / std::pow(r0.norm(), 3));
+  const Vec3 axis = r0.cross(v0).normalized();
+  Trajectory reference;
+  reference.bodies = sampled_at.bodies;
+  for (const Sample& at : sampled_at.samples) {
+    const Eigen::AngleAxisd turn(omega * at.time, axis);
+    Sample s;
+    s.time = at.time;
+    s.bodies.push_back({centre + turn * r0, Quat::Identity(), turn * v0, Vec3::Zero()});
+    reference.samples.push_back(std::move(s));
+  }
+  return reference;
+}
+
+Trajectory bounce_reference(const Scene& scene, const Trajectory& sampled_at) {
+  // a drop from height h onto the plane: parabolic flights between impacts, each leaving at e
+  // times the speed it arrived with, so the n-th apex is e^(2n) h
+  const ParticleSetSpec& p = *scene.particles;
+  const Vec3 n = p.planes[0].normal;
+  const double g = scene.gravity.norm(), e = p.restitution;
+  const double h = (p.spawn_min - p.planes[0].point).dot(n);
+  const Vec3 foot = p.spawn_min - h * n;
+  Trajectory reference;
+  reference.bodies = sampled_at.bodies;
+  for (const Sample& at : sampled_at.samples) {
+    // walk the flights to the one holding t: the first falls from rest, later ones rise from the
+    // plane
+    double t = at.time, height = 0.0, speed = 0.0;
+    const double fall = std::sqrt(2.0 * h / g);
+    if (t < fall) {
+      height = h - 0.5 * g * t * t;
+      speed = -g * t;
+    } else {
+      t -= fall;
+      double launch = e * g * fall;  // speed off the plane after the first impact
+      while (launch > 1e-9 && t > 2.0 * launch / g) {
+        t -= 2.0 * launch / g;
+        launch *= e;
+      }
+      if (launch > 1e-9) {
+        height = launch * t - 0.5 * g * t * t;
+        speed = launch - g * t;
+      }
+    }
+    Sample s;
+    s.time = at.time;
+    s.bodies.push_back({foot + height * n, Quat::Identity(), speed * n, Vec3::Zero()});
+    reference.samples.push_back(std::move(s));
+  }
+  return reference;
+}
+
 bool has_analytic_reference(const Scene& scene) {
-  return scene.reference.kind == ReferenceKind::Ballistic ||
+  return scene.reference.kind == ReferenceKind::Bounce ||
+         scene.reference.kind == ReferenceKind::Orbit ||
+         scene.reference.kind == ReferenceKind::Ballistic ||
          scene.reference.kind == ReferenceKind::Oscillator;
 }
 
@@ -253,6 +326,8 @@ Trajectory analytic_reference(const Scene& scene, const Trajectory& sampled_at) 
     return ballistic_reference(scene, sampled_at);
   if (scene.reference.kind == ReferenceKind::Oscillator)
     return oscillator_reference(scene, sampled_at);
+  if (scene.reference.kind == ReferenceKind::Orbit) return orbit_reference(scene, sampled_at);
+  if (scene.reference.kind == ReferenceKind::Bounce) return bounce_reference(scene, sampled_at);
   throw std::invalid_argument(std::string("no closed form for reference kind ") +
                               to_string(scene.reference.kind));
 }

@@ -215,7 +215,8 @@ Scene pushed_box_scene(bool planar) {
   Scene scene;
   scene.name = planar ? "pushed-box-planar" : "pushed-box";
   scene.description =
-      "the seed's keyboard pushes, scheduled: a 1 x 0.5 x 0.25 m, 2 kg box at rest in zero gravity takes an "
+      "the seed's keyboard pushes, scheduled: a 1 x 0.5 x 0.25 m, 2 kg box at rest in zero gravity "
+      "takes an "
       "impulse off its centre at 0.5 s and another at 1.5 s, so it drifts and turns";
   scene.gravity = Vec3::Zero();
   scene.dt = 1.0 / 60.0;
@@ -233,6 +234,134 @@ Scene pushed_box_scene(bool planar) {
   scene.probe.metrics = {Metric::Position, Metric::Orientation, Metric::LinearMomentum};
   scene.reference.kind = ReferenceKind::Converged;
   scene.reference.dt_divisor = 32;
+  return scene;
+}
+
+Scene particles_bounce_scene() {
+  Scene scene;
+  scene.name = "particles-bounce";
+  scene.description =
+      "one particle dropped from 1 m onto a plane with restitution 0.8: apex n is 0.8^(2n) m";
+  scene.dt = 1.0 / 120.0;
+  scene.duration = 3.0;
+  ParticleSetSpec p;
+  p.count = 1;
+  p.spawn_min = p.spawn_max = Vec3(0.0, 1.0, 0.0);
+  p.planes = {ParticlePlaneSpec{}};
+  p.restitution = 0.8;
+  scene.particles = p;
+  scene.probe.metrics = {Metric::Position};
+  scene.reference.kind = ReferenceKind::Bounce;
+  return scene;
+}
+
+Scene particles_orbit_scene() {
+  constexpr double kStrength = 10.0, kRadius = 2.0;
+  Scene scene;
+  scene.name = "particles-orbit";
+  scene.description =
+      "one particle on a circular orbit of 2 m about an attractor (s = 10 m³/s²), two periods";
+  scene.gravity = Vec3::Zero();
+  scene.dt = 1.0 / 60.0;
+  scene.duration = 2.0 * 2.0 * M_PI * std::sqrt(kRadius * kRadius * kRadius / kStrength);
+  ParticleSetSpec p;
+  p.count = 1;
+  p.spawn_min = p.spawn_max = Vec3(kRadius, 0.0, 0.0);
+  p.velocity_min = p.velocity_max = Vec3(0.0, 0.0, std::sqrt(kStrength / kRadius));
+  p.attractors = {{Vec3::Zero(), kStrength}};
+  p.softening = 1e-4;  // ε² / r² = 2.5e-9: far below any integrator's error here
+  scene.particles = p;
+  scene.probe.metrics = {Metric::Position, Metric::Energy};
+  scene.reference.kind = ReferenceKind::Orbit;
+  return scene;
+}
+
+namespace {
+
+// the seed's three tilted planes, meeting under the middle of the scene like a shallow bowl
+std::vector<ParticlePlaneSpec> seed_planes() {
+  return {{Vec3::Zero(), Vec3(0.25, 1.0, 0.0).normalized()},
+          {Vec3::Zero(), Vec3(-0.25, 1.0, 0.1).normalized()},
+          {Vec3::Zero(), Vec3(0.0, 1.0, -0.25).normalized()}};
+}
+
+}  // namespace
+
+Scene particles_attractors_scene(long count) {
+  Scene scene;
+  scene.name = "particles-attractors";
+  scene.description =
+      "the seed's first mode: particles orbit two attracting and one repelling force point above "
+      "three tilted planes, bouncing off them, with air drag";
+  scene.dt = 1.0 / 60.0;
+  scene.duration = 3.0;
+  ParticleSetSpec p;
+  p.count = count;
+  p.spawn_min = Vec3(-3.0, 2.0, -3.0);
+  p.spawn_max = Vec3(3.0, 5.0, 3.0);
+  p.velocity_min = Vec3(-1.0, -1.0, -1.0);
+  p.velocity_max = Vec3(1.0, 1.0, 1.0);
+  p.drag = 0.1;
+  p.attractors = {
+      {Vec3(-2.0, 3.0, 0.0), 20.0}, {Vec3(2.0, 3.0, 1.0), 15.0}, {Vec3(0.0, 4.0, -2.0), -10.0}};
+  p.softening = 0.2;
+  p.planes = seed_planes();
+  p.restitution = 0.6;
+  p.friction = 0.1;
+  p.probe = {0, 1, 2, 3};
+  scene.particles = p;
+  scene.probe.metrics = {};
+  return scene;
+}
+
+Scene particles_snow_scene(long count) {
+  Scene scene;
+  scene.name = "particles-snow";
+  scene.description =
+      "the seed's snow: no rebound (restitution 0, full friction) so flakes stick, wind drift with "
+      "a per-flake offset, and flakes melt after 6 s and fall again from the sky";
+  scene.dt = 1.0 / 60.0;
+  scene.duration = 5.0;
+  ParticleSetSpec p;
+  p.count = count;
+  p.spawn_min = Vec3(-5.0, 8.0, -5.0);
+  p.spawn_max = Vec3(5.0, 10.0, 5.0);
+  p.velocity_min = Vec3(0.0, -1.0, 0.0);
+  p.velocity_max = Vec3(0.0, -0.5, 0.0);
+  p.drag = 1.0;
+  p.wind = Vec3(1.0, 0.0, 0.3);
+  p.wind_jitter = 0.5;
+  p.planes = {ParticlePlaneSpec{}};
+  p.restitution = 0.0;
+  p.friction = 1.0;
+  p.lifetime = 6.0;
+  p.probe = {0, 1, 2, 3};
+  scene.particles = p;
+  scene.probe.metrics = {};
+  return scene;
+}
+
+Scene particles_plume_scene(long count) {
+  Scene scene;
+  scene.name = "particles-plume";
+  scene.description =
+      "the seed's plume: particles on high-friction ground are dragged toward a strong force point "
+      "above it until it lifts them into a plume";
+  scene.dt = 1.0 / 60.0;
+  scene.duration = 4.0;
+  ParticleSetSpec p;
+  p.count = count;
+  p.spawn_min = Vec3(-4.0, 0.0, -4.0);
+  p.spawn_max = Vec3(4.0, 0.05, 4.0);
+  p.drag = 0.05;
+  p.attractors = {{Vec3(0.0, 3.0, 0.0), 60.0}};
+  p.softening = 0.3;
+  p.planes = {ParticlePlaneSpec{}};
+  p.restitution = 0.2;
+  p.friction = 0.9;
+  p.probe = {0, 1, 2, 3};
+  scene.particles = p;
+  scene.probe.metrics = {};
   return scene;
 }
 
@@ -266,10 +395,25 @@ const std::vector<Scenario>& scenarios() {
         {"spring-chain", "coupled springs: how does error grow along a chain?",
          [] { return spring_chain_scene(8); }},
     };
-    all.push_back({"pushed-box", "do impulses at a point change linear and angular momentum by J and r x J?",
+    all.push_back({"pushed-box",
+                   "do impulses at a point change linear and angular momentum by J and r x J?",
                    [] { return pushed_box_scene(false); }});
     all.push_back({"pushed-box-planar", "the same in the plane, so Box2D can answer it",
                    [] { return pushed_box_scene(true); }});
+    all.push_back({"particles-bounce", "do bounce apexes fall as e^(2n), as the closed form says?",
+                   particles_bounce_scene, standard_dt_sweep()});
+    all.push_back({"particles-orbit",
+                   "how far off a circular orbit does each integrator drift, and at what cost?",
+                   particles_orbit_scene, standard_dt_sweep()});
+    all.push_back({"particles-attractors",
+                   "how many particle-steps per second, in the seed's attractor mode?",
+                   [] { return particles_attractors_scene(); }});
+    all.push_back({"particles-snow",
+                   "how many particle-steps per second with ageing and recycling (snow)?",
+                   [] { return particles_snow_scene(); }});
+    all.push_back({"particles-plume",
+                   "how many particle-steps per second in the seed's plume mode?",
+                   [] { return particles_plume_scene(); }});
     // the stiff-spring stability map: k × dt, every engine and variant
     for (double k : {1e2, 1e3, 1e4, 1e5, 1e6}) {
       Scenario s;

@@ -8,6 +8,7 @@
 
 #include <Eigen/Core>
 #include <Eigen/Geometry>
+#include <cstdint>
 #include <optional>
 #include <stdexcept>
 #include <string>
@@ -59,12 +60,47 @@ struct ImpulseSpec {
   Vec3 point = Vec3::Zero();    // world point of application (m)
 };
 
+// A set of particles: point masses under gravity, attractors, drag and wind, colliding with
+// planes and nothing else (no particle–particle contact in any engine). Particle i is probed as
+// body index bodies.size() + i.
+struct ParticleAttractor {
+  Vec3 position = Vec3::Zero();  // m
+  double strength = 0.0;         // m³/s²: a = s r / (|r|² + ε²)^{3/2}; negative repels
+};
+
+struct ParticlePlaneSpec {
+  Vec3 point = Vec3::Zero();
+  Vec3 normal = Vec3::UnitY();  // unit; particles stay on this side
+};
+
+struct ParticleSetSpec {
+  long count = 0;
+  Vec3 spawn_min = Vec3::Zero(), spawn_max = Vec3::Zero();  // uniform initial positions (m)
+  Vec3 velocity_min = Vec3::Zero(),
+       velocity_max = Vec3::Zero();  // uniform initial velocities (m/s)
+  double mass = 0.001;               // kg per particle
+  double radius = 0.01;              // m: the sphere an engine without point particles uses
+  double drag = 0.0;                 // 1/s: a += drag (wind + offset − v)
+  Vec3 wind = Vec3::Zero();          // m/s
+  double wind_jitter = 0.0;          // m/s: per-particle uniform offset, seeded
+  std::vector<ParticleAttractor> attractors;
+  double softening = 0.05;  // ε (m)
+  std::vector<ParticlePlaneSpec> planes;
+  double restitution = 0.5;  // normal velocity kept on a bounce
+  double friction = 0.0;     // fraction of tangential velocity lost on a bounce, 0..1
+  double lifetime = 0.0;     // s; > 0: particles age and are re-emitted from the spawn box
+  std::uint64_t seed = 1;
+  std::vector<long> probe = {0};  // particles to record
+};
+
 // what the harness compares each engine's trajectory with
 enum class ReferenceKind {
   None,        // invariants only (energy, momenta)
   Ballistic,   // closed-form free flight: x0 + v0 t + ½ g t² for every centre of mass, and the
                // torque-free rotation of bodies with two equal principal moments (symmetric tops)
   Oscillator,  // closed form of one body on one spring to a world anchor, moving along the spring
+  Orbit,       // closed form of one particle on a circular orbit about one attractor
+  Bounce,      // closed form of one particle dropped from rest onto one plane with restitution
   Converged,   // rtp RK4 at dt / divisor, shown converged by halving once more
 };
 
@@ -92,6 +128,7 @@ struct Scene {
   std::vector<BodySpec> bodies;
   std::vector<SpringSpec> springs;
   std::vector<ImpulseSpec> impulses;
+  std::optional<ParticleSetSpec> particles;
   Probe probe;
   Reference reference;
 

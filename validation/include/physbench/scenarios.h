@@ -39,5 +39,10 @@ Scene spring_cube_scene();
 Scene spring_chain_scene(int links = 8);
 Scene stiff_spring_scene(double stiffness);
 Scene pushed_box_scene(bool planar = false);
+Scene particles_bounce_scene();
+Scene particles_orbit_scene();
+Scene particles_attractors_scene(long count = 100000);
+Scene particles_snow_scene(long count = 100000);
+Scene particles_plume_scene(long count = 100000);
 
 }  // namespace physbench

@@ -1,0 +1,163 @@
+// rtp particles against closed forms and the seed's promises for each mode.
+#include <gtest/gtest.h>
+
+#include <cmath>
+
+#include "rtp/particles.h"
+
+namespace {
+
+using rtp::ParticleIntegrator;
+using rtp::ParticleSystem;
+using rtp::ParticleSystemDef;
+using rtp::Vec3;
+
+ParticleSystemDef one_particle(Vec3 position, Vec3 velocity) {
+  ParticleSystemDef def;
+  def.count = 1;
+  def.spawn_min = def.spawn_max = position;
+  def.velocity_min = def.velocity_max = velocity;
+  return def;
+}
+
+TEST(Particles, BounceApexHeightsFallAsRestitutionSquared) {
+  // dropped from 1 m onto y = 0 with e = 0.8: the n-th apex is e^(2n) m
+  ParticleSystemDef def = one_particle(Vec3(0, 1, 0), Vec3::Zero());
+  def.planes = {rtp::ParticlePlane{}};
+  def.restitution = 0.8;
+  def.integrator = ParticleIntegrator::SemiImplicitEuler;
+  ParticleSystem particles(def);
+  std::vector<double> apexes;
+  double previous_vy = 0.0;
+  for (int i = 0; i < 4000 && apexes.size() < 4; ++i) {
+    particles.step(1e-3);
+    const double vy = particles.velocity(0).y();
+    if (previous_vy > 0.0 && vy <= 0.0) apexes.push_back(particles.position(0).y());
+    previous_vy = vy;
+  }
+  ASSERT_EQ(apexes.size(), 4u);
+  for (std::size_t n = 0; n < apexes.size(); ++n) {
+    const double expected = std::pow(0.8, 2.0 * (n + 1));
+    EXPECT_NEAR(apexes[n], expected, 0.01 * expected + 2e-3) << "apex " << n + 1;  // 1 % and a step's rise
+  }
+}
+
+// a particle on a circular orbit around one attractor: speed √(s/r) at radius r (ε ≪ r)
+double orbit_radius_error(ParticleIntegrator integrator, double dt) {
+  const double strength = 10.0, radius = 2.0;
+  ParticleSystemDef def = one_particle(Vec3(radius, 0, 0), Vec3(0, 0, std::sqrt(strength / radius)));
+  def.gravity = Vec3::Zero();
+  def.attractors = {rtp::Attractor{Vec3::Zero(), strength}};
+  def.softening = 1e-4;
+  def.integrator = integrator;
+  ParticleSystem particles(def);
+  const double period = 2.0 * M_PI * std::sqrt(radius * radius * radius / strength);
+  double worst = 0.0;
+  for (long i = 0; i < std::lround(period / dt); ++i) {
+    particles.step(dt);
+    worst = std::max(worst, std::abs(particles.position(0).norm() - radius));
+  }
+  return worst;
+}
+
+TEST(Particles, OrbitMidpointBeatsEuler) {
+  const double dt = 1.0 / 120.0;
+  const double midpoint = orbit_radius_error(ParticleIntegrator::Midpoint, dt);
+  const double semi = orbit_radius_error(ParticleIntegrator::SemiImplicitEuler, dt);
+  const double explicit_euler = orbit_radius_error(ParticleIntegrator::ExplicitEuler, dt);
+  EXPECT_LT(midpoint, semi);
+  EXPECT_LT(midpoint, explicit_euler);
+  EXPECT_LT(midpoint, 1e-3 * 2.0);  // float state: a radius held to 0.1 % over one orbit
+}
+
+TEST(Particles, ParticleAtAnAttractorStaysFinite) {
+  ParticleSystemDef def = one_particle(Vec3(1, 2, 3), Vec3::Zero());
+  def.attractors = {rtp::Attractor{Vec3(1, 2, 3), 50.0}, rtp::Attractor{Vec3(1, 2, 3), -80.0}};
+  ParticleSystem particles(def);
+  for (int i = 0; i < 100; ++i) particles.step(1.0 / 60.0);
+  EXPECT_TRUE(particles.position(0).allFinite());
+  EXPECT_TRUE(particles.velocity(0).allFinite());
+}
+
+TEST(Particles, SnowSticksToThePlane) {
+  // zero restitution and full friction: once a flake touches the ground it stays on it
+  ParticleSystemDef def;
+  def.count = 2000;
+  def.spawn_min = Vec3(-1, 0.0, -1);
+  def.spawn_max = Vec3(1, 0.5, 1);
+  def.velocity_min = Vec3(-0.2, -1, -0.2);
+  def.velocity_max = Vec3(0.2, 0, 0.2);
+  def.planes = {rtp::ParticlePlane{}};
+  def.restitution = 0.0;
+  def.friction = 1.0;
+  def.drag = 1.0;
+  def.wind = Vec3(0.5, 0, 0);
+  def.wind_jitter = 0.2;
+  def.integrator = ParticleIntegrator::SemiImplicitEuler;
+  ParticleSystem snow(def);
+  std::vector<bool> landed(def.count, false);
+  for (int step = 0; step < 600; ++step) {
+    snow.step(1.0 / 60.0);
+    for (std::size_t i = 0; i < def.count; ++i) {
+      const double y = snow.position(i).y();
+      ASSERT_GE(y, -1e-6) << "particle " << i << " sank";
+      if (landed[i]) ASSERT_LT(y, 1e-5) << "particle " << i << " left the ground";
+      landed[i] = landed[i] || y < 1e-6;
+    }
+  }
+  EXPECT_EQ(std::count(landed.begin(), landed.end(), true), static_cast<long>(def.count));
+}
+
+TEST(Particles, RecyclingKeepsTheCountAndTheBuffers) {
+  ParticleSystemDef def;
+  def.count = 5000;
+  def.spawn_min = Vec3(-1, 4, -1);
+  def.spawn_max = Vec3(1, 5, 1);
+  def.lifetime = 0.5;
+  def.drag = 0.5;
+  ParticleSystem particles(def);
+  const float* buffer = particles.x_data();
+  for (int i = 0; i < 120; ++i) particles.step(1.0 / 60.0);  // 2 s: every particle re-emitted ~4 times
+  EXPECT_EQ(particles.x_data(), buffer) << "recycling reallocated the particle arrays";
+  EXPECT_EQ(particles.size(), def.count);
+  EXPECT_GT(particles.recycled(), 3 * def.count);
+  for (std::size_t i = 0; i < def.count; ++i) {
+    ASSERT_LT(particles.age(i), def.lifetime);
+    ASSERT_GT(particles.position(i).y(), -5.0) << "a particle outlived its lifetime";
+  }
+}
+
+TEST(Particles, PlumeFrictionDragsParticlesAlongThePlane) {
+  // high friction: particles sliding on the ground lose most of their tangential speed per contact
+  auto slide = [](double friction) {
+    ParticleSystemDef def = one_particle(Vec3(0, 0, 0), Vec3(3, 0, 0));
+    def.planes = {rtp::ParticlePlane{}};
+    def.restitution = 0.0;
+    def.friction = friction;
+    def.integrator = ParticleIntegrator::SemiImplicitEuler;
+    ParticleSystem particles(def);
+    for (int i = 0; i < 60; ++i) particles.step(1.0 / 60.0);
+    return particles.position(0).x();
+  };
+  EXPECT_LT(slide(0.9), 0.2 * slide(0.0));
+}
+
+TEST(Particles, TwoThreadsGiveTheSameStateAsOne) {
+  auto run = [](int threads) {
+    ParticleSystemDef def;
+    def.count = 40000;
+    def.spawn_min = Vec3(-2, 1, -2);
+    def.spawn_max = Vec3(2, 3, 2);
+    def.attractors = {rtp::Attractor{Vec3(0, 2, 0), 5.0}};
+    def.planes = {rtp::ParticlePlane{}};
+    def.lifetime = 1.0;
+    def.threads = threads;
+    ParticleSystem p(def);
+    for (int i = 0; i < 30; ++i) p.step(1.0 / 60.0);
+    return p;
+  };
+  const ParticleSystem one = run(1), two = run(2);
+  for (std::size_t i = 0; i < one.size(); i += 97) ASSERT_EQ(one.position(i), two.position(i)) << i;
+}
+
+}  // namespace
