@@ -38,14 +38,16 @@ TEST(Particles, BounceApexHeightsFallAsRestitutionSquared) {
   ASSERT_EQ(apexes.size(), 4u);
   for (std::size_t n = 0; n < apexes.size(); ++n) {
     const double expected = std::pow(0.8, 2.0 * (n + 1));
-    EXPECT_NEAR(apexes[n], expected, 0.01 * expected + 2e-3) << "apex " << n + 1;  // 1 % and a step's rise
+    EXPECT_NEAR(apexes[n], expected, 0.01 * expected + 2e-3)
+        << "apex " << n + 1;  // 1 % and a step's rise
   }
 }
 
 // a particle on a circular orbit around one attractor: speed √(s/r) at radius r (ε ≪ r)
 double orbit_radius_error(ParticleIntegrator integrator, double dt) {
   const double strength = 10.0, radius = 2.0;
-  ParticleSystemDef def = one_particle(Vec3(radius, 0, 0), Vec3(0, 0, std::sqrt(strength / radius)));
+  ParticleSystemDef def =
+      one_particle(Vec3(radius, 0, 0), Vec3(0, 0, std::sqrt(strength / radius)));
   def.gravity = Vec3::Zero();
   def.attractors = {rtp::Attractor{Vec3::Zero(), strength}};
   def.softening = 1e-4;
@@ -117,7 +119,8 @@ TEST(Particles, RecyclingKeepsTheCountAndTheBuffers) {
   def.drag = 0.5;
   ParticleSystem particles(def);
   const float* buffer = particles.x_data();
-  for (int i = 0; i < 120; ++i) particles.step(1.0 / 60.0);  // 2 s: every particle re-emitted ~4 times
+  for (int i = 0; i < 120; ++i)
+    particles.step(1.0 / 60.0);  // 2 s: every particle re-emitted ~4 times
   EXPECT_EQ(particles.x_data(), buffer) << "recycling reallocated the particle arrays";
   EXPECT_EQ(particles.size(), def.count);
   EXPECT_GT(particles.recycled(), 3 * def.count);

@@ -35,21 +35,22 @@ struct ParticlePlane {
 
 struct ParticleSystemDef {
   std::size_t count = 0;
-  Vec3 spawn_min = Vec3::Zero(), spawn_max = Vec3::Zero();        // uniform initial positions (m)
-  Vec3 velocity_min = Vec3::Zero(), velocity_max = Vec3::Zero();  // uniform initial velocities (m/s)
+  Vec3 spawn_min = Vec3::Zero(), spawn_max = Vec3::Zero();  // uniform initial positions (m)
+  Vec3 velocity_min = Vec3::Zero(),
+       velocity_max = Vec3::Zero();  // uniform initial velocities (m/s)
   Vec3 gravity = Vec3(0.0, -9.81, 0.0);
-  double drag = 0.0;             // 1/s: a += drag (wind + offset − v)
-  Vec3 wind = Vec3::Zero();      // m/s
-  double wind_jitter = 0.0;      // m/s: each particle's wind differs by a uniform offset of this size
+  double drag = 0.0;         // 1/s: a += drag (wind + offset − v)
+  Vec3 wind = Vec3::Zero();  // m/s
+  double wind_jitter = 0.0;  // m/s: each particle's wind differs by a uniform offset of this size
   std::vector<Attractor> attractors;
-  double softening = 0.05;       // ε (m)
+  double softening = 0.05;  // ε (m)
   std::vector<ParticlePlane> planes;
-  double restitution = 0.5;      // normal velocity kept on a bounce
-  double friction = 0.0;         // fraction of tangential velocity lost on a bounce, 0..1
-  double lifetime = 0.0;         // s; > 0: particles age and are re-emitted from the spawn box
+  double restitution = 0.5;  // normal velocity kept on a bounce
+  double friction = 0.0;     // fraction of tangential velocity lost on a bounce, 0..1
+  double lifetime = 0.0;     // s; > 0: particles age and are re-emitted from the spawn box
   std::uint64_t seed = 1;
   ParticleIntegrator integrator = ParticleIntegrator::Midpoint;
-  int threads = 1;               // OpenMP threads for the update
+  int threads = 1;  // OpenMP threads for the update
 };
 
 class ParticleSystem {
@@ -72,6 +73,9 @@ class ParticleSystem {
  private:
   void emit(std::size_t i);
   void update_range(std::size_t begin, std::size_t end, float dt);
+  void accelerate(std::size_t first, std::size_t n, const float* px, const float* py,
+                  const float* pz, const float* vx, const float* vy, const float* vz, float* ax,
+                  float* ay, float* az) const;
 
   ParticleSystemDef def_;
   // hot: positions and velocities (m, m/s)
