@@ -3,6 +3,7 @@
 #include <rtp/particles.h>
 #include <rtp/world.h>
 
+#include "physbench/particle_driver.h"
 #include "physbench/registry.h"
 
 namespace physbench {
@@ -62,26 +63,7 @@ class RtpEngine final : public Engine {
     }
     body_count_ = static_cast<int>(scene.bodies.size());
     if (scene.particles) {
-      const ParticleSetSpec& p = *scene.particles;
-      rtp::ParticleSystemDef def;
-      def.count = static_cast<std::size_t>(p.count);
-      def.spawn_min = p.spawn_min;
-      def.spawn_max = p.spawn_max;
-      def.velocity_min = p.velocity_min;
-      def.velocity_max = p.velocity_max;
-      def.gravity = scene.gravity;
-      def.drag = p.drag;
-      def.wind = p.wind;
-      def.wind_jitter = p.wind_jitter;
-      for (const ParticleAttractor& a : p.attractors)
-        def.attractors.push_back({a.position, a.strength});
-      def.softening = p.softening;
-      for (const ParticlePlaneSpec& plane : p.planes)
-        def.planes.push_back({plane.point, plane.normal});
-      def.restitution = p.restitution;
-      def.friction = p.friction;
-      def.lifetime = p.lifetime;
-      def.seed = p.seed;
+      rtp::ParticleSystemDef def = particle_system_def(scene);
       def.integrator = particle_integrator_;
       def.threads = threads_;
       particles_ = std::make_unique<rtp::ParticleSystem>(def);

@@ -20,6 +20,39 @@ double unit_random(std::uint64_t seed, std::uint64_t index, std::uint64_t salt) 
 
 }  // namespace
 
+ParticleSpawn particle_spawn(const ParticleSystemDef& def, std::size_t i,
+                             std::uint64_t generation) {
+  auto uniform = [&](double lo, double hi, std::uint64_t salt) {
+    return lo + (hi - lo) * unit_random(def.seed, i, generation * 16 + salt);
+  };
+  ParticleSpawn s;
+  s.position = Vec3(uniform(def.spawn_min.x(), def.spawn_max.x(), 0),
+                    uniform(def.spawn_min.y(), def.spawn_max.y(), 1),
+                    uniform(def.spawn_min.z(), def.spawn_max.z(), 2));
+  s.velocity = Vec3(uniform(def.velocity_min.x(), def.velocity_max.x(), 3),
+                    uniform(def.velocity_min.y(), def.velocity_max.y(), 4),
+                    uniform(def.velocity_min.z(), def.velocity_max.z(), 5));
+  const double j = def.wind_jitter;
+  s.wind = def.wind + Vec3(uniform(-j, j, 6), uniform(-j, j, 7), uniform(-j, j, 8));
+  return s;
+}
+
+double particle_initial_age(const ParticleSystemDef& def, std::size_t i) {
+  return def.lifetime * unit_random(def.seed, i, 7);
+}
+
+Vec3 particle_acceleration(const ParticleSystemDef& def, const Vec3& p, const Vec3& v,
+                           const Vec3& wind) {
+  Vec3 a = def.drag * (wind - v);
+  const double eps2 = def.softening * def.softening;
+  for (const Attractor& attractor : def.attractors) {
+    const Vec3 r = attractor.position - p;
+    const double r2 = r.squaredNorm() + eps2;
+    a += attractor.strength / (r2 * std::sqrt(r2)) * r;
+  }
+  return a;
+}
+
 ParticleSystem::ParticleSystem(const ParticleSystemDef& def) : def_(def) {
   for (const ParticlePlane& p : def_.planes)
     if (std::abs(p.normal.norm() - 1.0) > 1e-6)
@@ -33,27 +66,23 @@ ParticleSystem::ParticleSystem(const ParticleSystemDef& def) : def_(def) {
   for (std::size_t i = 0; i < n; ++i) {
     emit(i);
     // stagger the first generation's ages so the emitter runs steadily instead of in one burst
-    if (!age_.empty()) age_[i] = static_cast<float>(def_.lifetime * unit_random(def_.seed, i, 7));
+    if (!age_.empty()) age_[i] = static_cast<float>(particle_initial_age(def_, i));
   }
 }
 
 void ParticleSystem::emit(std::size_t i) {
   // the generation: a re-emitted particle gets new numbers
-  const std::uint64_t generation = recycled_;
-  auto uniform = [&](double lo, double hi, std::uint64_t salt) {
-    return lo + (hi - lo) * unit_random(def_.seed, i, generation * 16 + salt);
-  };
-  px_[i] = static_cast<float>(uniform(def_.spawn_min.x(), def_.spawn_max.x(), 0));
-  py_[i] = static_cast<float>(uniform(def_.spawn_min.y(), def_.spawn_max.y(), 1));
-  pz_[i] = static_cast<float>(uniform(def_.spawn_min.z(), def_.spawn_max.z(), 2));
-  vx_[i] = static_cast<float>(uniform(def_.velocity_min.x(), def_.velocity_max.x(), 3));
-  vy_[i] = static_cast<float>(uniform(def_.velocity_min.y(), def_.velocity_max.y(), 4));
-  vz_[i] = static_cast<float>(uniform(def_.velocity_min.z(), def_.velocity_max.z(), 5));
+  const ParticleSpawn spawn = particle_spawn(def_, i, recycled_);
+  px_[i] = static_cast<float>(spawn.position.x());
+  py_[i] = static_cast<float>(spawn.position.y());
+  pz_[i] = static_cast<float>(spawn.position.z());
+  vx_[i] = static_cast<float>(spawn.velocity.x());
+  vy_[i] = static_cast<float>(spawn.velocity.y());
+  vz_[i] = static_cast<float>(spawn.velocity.z());
   if (!wx_.empty()) {
-    const double j = def_.wind_jitter;
-    wx_[i] = static_cast<float>(def_.wind.x() + uniform(-j, j, 6));
-    wy_[i] = static_cast<float>(def_.wind.y() + uniform(-j, j, 7));
-    wz_[i] = static_cast<float>(def_.wind.z() + uniform(-j, j, 8));
+    wx_[i] = static_cast<float>(spawn.wind.x());
+    wy_[i] = static_cast<float>(spawn.wind.y());
+    wz_[i] = static_cast<float>(spawn.wind.z());
   }
   if (!age_.empty()) age_[i] = 0.0f;
 }

@@ -53,6 +53,20 @@ struct ParticleSystemDef {
   int threads = 1;  // OpenMP threads for the update
 };
 
+// Where particle i of a generation appears: uniform in the spawn box and velocity range, its wind
+// offset uniform in ±jitter. A pure function of (seed, i, generation) — a counter-based
+// generator, so any thread, and any other engine driven by the harness, emits the same particles.
+struct ParticleSpawn {
+  Vec3 position, velocity, wind;
+};
+ParticleSpawn particle_spawn(const ParticleSystemDef& def, std::size_t i, std::uint64_t generation);
+// the first generation's ages are staggered over the lifetime so the emitter runs steadily
+double particle_initial_age(const ParticleSystemDef& def, std::size_t i);
+// the acceleration of the definition's forces other than gravity (drag toward the particle's wind,
+// attractors) at position p and velocity v, in double: the law the float update implements
+Vec3 particle_acceleration(const ParticleSystemDef& def, const Vec3& p, const Vec3& v,
+                           const Vec3& wind);
+
 class ParticleSystem {
  public:
   explicit ParticleSystem(const ParticleSystemDef& def);

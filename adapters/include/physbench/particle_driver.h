@@ -1,0 +1,39 @@
+// Drives a scene's particles in an engine without a particle system of its own: the same starts,
+// forces, ageing and re-emission as rtp's (rtp/particles.h), so every engine runs the same
+// particles. Gravity is left to the engine; collisions with the planes are the engine's own.
+#pragma once
+
+#include <functional>
+#include <rtp/particles.h>
+#include <vector>
+
+#include "physbench/scene.h"
+
+namespace physbench {
+
+// the scene's particle set as rtp's definition (integrator and threads left at their defaults)
+rtp::ParticleSystemDef particle_system_def(const Scene& scene);
+
+class ParticleDriver {
+ public:
+  explicit ParticleDriver(const Scene& scene);
+
+  long count() const { return static_cast<long>(wind_.size()); }
+  // where particle i starts
+  rtp::ParticleSpawn start(long i) const { return rtp::particle_spawn(def_, static_cast<std::size_t>(i), 0); }
+  // drag toward the particle's wind and the attractors, as a force on a particle of the scene's mass (N)
+  Vec3 force(long i, const Vec3& position, const Vec3& velocity) const {
+    return mass_ * rtp::particle_acceleration(def_, position, velocity, wind_[i]);
+  }
+  // ages every particle by dt and re-emits, in index order as rtp does, those past their lifetime
+  void age(double dt, const std::function<void(long, const rtp::ParticleSpawn&)>& respawn);
+
+ private:
+  rtp::ParticleSystemDef def_;
+  double mass_;
+  std::vector<Vec3> wind_;    // each particle's wind, this generation (m/s)
+  std::vector<double> age_;   // s; empty when particles do not age
+  std::uint64_t recycled_ = 0;
+};
+
+}  // namespace physbench
