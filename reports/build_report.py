@@ -190,6 +190,11 @@ def speed_error(rows: pd.DataFrame, floors: dict[float, float] | None = None) ->
     return figure_html(fig), table
 
 
+def has_stability(rows: pd.DataFrame) -> bool:
+    """Whether any of these rows carries a stability class (empty cells read back as NaN)."""
+    return "stability" in rows and rows["stability"].notna().any()
+
+
 def stability_maps(results: pd.DataFrame, meta: dict) -> list[dict]:
     """One table per scenario family: engine/variant against (parameter, dt), each cell the run's
     stability class (stable, unstable, over-damped, exploded) or its status when it did not run."""
@@ -199,6 +204,9 @@ def stability_maps(results: pd.DataFrame, meta: dict) -> list[dict]:
             families.setdefault(info["family"], []).append((info.get("parameter"), name, info))
     maps = []
     for family, members in families.items():
+        names = [m[1] for m in members]
+        if not has_stability(results[results["scenario"].isin(names)]):
+            continue  # a family without stability classes is a scaling family (scaling_charts)
         members.sort(key=lambda m: m[0])
         columns = []  # (scenario, dt, parameter text, dt text)
         for parameter, name, info in members:
@@ -223,6 +231,41 @@ def stability_maps(results: pd.DataFrame, meta: dict) -> list[dict]:
         maps.append(dict(name=family, parameter_name=parameter_name, description=description, columns=columns,
                          rows=rows, groups=[(f"{p:g}", sum(1 for c in columns if c[0] == n)) for p, n, _ in members]))
     return maps
+
+
+def scaling_charts(results: pd.DataFrame, meta: dict) -> list[dict]:
+    """For families that vary a count (particles-scaling): body- or particle-steps/s against the
+    count on log-log axes, one curve per engine/variant, with the memory-bandwidth roofline when
+    the metadata carries one."""
+    families = {}
+    for name, info in meta.get("scenarios", {}).items():
+        if info.get("family"):
+            families.setdefault(info["family"], []).append((info.get("parameter"), name, info))
+    charts = []
+    for family, members in families.items():
+        names = [m[1] for m in members]
+        rows = results[results["scenario"].isin(names)]
+        if has_stability(rows):
+            continue  # a stability map
+        parameter = {name: value for value, name, _ in members}
+        fig = go.Figure()
+        for label, curve in rows[rows["body_steps_per_s"].notna()].groupby("label", sort=False):
+            counts = curve["scenario"].map(parameter)
+            order = counts.argsort()
+            fig.add_trace(go.Scatter(x=counts.iloc[order], y=curve["body_steps_per_s"].iloc[order],
+                                     mode="lines+markers", name=label))
+        if not fig.data:
+            continue
+        parameter_name = members[0][2].get("parameter_name", "count")
+        fig.update_layout(title=f"{family}: throughput against {parameter_name}", xaxis_title=parameter_name,
+                          yaxis_title="particle- (or body-) steps/s, median")
+        fig.update_xaxes(type="log", exponentformat="power")
+        fig.update_yaxes(type="log", exponentformat="power")
+        skipped = [f"{r['label']} at {parameter[r['scenario']]:g}: {r['message']}"
+                   for _, r in rows.iterrows() if r["status"] == "unsupported"]
+        charts.append(dict(name=family, chart=figure_html(fig), question=members[0][2].get("question", ""),
+                           skipped=skipped))
+    return charts
 
 
 TEMPLATE = jinja2.Template("""<!doctype html>
@@ -277,6 +320,12 @@ system lost over half its energy; exploded: the state became non-finite or ran a
 <tr><th class="l">engine/variant \\ dt (s)</th>{% for c in f.columns %}<th>{{ c[3] }}</th>{% endfor %}</tr>
 {% for r in f.rows %}<tr><td class="l">{{ r.label }}</td>{% for text, css in r.cells %}<td class="{{ css }}">{{ text }}</td>{% endfor %}</tr>{% endfor %}
 </table></section>{% endfor %}
+
+{% for f in scaling %}<section><h2>Scaling: {{ f.name }}</h2>
+<p><em>{{ f.question }}</em></p>
+{{ f.chart | safe }}
+{% if f.skipped %}<p class="note">Not run: {% for u in f.skipped %}<br>{{ u }}{% endfor %}</p>{% endif %}
+</section>{% endfor %}
 
 <section><h2>Engine settings</h2>
 <p class="note">Every setting an adapter changes from its engine's defaults, as the adapter states it.</p>
@@ -345,6 +394,7 @@ def build_report(folder: Path) -> Path:
             unsupported=[f"{r['label']}: {r['message']}" for _, r in own.iterrows() if r["status"] == "unsupported"]))
 
     families = stability_maps(results, meta)
+    scaling = scaling_charts(results, meta)
 
     engines = []
     for name, info in meta.get("engines", {}).items():
@@ -352,7 +402,8 @@ def build_report(folder: Path) -> Path:
         engines.append(dict(name=name, version=info.get("version", ""), variants=variants))
 
     page = TEMPLATE.render(meta=meta, plotlyjs=plotly.offline.get_plotlyjs(), summary_columns=summary_columns,
-                           summary_rows=summary_rows, scenarios=scenarios, families=families, engines=engines)
+                           summary_rows=summary_rows, scenarios=scenarios, families=families, scaling=scaling,
+                           engines=engines)
     out = folder / "index.html"
     partial = folder / "index.html.partial"
     partial.write_text(page, encoding="utf-8")

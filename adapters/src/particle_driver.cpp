@@ -14,7 +14,8 @@ rtp::ParticleSystemDef particle_system_def(const Scene& scene) {
   def.drag = p.drag;
   def.wind = p.wind;
   def.wind_jitter = p.wind_jitter;
-  for (const ParticleAttractor& a : p.attractors) def.attractors.push_back({a.position, a.strength});
+  for (const ParticleAttractor& a : p.attractors)
+    def.attractors.push_back({a.position, a.strength});
   def.softening = p.softening;
   for (const ParticlePlaneSpec& plane : p.planes) def.planes.push_back({plane.point, plane.normal});
   def.restitution = p.restitution;
@@ -24,7 +25,8 @@ rtp::ParticleSystemDef particle_system_def(const Scene& scene) {
   return def;
 }
 
-ParticleDriver::ParticleDriver(const Scene& scene) : def_(particle_system_def(scene)), mass_(scene.particles->mass) {
+ParticleDriver::ParticleDriver(const Scene& scene)
+    : def_(particle_system_def(scene)), mass_(scene.particles->mass) {
   wind_.resize(def_.count);
   for (std::size_t i = 0; i < def_.count; ++i) wind_[i] = rtp::particle_spawn(def_, i, 0).wind;
   if (def_.lifetime > 0.0) {
@@ -33,7 +35,8 @@ ParticleDriver::ParticleDriver(const Scene& scene) : def_(particle_system_def(sc
   }
 }
 
-void ParticleDriver::age(double dt, const std::function<void(long, const rtp::ParticleSpawn&)>& respawn) {
+void ParticleDriver::age(double dt,
+                         const std::function<void(long, const rtp::ParticleSpawn&)>& respawn) {
   for (std::size_t i = 0; i < age_.size(); ++i) {
     age_[i] += dt;
     if (age_[i] >= def_.lifetime) {

@@ -407,13 +407,31 @@ const std::vector<Scenario>& scenarios() {
                    particles_orbit_scene, standard_dt_sweep()});
     all.push_back({"particles-attractors",
                    "how many particle-steps per second, in the seed's attractor mode?",
-                   [] { return particles_attractors_scene(); }});
+                   [] { return particles_attractors_scene(10000); }});
     all.push_back({"particles-snow",
                    "how many particle-steps per second with ageing and recycling (snow)?",
-                   [] { return particles_snow_scene(); }});
+                   [] { return particles_snow_scene(10000); }});
     all.push_back({"particles-plume",
                    "how many particle-steps per second in the seed's plume mode?",
-                   [] { return particles_plume_scene(); }});
+                   [] { return particles_plume_scene(10000); }});
+    // particle throughput against count: the seed's attractor mode at 10^4 … 4·10^6 particles
+    for (long count : {10000L, 100000L, 1000000L, 4000000L}) {
+      Scenario s;
+      s.name = "particles-scaling-" + std::to_string(count);
+      s.question =
+          "how many particle-steps per second at this count, against the memory-bandwidth "
+          "roofline?";
+      s.build = [count] {
+        Scene scene = particles_attractors_scene(count);
+        scene.name = "particles-scaling-" + std::to_string(count);
+        scene.duration = 0.1;  // six steps: enough to time, short enough for Bullet at 10^5
+        return scene;
+      };
+      s.family = "particles-scaling";
+      s.parameter_name = "particles";
+      s.parameter = static_cast<double>(count);
+      all.push_back(s);
+    }
     // the stiff-spring stability map: k × dt, every engine and variant
     for (double k : {1e2, 1e3, 1e4, 1e5, 1e6}) {
       Scenario s;

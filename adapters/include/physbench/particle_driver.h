@@ -11,6 +11,10 @@
 
 namespace physbench {
 
+// peers run particle sets up to this size: beyond it a rigid-body engine's run of a seed scene
+// takes minutes (Bullet steps about 3e5 particle-steps/s at 1e5 particles, PEERS.md)
+inline constexpr long kMaxPeerParticles = 100000;
+
 // the scene's particle set as rtp's definition (integrator and threads left at their defaults)
 rtp::ParticleSystemDef particle_system_def(const Scene& scene);
 
