@@ -166,6 +166,41 @@ TEST(SceneJson, MissingFileIsNamed) {
       SceneError);
 }
 
+TEST(SceneJson, ParticlesRoundTripAndBadFieldsAreNamed) {
+  Scene scene;
+  scene.name = "particles";
+  scene.dt = 0.01;
+  scene.duration = 1.0;
+  ParticleSetSpec p;
+  p.count = 100;
+  p.spawn_min = Vec3(-1, 0, -1);
+  p.spawn_max = Vec3(1, 2, 1);
+  p.attractors = {{Vec3(0, 1, 0), 5.0}};
+  p.planes = {{Vec3::Zero(), Vec3::UnitY()}};
+  p.lifetime = 2.0;
+  p.seed = 42;
+  p.probe = {0, 99};
+  scene.particles = p;
+  scene.probe.metrics = {};
+  const json doc = to_json(scene);
+  EXPECT_EQ(to_json(scene_from_json(doc)), doc);
+  EXPECT_EQ(scene.probed_bodies(), (std::vector<int>{0, 99}));  // particles follow the (no) bodies
+
+  json bad = doc;
+  bad["particles"]["planes"][0]["normal"] = json::array({0.0, 2.0, 0.0});
+  EXPECT_NE(error_for(bad).find("particles.planes[0].normal: must be a unit vector"),
+            std::string::npos)
+      << error_for(bad);
+  bad = doc;
+  bad["particles"]["probe"] = json::array({100});
+  EXPECT_NE(error_for(bad).find("particles.probe[0]: no particle 100"), std::string::npos)
+      << error_for(bad);
+  bad = doc;
+  bad["particles"]["friction"] = 1.5;
+  EXPECT_NE(error_for(bad).find("particles.friction: must be <= 1"), std::string::npos)
+      << error_for(bad);
+}
+
 TEST(Scene, BoxInertiaMatchesTheClosedForm) {
   Shape box;
   box.half_extents = Vec3(0.5, 2.0, 4.5);  // a 1 x 4 x 9 box

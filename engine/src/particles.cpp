@@ -195,24 +195,35 @@ void midpoint_finish(std::size_t n, float dt, float* __restrict x, float* __rest
   }
 }
 
-// one plane against one block: a particle that crossed is reflected out, its penetration scaled
-// by the restitution (exact for straight-line motion near the plane, and no sinking), its
-// normal velocity reversed and scaled by the restitution, its tangential velocity reduced by
-// the friction. Written as selects, not branches, so it vectorises.
-void collide(std::size_t n, float nx, float ny, float nz, float offset, float restitution,
-             float keep_tangential, float* __restrict x, float* __restrict y, float* __restrict z,
-             float* __restrict vx, float* __restrict vy, float* __restrict vz) {
+// One plane against one block. A particle found below the plane at the end of a step crossed it
+// τ = depth / vₙ ago (straight-line estimate). It is bounced as if at the crossing: its normal
+// speed at impact, vₙ + gₙτ with gₙ the pull of gravity into the plane, is reversed and scaled by
+// the restitution, then it climbs against gravity for τ. Reflecting the end-of-step speed instead
+// hands every bounce the (1 + e) gₙ τ it gained below the plane: apexes came out 7 % high at
+// dt = 1/120. Its tangential velocity loses the friction fraction; it never ends below the plane.
+// Written as selects, not branches, so it vectorises.
+void collide(std::size_t n, float nx, float ny, float nz, float offset, float gravity_into_plane,
+             float restitution, float keep_tangential, float* __restrict x, float* __restrict y,
+             float* __restrict z, float* __restrict vx, float* __restrict vy,
+             float* __restrict vz) {
+  const float gn = gravity_into_plane;
   for (std::size_t j = 0; j < n; ++j) {
     const float depth = x[j] * nx + y[j] * ny + z[j] * nz - offset;
-    const float out = -(1.0f + restitution) * std::min(depth, 0.0f);
-    x[j] += out * nx;
-    y[j] += out * ny;
-    z[j] += out * nz;
     const float vn = vx[j] * nx + vy[j] * ny + vz[j] * nz;
-    // on a hit: v = keep (v − vn n) − e vn n = keep v − (keep + e) vn n; else unchanged
-    const float hit = static_cast<float>((depth < 0.0f) & (vn < 0.0f));
-    const float keep = 1.0f + hit * (keep_tangential - 1.0f);
-    const float normal = -hit * (restitution + keep_tangential) * vn;
+    const bool hit = (depth < 0.0f) & (vn < 0.0f);
+    const float tau = hit ? depth / vn : 0.0f;           // s since the crossing
+    const float impact = std::min(vn + gn * tau, 0.0f);  // normal velocity at the crossing
+    const float rise = -restitution * impact;            // normal speed off the plane
+    const float height = std::max(rise * tau - 0.5f * gn * tau * tau, 0.0f);
+    const float after = height > 0.0f ? rise - gn * tau : std::max(rise - gn * tau, 0.0f);
+    // a particle below the plane but moving out of it is only lifted back to the surface
+    const float lift = hit ? height - depth : std::max(-depth, 0.0f);
+    x[j] += lift * nx;
+    y[j] += lift * ny;
+    z[j] += lift * nz;
+    const float keep = hit ? keep_tangential : 1.0f;
+    const float normal =
+        hit ? after - keep_tangential * vn : 0.0f;  // v = keep (v − vn n) + after n
     vx[j] = keep * vx[j] + normal * nx;
     vy[j] = keep * vy[j] + normal * ny;
     vz[j] = keep * vz[j] + normal * nz;
@@ -255,8 +266,8 @@ void ParticleSystem::update_range(std::size_t begin, std::size_t end, float dt) 
 
     for (const ParticlePlane& plane : def_.planes)
       collide(n, float(plane.normal.x()), float(plane.normal.y()), float(plane.normal.z()),
-              float(plane.point.dot(plane.normal)), restitution, keep_tangential, x, y, z, vx, vy,
-              vz);
+              float(plane.point.dot(plane.normal)), float(-def_.gravity.dot(plane.normal)),
+              restitution, keep_tangential, x, y, z, vx, vy, vz);
   }
 }
 

@@ -82,6 +82,42 @@ void expect_native_spring_holds_but_damps(const std::string& engine, const std::
       << engine << "/" << variant;
 }
 
+// the apex heights of particles-bounce after each impact, from the probed particle's samples
+std::vector<double> bounce_apexes(const std::string& engine, const std::string& variant) {
+  const Trajectory run = measure(engine, variant, particles_bounce_scene()).run.trajectory;
+  std::vector<double> apexes;
+  for (std::size_t k = 1; k < run.samples.size(); ++k)
+    if (run.samples[k - 1].bodies[0].linear_velocity.y() > 0.0 &&
+        run.samples[k].bodies[0].linear_velocity.y() <= 0.0)
+      apexes.push_back(run.samples[k].bodies[0].position.y());
+  return apexes;
+}
+
+// every engine starts the same particles: the shared driver reproduces rtp's emitter
+void expect_same_particle_starts_as_rtp(const std::string& engine, const std::string& variant) {
+  const Scene scene = particles_attractors_scene(1000);
+  SimulateOptions options;
+  options.timing_budget = 0.0;
+  const RunResult peer = simulate(physbench::testing::engine(engine), variant, scene, options);
+  const RunResult ours = simulate(rtp_engine_info(), "midpoint", scene, options);
+  ASSERT_EQ(peer.status, Status::Ok) << peer.message;
+  const Sample& a = peer.trajectory.samples.front();
+  const Sample& b = ours.trajectory.samples.front();
+  ASSERT_EQ(a.bodies.size(), 4u);
+  for (std::size_t i = 0; i < a.bodies.size(); ++i) {
+    EXPECT_LT((a.bodies[i].position - b.bodies[i].position).norm(), 1e-5)
+        << engine << " particle " << i;
+    EXPECT_LT((a.bodies[i].linear_velocity - b.bodies[i].linear_velocity).norm(), 1e-5) << engine;
+  }
+}
+
+TEST(Rtp, ParticleBounceApexesFollowRestitution) {
+  const std::vector<double> apexes = bounce_apexes("rtp", "midpoint");
+  ASSERT_GE(apexes.size(), 2u);
+  EXPECT_NEAR(apexes[0], 0.64, 0.03);
+  EXPECT_NEAR(apexes[1], 0.4096, 0.03);
+}
+
 TEST(Rtp, ImpulsesLand) { expect_impulses_land("rtp", "rk4", false, 1e-9); }
 
 TEST(Rtp, ReadsBackTheInitialState) { expect_initial_state_read_back("rtp", "rk4", false, 1e-12); }
@@ -112,6 +148,7 @@ TEST(Bullet, SpringsMatchRtpSemiImplicitEuler) {
   expect_same_spring_trajectory_as_rtp("bullet", "float", "euler", spring_oscillator_scene(), 1e-5);
 }
 TEST(Bullet, ImpulsesLand) { expect_impulses_land("bullet", "float", false, 0.02); }
+TEST(Bullet, ParticlesStartWhereRtpsDo) { expect_same_particle_starts_as_rtp("bullet", "float"); }
 TEST(Bullet, ProjectileShowsSemiImplicitEuler) {
   expect_semi_implicit_signature("bullet", "float", false, 1e-4);
 }
@@ -140,6 +177,14 @@ TEST(Ode, JointVariantOnlyAppliesToSpringScenes) {
   EXPECT_TRUE(ode.applies(spring_oscillator_scene(), "step-joint"));
   EXPECT_TRUE(ode.applies(projectile_scene(), "step"));
 }
+TEST(Ode, ParticleBounceApexesFollowRestitution) {
+  // e = 0.8 from 1 m: apexes 0.64, 0.41 m (centre of a 1 cm sphere: + 0.01 m at most)
+  const std::vector<double> apexes = bounce_apexes("ode", "step");
+  ASSERT_GE(apexes.size(), 2u);
+  EXPECT_NEAR(apexes[0], 0.64, 0.03);
+  EXPECT_NEAR(apexes[1], 0.4096, 0.03);
+}
+TEST(Ode, ParticlesStartWhereRtpsDo) { expect_same_particle_starts_as_rtp("ode", "quickstep"); }
 TEST(Ode, ProjectileShowsSemiImplicitEuler) {
   expect_semi_implicit_signature("ode", "step", false, 1e-9);
 }
