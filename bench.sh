@@ -1,7 +1,8 @@
 #!/usr/bin/env bash
 # The main job: builds the bench preset (release, native instruction set), runs the default
-# suite on every engine, and writes results/<timestamp>/ with results.csv, trajectories/,
-# scenes/, metadata.json and index.html.
+# suite on every engine, runs the particle benchmark against the memory roofline, and writes
+# results/<timestamp>/ with results.csv, trajectories/, scenes/, metadata.json, benchmarks/ and
+# index.html.
 #   ./bench.sh                         the default suite
 #   ./bench.sh -s tumbling-box -e rtp  any `physbench run` options pass through
 set -euo pipefail
@@ -11,5 +12,8 @@ cmake --preset bench
 cmake --build --preset bench
 out="results/$(date +%Y%m%d-%H%M%S)"
 build/bench/harness/physbench run --out "$out" "$@"
+# the particle update against the memory roofline, measured in the same session (Google Benchmark)
+mkdir -p "$out/benchmarks"
+build/bench/bench/particles_bench --benchmark_out="$out/benchmarks/particles.json" --benchmark_out_format=json
 .venv/bin/python reports/build_report.py "$out"
 echo "bench: open $out/index.html"

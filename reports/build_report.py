@@ -233,7 +233,32 @@ def stability_maps(results: pd.DataFrame, meta: dict) -> list[dict]:
     return maps
 
 
-def scaling_charts(results: pd.DataFrame, meta: dict) -> list[dict]:
+def particle_benchmark(folder: Path) -> dict | None:
+    """The Google Benchmark run of the particle update, if bench.sh wrote one: the triad's bytes/s
+    per thread count, and per (particles, threads) the particle-steps/s and roofline fraction."""
+    path = folder / "benchmarks" / "particles.json"
+    if not path.is_file():
+        return None
+    try:
+        runs = json.loads(path.read_text()).get("benchmarks", [])
+    except json.JSONDecodeError as exc:
+        raise ReportError(f"{path}: not valid JSON: {exc}") from exc
+    triad, rows = {}, []
+    for run in runs:
+        if run.get("run_type") != "iteration":
+            continue
+        name = run.get("name", "")
+        if name.startswith("Triad/"):
+            triad[int(run["threads"])] = run["bytes_per_second"]
+        elif name.startswith("ParticleUpdate/"):
+            fields = dict(part.split(":") for part in name.split("/")[1:] if ":" in part)
+            rows.append(dict(particles=int(fields["particles"]), threads=int(fields["threads"]),
+                             steps=run["items_per_second"], bytes_per_step=run["bytes_per_particle_step"],
+                             fraction=run.get("roofline_fraction")))
+    return dict(triad=triad, rows=rows) if rows else None
+
+
+def scaling_charts(results: pd.DataFrame, meta: dict, benchmark: dict | None = None) -> list[dict]:
     """For families that vary a count (particles-scaling): body- or particle-steps/s against the
     count on log-log axes, one curve per engine/variant, with the memory-bandwidth roofline when
     the metadata carries one."""
@@ -256,6 +281,18 @@ def scaling_charts(results: pd.DataFrame, meta: dict) -> list[dict]:
                                      mode="lines+markers", name=label))
         if not fig.data:
             continue
+        if benchmark and family == "particles-scaling":
+            counts = sorted(parameter.values())
+            for threads, bandwidth in sorted(benchmark["triad"].items()):
+                roof = bandwidth / benchmark["rows"][0]["bytes_per_step"]
+                fig.add_trace(go.Scatter(x=[counts[0], counts[-1]], y=[roof, roof], mode="lines",
+                                         name=f"roofline, {threads} thread(s): triad / bytes per particle-step",
+                                         line=dict(dash="dot", color="black" if threads == 1 else "grey")))
+            for threads in sorted({r["threads"] for r in benchmark["rows"]}):
+                points = sorted((r["particles"], r["steps"]) for r in benchmark["rows"] if r["threads"] == threads)
+                fig.add_trace(go.Scatter(x=[p for p, _ in points], y=[v for _, v in points], mode="markers",
+                                         marker=dict(symbol="x", size=10),
+                                         name=f"rtp midpoint, Google Benchmark, {threads} thread(s)"))
         parameter_name = members[0][2].get("parameter_name", "count")
         fig.update_layout(title=f"{family}: throughput against {parameter_name}", xaxis_title=parameter_name,
                           yaxis_title="particle- (or body-) steps/s, median")
@@ -325,6 +362,12 @@ system lost over half its energy; exploded: the state became non-finite or ran a
 <p><em>{{ f.question }}</em></p>
 {{ f.chart | safe }}
 {% if f.skipped %}<p class="note">Not run: {% for u in f.skipped %}<br>{{ u }}{% endfor %}</p>{% endif %}
+{% if benchmark and f.name == "particles-scaling" %}
+<table><tr><th class="l" colspan="5">rtp particle update (midpoint, attractor mode), Google Benchmark, same session</th></tr>
+<tr><th>particles</th><th>threads</th><th>particle-steps/s</th><th>bytes per particle-step</th><th>fraction of the triad roofline</th></tr>
+{% for r in benchmark.rows %}<tr><td>{{ r.particles }}</td><td>{{ r.threads }}</td><td>{{ "%.3g" % r.steps }}</td>
+<td>{{ r.bytes_per_step }}</td><td>{{ "%.2f" % r.fraction if r.fraction is not none else "" }}</td></tr>{% endfor %}
+</table>{% endif %}
 </section>{% endfor %}
 
 <section><h2>Engine settings</h2>
@@ -394,7 +437,8 @@ def build_report(folder: Path) -> Path:
             unsupported=[f"{r['label']}: {r['message']}" for _, r in own.iterrows() if r["status"] == "unsupported"]))
 
     families = stability_maps(results, meta)
-    scaling = scaling_charts(results, meta)
+    benchmark = particle_benchmark(folder)
+    scaling = scaling_charts(results, meta, benchmark)
 
     engines = []
     for name, info in meta.get("engines", {}).items():
@@ -403,7 +447,7 @@ def build_report(folder: Path) -> Path:
 
     page = TEMPLATE.render(meta=meta, plotlyjs=plotly.offline.get_plotlyjs(), summary_columns=summary_columns,
                            summary_rows=summary_rows, scenarios=scenarios, families=families, scaling=scaling,
-                           engines=engines)
+                           benchmark=benchmark, engines=engines)
     out = folder / "index.html"
     partial = folder / "index.html.partial"
     partial.write_text(page, encoding="utf-8")

@@ -1,6 +1,7 @@
 """The report builder on a real results folder written by physbench."""
 from __future__ import annotations
 
+import json
 import os
 import re
 import shutil
@@ -124,3 +125,22 @@ def test_stability_map_classifies_every_run_of_a_family(tmp_path):
     # midpoint cannot hold k = 1e4 at dt = 1/30: its cell says so
     midpoint = table.split("rtp/midpoint")[1].split("</tr>")[0]
     assert "exploded" in midpoint or "unstable" in midpoint
+
+
+def test_particle_benchmark_roofline_reaches_the_scaling_chart(tmp_path):
+    if not PHYSBENCH:
+        pytest.skip("PHYSBENCH_EXE is not set (CTest sets it)")
+    out = tmp_path / "r"
+    subprocess.run([PHYSBENCH, "run", "-s", "particles-scaling-10000,particles-scaling-100000", "-e", "rtp",
+                    "--budget", "0", "--out", str(out)], check=True, capture_output=True)
+    # the shape Google Benchmark's JSON reporter writes, for one triad and one particle run
+    (out / "benchmarks").mkdir()
+    (out / "benchmarks" / "particles.json").write_text(json.dumps({"benchmarks": [
+        {"name": "Triad/1/real_time", "run_type": "iteration", "threads": 1, "bytes_per_second": 3.0e10},
+        {"name": "ParticleUpdate/particles:100000/threads:1/real_time", "run_type": "iteration",
+         "items_per_second": 5.0e7, "bytes_per_particle_step": 60, "roofline_fraction": 0.1},
+    ]}))
+    page = build_report.build_report(out).read_text()
+    assert "Scaling: particles-scaling" in page
+    assert "roofline, 1 thread(s)" in page
+    assert "<td>100000</td><td>1</td><td>5e+07</td>" in page

@@ -1,0 +1,103 @@
+// The particle update against the memory roofline, in one run: a STREAM-style triad measures
+// what one core (and both) can move, then the seed's attractor mode is timed at 10^4 … 4·10^6
+// particles. Counters: particle-steps/s (items), bytes/s of particle state moved, and the
+// fraction of the triad's bandwidth that is (roofline_fraction, same thread count).
+//
+//   build/bench/bench/particles_bench --benchmark_out=particles.json --benchmark_out_format=json
+#include <benchmark/benchmark.h>
+
+#include <rtp/particles.h>
+
+#include <map>
+#include <vector>
+
+namespace {
+
+// bytes/s measured by the triad, per thread count, filled before the particle benchmarks run
+std::map<int, double> triad_bandwidth;
+
+// STREAM triad a = b + s c over 3 × 256 MiB / 3 of doubles, split across the given threads
+void Triad(benchmark::State& state) {
+  const int threads = static_cast<int>(state.range(0));
+  const std::size_t n = (256u << 20) / sizeof(double) / 3;
+  std::vector<double> a(n), b(n, 1.0), c(n, 2.0);
+  const double s = 3.0;
+  for (auto _ : state) {
+#pragma omp parallel for num_threads(threads) schedule(static)
+    for (std::size_t i = 0; i < n; ++i) a[i] = b[i] + s * c[i];
+    benchmark::DoNotOptimize(a.data());
+    benchmark::ClobberMemory();
+  }
+  const double bytes = 3.0 * sizeof(double) * static_cast<double>(n);
+  state.SetBytesProcessed(static_cast<int64_t>(bytes * static_cast<double>(state.iterations())));
+  state.counters["threads"] = threads;
+}
+
+rtp::ParticleSystemDef attractor_mode(std::size_t count, int threads) {
+  // the particles-attractors scene (validation/src/scenarios.cpp) as rtp's definition
+  rtp::ParticleSystemDef def;
+  def.count = count;
+  def.spawn_min = rtp::Vec3(-3, 2, -3);
+  def.spawn_max = rtp::Vec3(3, 5, 3);
+  def.velocity_min = rtp::Vec3(-1, -1, -1);
+  def.velocity_max = rtp::Vec3(1, 1, 1);
+  def.drag = 0.1;
+  def.attractors = {{rtp::Vec3(-2, 3, 0), 20.0}, {rtp::Vec3(2, 3, 1), 15.0}, {rtp::Vec3(0, 4, -2), -10.0}};
+  def.softening = 0.2;
+  def.planes = {{rtp::Vec3::Zero(), rtp::Vec3(0.25, 1.0, 0.0).normalized()},
+                {rtp::Vec3::Zero(), rtp::Vec3(-0.25, 1.0, 0.1).normalized()},
+                {rtp::Vec3::Zero(), rtp::Vec3(0.0, 1.0, -0.25).normalized()}};
+  def.restitution = 0.6;
+  def.friction = 0.1;
+  def.integrator = rtp::ParticleIntegrator::Midpoint;
+  def.threads = threads;
+  return def;
+}
+
+void ParticleUpdate(benchmark::State& state) {
+  const auto count = static_cast<std::size_t>(state.range(0));
+  const int threads = static_cast<int>(state.range(1));
+  rtp::ParticleSystem particles(attractor_mode(count, threads));
+  particles.step(1.0 / 60.0);  // warm-up outside the timed loop
+  for (auto _ : state) particles.step(1.0 / 60.0);
+  const double steps = static_cast<double>(state.iterations()) * static_cast<double>(count);
+  const double bytes = steps * static_cast<double>(particles.bytes_per_particle_step());
+  state.SetItemsProcessed(static_cast<int64_t>(steps));
+  state.SetBytesProcessed(static_cast<int64_t>(bytes));
+  state.counters["bytes_per_particle_step"] = static_cast<double>(particles.bytes_per_particle_step());
+  if (triad_bandwidth.count(threads))
+    state.counters["roofline_fraction"] = benchmark::Counter(bytes / triad_bandwidth[threads], benchmark::Counter::kIsRate);
+}
+
+// records the triad's bytes/s so the particle benchmarks can state their fraction of it
+class TriadCapture : public benchmark::ConsoleReporter {
+ public:
+  void ReportRuns(const std::vector<Run>& runs) override {
+    for (const Run& run : runs)
+      if (run.benchmark_name().rfind("Triad", 0) == 0 && run.run_type == Run::RT_Iteration)
+        triad_bandwidth[static_cast<int>(run.counters.at("threads").value)] =
+            run.counters.at("bytes_per_second").value;
+    ConsoleReporter::ReportRuns(runs);
+  }
+};
+
+}  // namespace
+
+BENCHMARK(Triad)->Arg(1)->Arg(2)->Unit(benchmark::kMillisecond)->UseRealTime();
+BENCHMARK(ParticleUpdate)
+    ->ArgsProduct({{10000, 100000, 1000000, 4000000}, {1, 2}})
+    ->ArgNames({"particles", "threads"})
+    ->Unit(benchmark::kMillisecond)
+    ->UseRealTime();
+
+int main(int argc, char** argv) {
+  benchmark::Initialize(&argc, argv);
+  if (benchmark::ReportUnrecognizedArguments(argc, argv)) return 1;
+  benchmark::AddCustomContext("particle_integrator", "midpoint");
+  benchmark::AddCustomContext("scene", "particles-attractors (3 attractors, 3 planes, drag)");
+  // the triad first, on its own, so its bandwidth is known when the particle runs report
+  TriadCapture console;
+  benchmark::RunSpecifiedBenchmarks(&console);
+  benchmark::Shutdown();
+  return 0;
+}
