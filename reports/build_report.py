@@ -190,6 +190,15 @@ def speed_error(rows: pd.DataFrame, floors: dict[float, float] | None = None) ->
     return figure_html(fig), table
 
 
+def families_of(meta: dict) -> dict[str, list[tuple]]:
+    """Scenario families from the metadata: family -> [(parameter, scenario, info), ...]."""
+    families: dict[str, list[tuple]] = {}
+    for name, info in meta.get("scenarios", {}).items():
+        if info.get("family"):
+            families.setdefault(info["family"], []).append((info.get("parameter"), name, info))
+    return families
+
+
 def has_stability(rows: pd.DataFrame) -> bool:
     """Whether any of these rows carries a stability class (empty cells read back as NaN)."""
     return "stability" in rows and rows["stability"].notna().any()
@@ -198,10 +207,7 @@ def has_stability(rows: pd.DataFrame) -> bool:
 def stability_maps(results: pd.DataFrame, meta: dict) -> list[dict]:
     """One table per scenario family: engine/variant against (parameter, dt), each cell the run's
     stability class (stable, unstable, over-damped, exploded) or its status when it did not run."""
-    families = {}
-    for name, info in meta.get("scenarios", {}).items():
-        if info.get("family"):
-            families.setdefault(info["family"], []).append((info.get("parameter"), name, info))
+    families = families_of(meta)
     maps = []
     for family, members in families.items():
         names = [m[1] for m in members]
@@ -262,10 +268,7 @@ def scaling_charts(results: pd.DataFrame, meta: dict, benchmark: dict | None = N
     """For families that vary a count (particles-scaling): body- or particle-steps/s against the
     count on log-log axes, one curve per engine/variant, with the memory-bandwidth roofline when
     the metadata carries one."""
-    families = {}
-    for name, info in meta.get("scenarios", {}).items():
-        if info.get("family"):
-            families.setdefault(info["family"], []).append((info.get("parameter"), name, info))
+    families = families_of(meta)
     charts = []
     for family, members in families.items():
         names = [m[1] for m in members]

@@ -159,8 +159,8 @@ void World::normalise_orientations() {
   for (BodyState& s : states_) s.orientation.normalize();
 }
 
-void World::integrate_semi_implicit_euler(double dt) {
-  // momenta from the forces at the start of the step
+void World::kick_and_translate(double dt) {
+  // momenta from the forces at the start of the step, then positions from the new velocities
   evaluate(states_, k1_);
   for (std::size_t i = 0; i < states_.size(); ++i) {
     BodyState& s = states_[i];
@@ -168,10 +168,18 @@ void World::integrate_semi_implicit_euler(double dt) {
     if (m.inverse_mass == 0.0) continue;
     s.linear_momentum += dt * k1_[i].force;
     s.angular_momentum += dt * k1_[i].torque;
-    // positions from the new velocities; the orientation turns by the exponential map, a rotation
-    // of |ω| dt about ω, which is exact for a fixed axis where q += ½ ω q dt is not
     s.position += dt * derived_velocity(s, m);
-    const Vec3 w = derived_angular_velocity(s, m);
+  }
+}
+
+void World::integrate_semi_implicit_euler(double dt) {
+  kick_and_translate(dt);
+  // the orientation turns by the exponential map, a rotation of |ω| dt about the new ω, which is
+  // exact for a fixed axis where q += ½ ω q dt is not
+  for (std::size_t i = 0; i < states_.size(); ++i) {
+    BodyState& s = states_[i];
+    if (masses_[i].inverse_mass == 0.0) continue;
+    const Vec3 w = derived_angular_velocity(s, masses_[i]);
     const double angle = w.norm() * dt;
     if (angle > 0.0) s.orientation = Quat(Eigen::AngleAxisd(angle, w / w.norm())) * s.orientation;
   }
@@ -179,15 +187,11 @@ void World::integrate_semi_implicit_euler(double dt) {
 }
 
 void World::integrate_symplectic(double dt) {
-  // kick: momenta from the forces at the start of the step
-  evaluate(states_, k1_);
+  kick_and_translate(dt);
   for (std::size_t i = 0; i < states_.size(); ++i) {
     BodyState& s = states_[i];
     const BodyMass& m = masses_[i];
     if (m.inverse_mass == 0.0) continue;
-    s.linear_momentum += dt * k1_[i].force;
-    s.angular_momentum += dt * k1_[i].torque;
-    s.position += dt * derived_velocity(s, m);
     // drift: the torque-free rotation H = Σ Lᵢ² / 2Iᵢ split into one rotation about each principal
     // axis, composed symmetrically X(h/2) Y(h/2) Z(h) Y(h/2) X(h/2). Each part is exact: the body
     // turns about body axis i by θ = h Lᵢ / Iᵢ while the body-frame momentum turns by −θ, so the

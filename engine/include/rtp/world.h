@@ -108,6 +108,9 @@ class World {
  private:
   // time derivative of every body's state, forces re-evaluated from that state
   void evaluate(const std::vector<BodyState>& states, std::vector<BodyRate>& rates) const;
+  // the first half of both Euler-type integrators: momenta by the forces, positions by the new
+  // velocities
+  void kick_and_translate(double dt);
   void integrate_semi_implicit_euler(double dt);
   void integrate_midpoint(double dt);
   void integrate_runge_kutta4(double dt);
