@@ -5,7 +5,6 @@
 //
 //   build/bench/bench/particles_bench --benchmark_out=particles.json --benchmark_out_format=json
 #include <benchmark/benchmark.h>
-
 #include <rtp/particles.h>
 
 #include <map>
@@ -42,7 +41,8 @@ rtp::ParticleSystemDef attractor_mode(std::size_t count, int threads) {
   def.velocity_min = rtp::Vec3(-1, -1, -1);
   def.velocity_max = rtp::Vec3(1, 1, 1);
   def.drag = 0.1;
-  def.attractors = {{rtp::Vec3(-2, 3, 0), 20.0}, {rtp::Vec3(2, 3, 1), 15.0}, {rtp::Vec3(0, 4, -2), -10.0}};
+  def.attractors = {
+      {rtp::Vec3(-2, 3, 0), 20.0}, {rtp::Vec3(2, 3, 1), 15.0}, {rtp::Vec3(0, 4, -2), -10.0}};
   def.softening = 0.2;
   def.planes = {{rtp::Vec3::Zero(), rtp::Vec3(0.25, 1.0, 0.0).normalized()},
                 {rtp::Vec3::Zero(), rtp::Vec3(-0.25, 1.0, 0.1).normalized()},
@@ -64,9 +64,11 @@ void ParticleUpdate(benchmark::State& state) {
   const double bytes = steps * static_cast<double>(particles.bytes_per_particle_step());
   state.SetItemsProcessed(static_cast<int64_t>(steps));
   state.SetBytesProcessed(static_cast<int64_t>(bytes));
-  state.counters["bytes_per_particle_step"] = static_cast<double>(particles.bytes_per_particle_step());
+  state.counters["bytes_per_particle_step"] =
+      static_cast<double>(particles.bytes_per_particle_step());
   if (triad_bandwidth.count(threads))
-    state.counters["roofline_fraction"] = benchmark::Counter(bytes / triad_bandwidth[threads], benchmark::Counter::kIsRate);
+    state.counters["roofline_fraction"] =
+        benchmark::Counter(bytes / triad_bandwidth[threads], benchmark::Counter::kIsRate);
 }
 
 // records the triad's bytes/s so the particle benchmarks can state their fraction of it

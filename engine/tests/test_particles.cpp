@@ -25,7 +25,8 @@ TEST(Particles, BounceApexHeightsFallAsRestitutionSquared) {
   ParticleSystemDef def = one_particle(Vec3(0, 1, 0), Vec3::Zero());
   def.planes = {rtp::ParticlePlane{}};
   def.restitution = 0.8;
-  def.integrator = ParticleIntegrator::Midpoint;  // exact in free flight: what is left is the bounce
+  def.integrator =
+      ParticleIntegrator::Midpoint;  // exact in free flight: what is left is the bounce
   ParticleSystem particles(def);
   std::vector<double> apexes;
   double previous_vy = 0.0;

@@ -3,8 +3,9 @@
 // particles. Gravity is left to the engine; collisions with the planes are the engine's own.
 #pragma once
 
-#include <functional>
 #include <rtp/particles.h>
+
+#include <functional>
 #include <vector>
 
 #include "physbench/scene.h"
@@ -24,8 +25,11 @@ class ParticleDriver {
 
   long count() const { return static_cast<long>(wind_.size()); }
   // where particle i starts
-  rtp::ParticleSpawn start(long i) const { return rtp::particle_spawn(def_, static_cast<std::size_t>(i), 0); }
-  // drag toward the particle's wind and the attractors, as a force on a particle of the scene's mass (N)
+  rtp::ParticleSpawn start(long i) const {
+    return rtp::particle_spawn(def_, static_cast<std::size_t>(i), 0);
+  }
+  // drag toward the particle's wind and the attractors, as a force on a particle of the scene's
+  // mass (N)
   Vec3 force(long i, const Vec3& position, const Vec3& velocity) const {
     return mass_ * rtp::particle_acceleration(def_, position, velocity, wind_[i]);
   }
@@ -35,8 +39,8 @@ class ParticleDriver {
  private:
   rtp::ParticleSystemDef def_;
   double mass_;
-  std::vector<Vec3> wind_;    // each particle's wind, this generation (m/s)
-  std::vector<double> age_;   // s; empty when particles do not age
+  std::vector<Vec3> wind_;   // each particle's wind, this generation (m/s)
+  std::vector<double> age_;  // s; empty when particles do not age
   std::uint64_t recycled_ = 0;
 };
 

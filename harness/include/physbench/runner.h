@@ -26,11 +26,11 @@ struct RunOptions {
   std::vector<std::string>
       scenarios;  // names; empty: every built-in (unless scene files are given)
   std::vector<std::string> scene_files;
-  std::vector<std::string> engines;   // empty: every engine
-  std::vector<std::string> variants;  // empty: every variant
+  std::vector<std::string> engines;    // empty: every engine
+  std::vector<std::string> variants;   // empty: every variant
   std::optional<double> dt, duration;  // dt: one step for every scene, no sweep
-  std::vector<double> sweep_dt;        // steps to sweep every scene over; empty: each scenario's own
-  bool no_sweep = false;               // only each scene's own step
+  std::vector<double> sweep_dt;  // steps to sweep every scene over; empty: each scenario's own
+  bool no_sweep = false;         // only each scene's own step
   std::filesystem::path out;
   double timeout_seconds = 300.0;
   double timing_budget = 0.3;  // s of measured stepping per job

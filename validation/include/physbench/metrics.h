@@ -35,9 +35,10 @@ struct ErrorSummary {
 
 // How a conservative scene behaves, from its energy in play e(t) = 1 + energy change:
 // "unstable" when the second half of the run peaks more than twice as high as the first (the
-// energy grows) or e ever exceeds 20 (bounded only by something like a velocity clamp), "over-damped" when the second half stays under half the start although nothing
-// dissipates, else "stable" (a symplectic method's bounded wobble is stable). "" when the scene
-// has damping or no energy metric.
+// energy grows) or e ever exceeds 20 (bounded only by something like a velocity clamp),
+// "over-damped" when the second half stays under half the start although nothing dissipates, else
+// "stable" (a symplectic method's bounded wobble is stable). "" when the scene has damping or no
+// energy metric.
 std::string stability_of(const Scene& scene, const ErrorSeries& series);
 
 // reference may be null when the scene asks only for invariants; samples are matched by index
