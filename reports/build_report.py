@@ -103,6 +103,27 @@ def error_over_time(folder: Path, rows: pd.DataFrame, column: str, title: str, u
     return figure_html(fig)
 
 
+def error_by_body(folder: Path, rows: pd.DataFrame) -> str | None:
+    """Max position error of each probed body over the run, against its index: how error grows
+    along a chain. Only for scenes with more than one probed body and a reference."""
+    fig = go.Figure()
+    for _, row in rows.iterrows():
+        if not isinstance(row.get("trajectory"), str):
+            continue
+        traj = pd.read_csv(folder / row["trajectory"])
+        if "body_position_err" not in traj or traj["body"].nunique() < 2 or traj["body_position_err"].isna().all():
+            continue
+        per_body = traj.groupby("body", sort=True)["body_position_err"].max()
+        fig.add_trace(go.Scatter(x=per_body.index, y=per_body.clip(lower=1e-16).values, mode="lines+markers",
+                                 name=row["label"]))
+    if not fig.data:
+        return None
+    fig.update_layout(title="Max position error of each body (body index along the scene)",
+                      xaxis_title="body", yaxis_title="max position error (m)")
+    fig.update_yaxes(type="log", exponentformat="power")
+    return figure_html(fig)
+
+
 def throughput_chart(rows: pd.DataFrame) -> str | None:
     ok = rows[rows["steps_per_s"].notna()]
     if ok.empty:
@@ -416,6 +437,9 @@ def build_report(folder: Path) -> Path:
                 chart = error_over_time(folder, own, column, title, unit)
                 if chart:
                     charts.append(chart)
+        chart = error_by_body(folder, own)
+        if chart:
+            charts.append(chart)
         chart = throughput_chart(own)
         if chart:
             charts.append(chart)

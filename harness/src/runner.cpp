@@ -203,11 +203,13 @@ const std::vector<std::string> kColumns = {"scenario",
                                            "trajectory",
                                            "message"};
 
-void write_trajectory_csv(const fs::path& path, const Trajectory& run, const ErrorSeries& series) {
+// reference may be null; with one, each row also carries its own body's position error
+void write_trajectory_csv(const fs::path& path, const Trajectory& run, const ErrorSeries& series,
+                          const Trajectory* reference) {
   std::ofstream out(path);
   out << "time,body,px,py,pz,qw,qx,qy,qz,vx,vy,vz,wx,wy,wz,position_err,orientation_err,energy_"
          "drift,"
-         "linear_momentum_drift,angular_momentum_drift\n";
+         "linear_momentum_drift,angular_momentum_drift,body_position_err\n";
   auto at = [](const std::vector<double>& v, std::size_t k) {
     return k < v.size() ? number(v[k]) : std::string();
   };
@@ -227,7 +229,10 @@ void write_trajectory_csv(const fs::path& path, const Trajectory& run, const Err
       // the error series are per sample (worst body), repeated on each body's row
       out << ',' << at(series.position_error, k) << ',' << at(series.orientation_error, k) << ','
           << at_abs(series.energy_change, k) << ',' << at(series.linear_momentum_drift, k) << ','
-          << at(series.angular_momentum_drift, k) << '\n';
+          << at(series.angular_momentum_drift, k) << ',';
+      if (reference && k < reference->samples.size())
+        out << number((st.position - reference->samples[k].bodies[b].position).norm());
+      out << '\n';
     }
   }
 }
@@ -524,7 +529,7 @@ int run_suite(const RunOptions& options, const fs::path& self) {
             put("linear_momentum_drift", summary.linear_momentum, false);
             put("angular_momentum_drift", summary.angular_momentum, false);
             const fs::path trajectory = out / "trajectories" / (job + ".csv");
-            write_trajectory_csv(trajectory, r.trajectory, series);
+            write_trajectory_csv(trajectory, r.trajectory, series, against);
             row["trajectory"] = fs::relative(trajectory, out).string();
           } catch (const std::exception& e) {
             message += (message.empty() ? "" : "; ") + std::string("metrics failed: ") + e.what();

@@ -144,3 +144,17 @@ def test_particle_benchmark_roofline_reaches_the_scaling_chart(tmp_path):
     assert "Scaling: particles-scaling" in page
     assert "roofline, 1 thread(s)" in page
     assert "<td>100000</td><td>1</td><td>5e+07</td>" in page
+
+
+def test_chain_gets_an_error_per_body_chart(tmp_path):
+    if not PHYSBENCH:
+        pytest.skip("PHYSBENCH_EXE is not set (CTest sets it)")
+    out = tmp_path / "r"
+    subprocess.run([PHYSBENCH, "run", "-s", "spring-chain", "--no-sweep", "-e", "rtp", "--variant", "euler",
+                    "--budget", "0", "--out", str(out)], check=True, capture_output=True)
+    trajectory = pd.read_csv(next((out / "trajectories").glob("*.csv")))
+    errors = trajectory.groupby("body")["body_position_err"].max()
+    assert len(errors) == 8 and errors.notna().all()
+    # the worst body's error is the scenario's position error
+    assert errors.max() == pytest.approx(pd.read_csv(out / "results.csv")["position_err_max"].iloc[0], rel=1e-6)
+    assert "Max position error of each body" in build_report.build_report(out).read_text()
