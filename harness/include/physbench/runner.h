@@ -33,7 +33,7 @@ struct RunOptions {
   bool no_sweep = false;         // only each scene's own step
   std::filesystem::path out;
   double timeout_seconds = 300.0;
-  double timing_budget = 0.3;  // s of measured stepping per job
+  double timing_budget = 0.2;  // s of measured stepping per job
   std::string command_line;
 };
 
