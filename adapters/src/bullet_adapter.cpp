@@ -196,12 +196,7 @@ EngineInfo bullet_engine_info() {
                         const std::string& variant) -> std::optional<std::string> {
     if (variant != kVariant)
       return "this executable links Bullet's " + std::string(kVariant) + " build, not " + variant;
-    if (scene.particles && scene.particles->count > kMaxPeerParticles)
-      return "over " + std::to_string(kMaxPeerParticles) +
-             " particles a run of Bullet outlasts the harness's time budget: rtp alone runs larger "
-             "sets";
-    if (scene.particles && !scene.bodies.empty())
-      return "particles beside rigid bodies are not mapped onto Bullet yet";
+    if (auto why = peer_particles_unsupported(scene, "Bullet")) return why;
     if (scene.has_contacts())
       return "contact scenes are not mapped onto Bullet yet (the contact settings table is not "
              "written)";

@@ -213,12 +213,7 @@ EngineInfo ode_engine_info() {
   ensure_ode_initialised();
   info.version = std::string(PHYSBENCH_ODE_VERSION) + " (" + dGetConfiguration() + ")";
   info.unsupported = [](const Scene& scene, const std::string&) -> std::optional<std::string> {
-    if (scene.particles && scene.particles->count > kMaxPeerParticles)
-      return "over " + std::to_string(kMaxPeerParticles) +
-             " particles a run of ODE outlasts the harness's time budget: rtp alone runs larger "
-             "sets";
-    if (scene.particles && !scene.bodies.empty())
-      return "particles beside rigid bodies are not mapped onto ODE yet";
+    if (auto why = peer_particles_unsupported(scene, "ODE")) return why;
     if (scene.has_contacts())
       return "contact scenes are not mapped onto ODE yet (the contact settings table is not "
              "written)";

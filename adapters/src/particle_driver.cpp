@@ -2,6 +2,17 @@
 
 namespace physbench {
 
+std::optional<std::string> peer_particles_unsupported(const Scene& scene,
+                                                      const std::string& engine) {
+  if (!scene.particles) return std::nullopt;
+  if (scene.particles->count > kMaxPeerParticles)
+    return "over " + std::to_string(kMaxPeerParticles) + " particles a run of " + engine +
+           " outlasts the harness's time budget: rtp alone runs larger sets";
+  if (!scene.bodies.empty())
+    return "particles beside rigid bodies are not mapped onto " + engine + " yet";
+  return std::nullopt;
+}
+
 rtp::ParticleSystemDef particle_system_def(const Scene& scene) {
   const ParticleSetSpec& p = *scene.particles;
   rtp::ParticleSystemDef def;

@@ -1,6 +1,7 @@
 #include "rtp/world.h"
 
 #include <cassert>
+#include <chrono>
 #include <stdexcept>
 
 namespace rtp {

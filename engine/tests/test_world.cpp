@@ -25,6 +25,17 @@ void expect_finite(const World& world) {
   }
 }
 
+// largest |E − E0| / E0 of a world stepped for a duration
+double largest_energy_drift(World world, double dt, double duration) {
+  const double initial = world.mechanical_energy();
+  double worst = 0.0;
+  for (long i = 0; i < std::lround(duration / dt); ++i) {
+    world.step(dt);
+    worst = std::max(worst, std::abs(world.mechanical_energy() - initial) / initial);
+  }
+  return worst;
+}
+
 // a 1 kg mass on a k = 100 N/m spring from the origin, released 0.1 m out, no gravity:
 // x(t) = 0.1 cos(ω t), ω = 10 rad/s
 struct Oscillator {
@@ -54,16 +65,8 @@ struct Oscillator {
     return std::abs(world.state(0).position.x() - exact);
   }
 
-  // largest |E − E0| / E0 over the run
   static double energy_drift(Integrator integrator, double dt, double duration) {
-    World world = make(integrator);
-    const double initial = world.mechanical_energy();
-    double worst = 0.0;
-    for (long i = 0; i < std::lround(duration / dt); ++i) {
-      world.step(dt);
-      worst = std::max(worst, std::abs(world.mechanical_energy() - initial) / initial);
-    }
-    return worst;
+    return largest_energy_drift(make(integrator), dt, duration);
   }
 };
 
@@ -144,16 +147,8 @@ TEST(Integrators, TorqueFreeAngularMomentumIsConservedByEveryIntegrator) {
   }
 }
 
-// largest |E − E0| / E0 of the tumbling box over a run
 double tumbling_energy_drift(Integrator integrator, double dt, double duration) {
-  World world = tumbling(integrator);
-  const double initial = world.mechanical_energy();
-  double worst = 0.0;
-  for (long i = 0; i < std::lround(duration / dt); ++i) {
-    world.step(dt);
-    worst = std::max(worst, std::abs(world.mechanical_energy() - initial) / initial);
-  }
-  return worst;
+  return largest_energy_drift(tumbling(integrator), dt, duration);
 }
 
 TEST(Integrators, SymplecticSplittingKeepsFreeRotationEnergyBounded) {

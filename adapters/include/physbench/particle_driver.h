@@ -6,6 +6,8 @@
 #include <rtp/particles.h>
 
 #include <functional>
+#include <optional>
+#include <string>
 #include <vector>
 
 #include "physbench/scene.h"
@@ -15,6 +17,10 @@ namespace physbench {
 // peers run particle sets up to this size: beyond it a rigid-body engine's run of a seed scene
 // takes minutes (Bullet steps about 3e5 particle-steps/s at 1e5 particles, PEERS.md)
 inline constexpr long kMaxPeerParticles = 100000;
+
+// why a rigid-body engine cannot run this scene's particles, or nullopt when it can
+std::optional<std::string> peer_particles_unsupported(const Scene& scene,
+                                                      const std::string& engine);
 
 // the scene's particle set as rtp's definition (integrator and threads left at their defaults)
 rtp::ParticleSystemDef particle_system_def(const Scene& scene);

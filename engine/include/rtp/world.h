@@ -8,7 +8,6 @@
 // Based Modeling", SIGGRAPH 2001 course notes, §2; Fiedler, "Physics in 3D").
 #pragma once
 
-#include <chrono>
 #include <cstdint>
 #include <vector>
 
