@@ -282,7 +282,20 @@ def particle_benchmark(folder: Path) -> dict | None:
             rows.append(dict(particles=int(fields["particles"]), threads=int(fields["threads"]),
                              steps=run["items_per_second"], bytes_per_step=run["bytes_per_particle_step"],
                              fraction=run.get("roofline_fraction")))
-    return dict(triad=triad, rows=rows) if rows else None
+    return dict(triad=triad, rows=rows, at_60hz=particles_at_rate(rows, 60.0)) if rows else None
+
+
+def particles_at_rate(rows: list[dict], hz: float) -> list[dict]:
+    """How many particles one update holds at hz steps per second, per thread count: the largest
+    measured count's particle-steps/s divided by hz (throughput at large counts is flat, bound by
+    memory), with whether that count lies inside the measured range or beyond it."""
+    held = []
+    for threads in sorted({r["threads"] for r in rows}):
+        largest = max((r for r in rows if r["threads"] == threads), key=lambda r: r["particles"])
+        count = largest["steps"] / hz
+        held.append(dict(threads=threads, particles=count, measured_up_to=largest["particles"],
+                         extrapolated=count > largest["particles"]))
+    return held
 
 
 def scaling_charts(results: pd.DataFrame, meta: dict, benchmark: dict | None = None) -> list[dict]:
@@ -391,7 +404,10 @@ system lost over half its energy; exploded: the state became non-finite or ran a
 <tr><th>particles</th><th>threads</th><th>particle-steps/s</th><th>bytes per particle-step</th><th>fraction of the triad roofline</th></tr>
 {% for r in benchmark.rows %}<tr><td>{{ r.particles }}</td><td>{{ r.threads }}</td><td>{{ "%.3g" % r.steps }}</td>
 <td>{{ r.bytes_per_step }}</td><td>{{ "%.2f" % r.fraction if r.fraction is not none else "" }}</td></tr>{% endfor %}
-</table>{% endif %}
+</table>
+<p>At 60 Hz (16.7 ms per step) rtp's update holds {% for h in benchmark.at_60hz %}{{ "%.2g" % h.particles }} particles
+on {{ h.threads }} thread(s){{ " (extrapolated from " ~ h.measured_up_to ~ ", the largest count measured)" if h.extrapolated else "" }}{{ "; " if not loop.last else "." }}{% endfor %}
+The seed ran 200,000 at 60 FPS.</p>{% endif %}
 </section>{% endfor %}
 
 <section><h2>Engine settings</h2>

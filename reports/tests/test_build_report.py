@@ -144,6 +144,17 @@ def test_particle_benchmark_roofline_reaches_the_scaling_chart(tmp_path):
     assert "Scaling: particles-scaling" in page
     assert "roofline, 1 thread(s)" in page
     assert "<td>100000</td><td>1</td><td>5e+07</td>" in page
+    # 5e7 particle-steps/s at 60 steps/s: 8.3e5 particles, more than the 1e5 measured
+    assert "holds 8.3e+05 particles\non 1 thread(s) (extrapolated from 100000" in page
+
+
+def test_particles_at_rate_takes_the_largest_count_per_thread_count():
+    rows = [dict(particles=1000, threads=1, steps=1.0e8), dict(particles=4000000, threads=1, steps=6.0e7),
+            dict(particles=4000000, threads=2, steps=1.2e9)]
+    held = build_report.particles_at_rate(rows, 60.0)
+    assert [h["threads"] for h in held] == [1, 2]
+    assert held[0]["particles"] == pytest.approx(1.0e6) and not held[0]["extrapolated"]
+    assert held[1]["particles"] == pytest.approx(2.0e7) and held[1]["extrapolated"]
 
 
 def test_chain_gets_an_error_per_body_chart(tmp_path):
