@@ -8,7 +8,7 @@ root=$(cd "$(dirname "${BASH_SOURCE[0]}")/.." && pwd)
 
 packages=(
   build-essential cmake ninja-build pkg-config git
-  libeigen3-dev nlohmann-json3-dev libcli11-dev libgtest-dev libbenchmark-dev
+  libeigen3-dev libboost-dev nlohmann-json3-dev libcli11-dev libgtest-dev libbenchmark-dev
   libbullet-dev libode-dev libbox2d-dev libmujoco-dev libqhull-dev
   python3 python3-venv
 )

@@ -1,0 +1,457 @@
+#include "rtp/broadphase.h"
+
+#include <algorithm>
+#include <boost/sort/spreadsort/float_sort.hpp>
+#include <experimental/simd>
+#include <limits>
+#include <stdexcept>
+#include <string>
+#include <unordered_map>
+
+namespace rtp {
+
+Aabb bounds_of_points(const std::vector<Vec3>& body_vertices, const Vec3& position,
+                      const Quat& orientation) {
+  if (body_vertices.empty()) throw std::invalid_argument("rtp: bounds of no points");
+  const Mat3 rotation = orientation.toRotationMatrix();
+  Vec3 lo = Vec3::Constant(std::numeric_limits<double>::infinity()), hi = -lo;
+  for (const Vec3& v : body_vertices) {
+    const Vec3 world = position + rotation * v;
+    lo = lo.cwiseMin(world);
+    hi = hi.cwiseMax(world);
+  }
+  return {{float(lo.x()), float(lo.y()), float(lo.z())},
+          {float(hi.x()), float(hi.y()), float(hi.z())}};
+}
+
+Aabb bounds_of_box(const Vec3& half_extents, const Vec3& position, const Quat& orientation) {
+  // the world half extents of a rotated box: |R| h (Ericson §4.2.6)
+  const Vec3 extent = orientation.toRotationMatrix().cwiseAbs() * half_extents;
+  const Vec3 lo = position - extent, hi = position + extent;
+  return {{float(lo.x()), float(lo.y()), float(lo.z())},
+          {float(hi.x()), float(hi.y()), float(hi.z())}};
+}
+
+Aabb bounds_of_sphere(const Vec3& centre, double radius) {
+  return bounds_of_box(Vec3::Constant(radius), centre, Quat::Identity());
+}
+
+std::string_view name_of(BroadPhaseKind kind) {
+  switch (kind) {
+    case BroadPhaseKind::SeedSap:
+      return "seed-sap";
+    case BroadPhaseKind::IncrementalSap:
+      return "incremental-sap";
+    case BroadPhaseKind::BoxPruning:
+      return "box-pruning";
+  }
+  return "?";
+}
+
+std::vector<ProxyPair> brute_force_pairs(const std::vector<Aabb>& boxes,
+                                         const std::vector<bool>& alive) {
+  std::vector<ProxyPair> pairs;
+  const auto live = [&](std::size_t i) { return alive.empty() || alive[i]; };
+  for (std::size_t i = 0; i < boxes.size(); ++i)
+    for (std::size_t j = i + 1; j < boxes.size(); ++j)
+      if (live(i) && live(j) && overlaps(boxes[i], boxes[j]))
+        pairs.push_back({ProxyId(i), ProxyId(j)});
+  return pairs;
+}
+
+namespace {
+
+ProxyPair ordered(ProxyId a, ProxyId b) { return a < b ? ProxyPair{a, b} : ProxyPair{b, a}; }
+
+// Boxes by handle: bounds, whether live, and the handles free for reuse. Changes are recorded
+// here and applied by the variant's update().
+class ProxyStore : public BroadPhase {
+ public:
+  ProxyId allocate(const Aabb& box) {
+    ProxyId id;
+    if (!free_.empty()) {
+      id = free_.back();
+      free_.pop_back();
+      boxes_[id] = box;
+      alive_[id] = 1;
+    } else {
+      id = ProxyId(boxes_.size());
+      boxes_.push_back(box);
+      alive_.push_back(1);
+    }
+    added_.push_back(id);
+    return id;
+  }
+  void set(ProxyId id, const Aabb& box) {
+    check(id);
+    boxes_[id] = box;
+  }
+  void release(ProxyId id) {
+    check(id);
+    alive_[id] = 0;
+    removed_.push_back(id);
+  }
+  bool alive(ProxyId id) const { return alive_[id] != 0; }
+  const Aabb& box(ProxyId id) const { return boxes_[id]; }
+  std::size_t capacity() const { return boxes_.size(); }
+
+ protected:
+  void check(ProxyId id) const {
+    if (id >= boxes_.size() || !alive_[id])
+      throw std::out_of_range("rtp broad phase: no live box with handle " + std::to_string(id));
+  }
+  // handles of boxes removed since the last update become reusable only after it, so a pair
+  // with a removed box is never confused with its successor
+  void recycle_removed() {
+    free_.insert(free_.end(), removed_.begin(), removed_.end());
+    removed_.clear();
+  }
+
+  std::vector<Aabb> boxes_;
+  std::vector<std::uint8_t> alive_;
+  std::vector<ProxyId> free_, added_, removed_;
+};
+
+// A set of pairs with O(1) insertion and removal that lists as a dense array.
+class PairSet {
+ public:
+  void add(ProxyPair p) {
+    if (index_.try_emplace(key(p), std::uint32_t(pairs_.size())).second) pairs_.push_back(p);
+  }
+  void remove(ProxyPair p) {
+    const auto found = index_.find(key(p));
+    if (found == index_.end()) return;
+    const std::uint32_t slot = found->second;
+    index_.erase(found);
+    if (slot + 1 != pairs_.size()) {
+      pairs_[slot] = pairs_.back();
+      index_[key(pairs_[slot])] = slot;
+    }
+    pairs_.pop_back();
+  }
+  template <class Predicate>
+  void remove_if(Predicate dead) {
+    std::vector<ProxyPair> doomed;
+    for (const ProxyPair& p : pairs_)
+      if (dead(p)) doomed.push_back(p);
+    for (const ProxyPair& p : doomed) remove(p);
+  }
+  void clear() {
+    pairs_.clear();
+    index_.clear();
+  }
+  const std::vector<ProxyPair>& list() const { return pairs_; }
+
+ private:
+  static std::uint64_t key(ProxyPair p) { return std::uint64_t(p.a) << 32 | p.b; }
+  std::vector<ProxyPair> pairs_;
+  std::unordered_map<std::uint64_t, std::uint32_t> index_;
+};
+
+// one end of a box on one axis, 8 bytes: tag = handle · 2 + (1 for the max end)
+struct Endpoint {
+  float value;
+  std::uint32_t tag;
+  ProxyId id() const { return tag >> 1; }
+  bool is_max() const { return tag & 1u; }
+};
+
+// a min goes before a max of equal value: the sorted order then agrees with closed intervals
+bool precedes(const Endpoint& a, const Endpoint& b) {
+  return a.value < b.value || (a.value == b.value && !a.is_max() && b.is_max());
+}
+
+// Endpoints of every live box on three axes, kept sorted between updates. The insertion sort
+// is O(n + swaps), and with coherent motion swaps are few; each swap is reported to on_swap
+// (the endpoint moving down, the one it passes).
+class SortedAxes : public ProxyStore {
+ protected:
+  // applies removals and additions; returns true when so many boxes arrived that the axes were
+  // sorted from scratch (the caller then rebuilds what it derives from them)
+  bool apply_changes() {
+    bool rebuilt = false;
+    if (!removed_.empty()) {
+      for (auto& axis : axes_)
+        std::erase_if(axis, [&](const Endpoint& e) { return !alive(e.id()); });
+    }
+    if (!added_.empty()) {
+      // a few arrivals are inserted from the top by the next sort (each costs a pass over the
+      // axis); a batch is cheaper sorted from scratch
+      rebuilt = added_.size() > axes_[0].size() / 16;
+      for (int k = 0; k < 3; ++k)
+        for (ProxyId id : added_) {
+          if (!alive(id)) continue;  // added and removed before this update
+          axes_[k].push_back({boxes_[id].min[k], id << 1});
+          axes_[k].push_back({boxes_[id].max[k], id << 1 | 1u});
+        }
+      added_.clear();
+    }
+    refresh_values();
+    if (rebuilt)
+      for (auto& axis : axes_)
+        std::sort(axis.begin(), axis.end(), [](const Endpoint& a, const Endpoint& b) {
+          return precedes(a, b) || (!precedes(b, a) && a.tag < b.tag);
+        });
+    return rebuilt;
+  }
+
+  void refresh_values() {
+    for (int k = 0; k < 3; ++k)
+      for (Endpoint& e : axes_[k])
+        e.value = e.is_max() ? boxes_[e.id()].max[k] : boxes_[e.id()].min[k];
+  }
+
+  template <class OnSwap>
+  void insertion_sort(int k, OnSwap on_swap) {
+    std::vector<Endpoint>& axis = axes_[k];
+    for (std::size_t i = 1; i < axis.size(); ++i) {
+      const Endpoint moving = axis[i];
+      std::size_t j = i;
+      while (j > 0 && precedes(moving, axis[j - 1])) {
+        on_swap(moving, axis[j - 1]);
+        axis[j] = axis[j - 1];
+        --j;
+      }
+      axis[j] = moving;
+    }
+  }
+
+  std::array<std::vector<Endpoint>, 3> axes_;
+};
+
+// every pair overlapping on all three axes, by a sweep of one sorted axis keeping the boxes
+// open on it and testing the other two axes
+template <class Emit>
+void sweep_sorted_axis(const std::vector<Endpoint>& axis, const std::vector<Aabb>& boxes,
+                       std::vector<ProxyId>& open, std::vector<std::uint32_t>& slot, Emit emit) {
+  open.clear();
+  slot.resize(boxes.size());
+  for (const Endpoint& e : axis) {
+    const ProxyId id = e.id();
+    if (e.is_max()) {  // close: swap-remove from the open list
+      const std::uint32_t s = slot[id];
+      open[s] = open.back();
+      slot[open[s]] = s;
+      open.pop_back();
+      continue;
+    }
+    const Aabb& a = boxes[id];
+    for (ProxyId other : open) {
+      const Aabb& b = boxes[other];
+      if (a.min[1] <= b.max[1] && b.min[1] <= a.max[1] && a.min[2] <= b.max[2] &&
+          b.min[2] <= a.max[2])
+        emit(ordered(id, other));
+    }
+    slot[id] = std::uint32_t(open.size());
+    open.push_back(id);
+  }
+}
+
+// ---------------------------------------------------------------------------------------------
+// the seed's sweep and prune: a table counting the axes each pair overlaps on
+
+class SeedSap final : public SortedAxes {
+ public:
+  ProxyId add(const Aabb& box) override {
+    if (capacity() >= kSeedSapMaxProxies && free_.empty())
+      throw std::length_error("rtp seed-sap: its pair table takes n²/2 bytes; " +
+                              std::to_string(kSeedSapMaxProxies) +
+                              " boxes is its limit (use incremental-sap or box-pruning)");
+    return allocate(box);
+  }
+  void move(ProxyId id, const Aabb& box) override { set(id, box); }
+  void remove(ProxyId id) override { release(id); }
+  const std::vector<ProxyPair>& pairs() const override { return pairs_; }
+
+  void update() override {
+    if (!apply_changes())
+      for (int k = 0; k < 3; ++k) insertion_sort(k, [](const Endpoint&, const Endpoint&) {});
+    recycle_removed();
+    pairs_.clear();
+    const std::size_t n = capacity();
+    table_.resize(n * (n - (n > 0)) / 2);
+
+    // early exit: an axis with no overlapping intervals has no pairs
+    for (const auto& axis : axes_) {
+      std::size_t open = 0, overlaps_on_axis = 0;
+      for (const Endpoint& e : axis) {
+        if (e.is_max()) {
+          --open;
+        } else {
+          overlaps_on_axis += open;
+          ++open;
+        }
+      }
+      if (overlaps_on_axis == 0) return;
+    }
+    // count, per pair, the axes its intervals overlap on
+    for (const auto& axis : axes_) {
+      open_.clear();
+      slot_.resize(n);
+      for (const Endpoint& e : axis) {
+        const ProxyId id = e.id();
+        if (e.is_max()) {
+          const std::uint32_t s = slot_[id];
+          open_[s] = open_.back();
+          slot_[open_[s]] = s;
+          open_.pop_back();
+        } else {
+          for (ProxyId other : open_) ++table_[cell(ordered(id, other), n)];
+          slot_[id] = std::uint32_t(open_.size());
+          open_.push_back(id);
+        }
+      }
+    }
+    // the triangle: pairs counted on all three axes, each cell reset as it is read
+    std::size_t c = 0;
+    for (std::size_t i = 0; i + 1 < n; ++i)
+      for (std::size_t j = i + 1; j < n; ++j, ++c) {
+        if (table_[c] == 3) pairs_.push_back({ProxyId(i), ProxyId(j)});
+        table_[c] = 0;
+      }
+  }
+
+ private:
+  // row-major upper triangle without the diagonal
+  static std::size_t cell(ProxyPair p, std::size_t n) {
+    return p.a * (2 * n - p.a - 1) / 2 + (p.b - p.a - 1);
+  }
+
+  std::vector<std::uint8_t> table_;
+  std::vector<ProxyId> open_;
+  std::vector<std::uint32_t> slot_;
+  std::vector<ProxyPair> pairs_;
+};
+
+// ---------------------------------------------------------------------------------------------
+// incremental sweep and prune: pairs change only where a min and a max endpoint swap
+
+class IncrementalSap final : public SortedAxes {
+ public:
+  ProxyId add(const Aabb& box) override { return allocate(box); }
+  void move(ProxyId id, const Aabb& box) override { set(id, box); }
+  void remove(ProxyId id) override { release(id); }
+  const std::vector<ProxyPair>& pairs() const override { return pairs_.list(); }
+
+  void update() override {
+    if (!removed_.empty())
+      pairs_.remove_if([&](ProxyPair p) { return !alive(p.a) || !alive(p.b); });
+    if (apply_changes()) {
+      pairs_.clear();
+      sweep_sorted_axis(axes_[0], boxes_, open_, slot_, [&](ProxyPair p) { pairs_.add(p); });
+    } else {
+      // The endpoint moving down passes `other`. A min passing a max starts an overlap on this
+      // axis: the pair is added if the boxes now overlap on every axis (their bounds are final,
+      // so the test is exact whatever order the axes are sorted in). A max passing a min ends
+      // one: the pair goes. Each pair of endpoints swaps at most once per sort.
+      for (int k = 0; k < 3; ++k)
+        insertion_sort(k, [&](const Endpoint& moving, const Endpoint& other) {
+          if (moving.is_max() == other.is_max() || moving.id() == other.id()) return;
+          const ProxyPair pair = ordered(moving.id(), other.id());
+          if (moving.is_max())
+            pairs_.remove(pair);
+          else if (overlaps(boxes_[pair.a], boxes_[pair.b]))
+            pairs_.add(pair);
+        });
+    }
+    recycle_removed();
+  }
+
+ private:
+  PairSet pairs_;
+  std::vector<ProxyId> open_;
+  std::vector<std::uint32_t> slot_;
+};
+
+// ---------------------------------------------------------------------------------------------
+// box pruning: sort on x every update, sweep, and test y and z for a vector of boxes at a time
+
+class BoxPruning final : public ProxyStore {
+ public:
+  ProxyId add(const Aabb& box) override { return allocate(box); }
+  void move(ProxyId id, const Aabb& box) override { set(id, box); }
+  void remove(ProxyId id) override { release(id); }
+  const std::vector<ProxyPair>& pairs() const override { return pairs_; }
+
+  void update() override {
+    added_.clear();
+    recycle_removed();
+    pairs_.clear();
+    // the live boxes by min x: spreadsort, a radix-hybrid that sorts floats by their bits
+    order_.clear();
+    for (ProxyId id = 0; id < capacity(); ++id)
+      if (alive(id)) order_.push_back({boxes_[id].min[0], id});
+    boost::sort::spreadsort::float_sort(
+        order_.begin(), order_.end(),
+        [](const Keyed& k, unsigned offset) {
+          return boost::sort::spreadsort::float_mem_cast<float, int>(k.key) >> offset;
+        },
+        [](const Keyed& a, const Keyed& b) { return a.key < b.key; });
+
+    // sorted structure-of-arrays, padded by one vector of boxes that start at +∞ so the sweep
+    // needs no scalar tail
+    const std::size_t n = order_.size();
+    const std::size_t padded = n + Lanes::size();
+    for (auto* column : {&min_x_, &max_x_, &min_y_, &max_y_, &min_z_, &max_z_})
+      column->resize(padded);
+    ids_.resize(padded);
+    for (std::size_t i = 0; i < n; ++i) {
+      const Aabb& b = boxes_[order_[i].id];
+      min_x_[i] = b.min[0];
+      max_x_[i] = b.max[0];
+      min_y_[i] = b.min[1];
+      max_y_[i] = b.max[1];
+      min_z_[i] = b.min[2];
+      max_z_[i] = b.max[2];
+      ids_[i] = order_[i].id;
+    }
+    std::fill(min_x_.begin() + n, min_x_.end(), std::numeric_limits<float>::infinity());
+
+    // each box against the boxes after it that start before it ends on x
+    namespace stdx = std::experimental;
+    for (std::size_t i = 0; i < n; ++i) {
+      const float end_x = max_x_[i], lo_y = min_y_[i], hi_y = max_y_[i], lo_z = min_z_[i],
+                  hi_z = max_z_[i];
+      for (std::size_t j = i + 1;; j += Lanes::size()) {
+        const Lanes start_x(&min_x_[j], stdx::element_aligned);
+        const auto on_x = start_x <= end_x;
+        if (stdx::none_of(on_x)) break;
+        const auto hit = on_x && Lanes(&min_y_[j], stdx::element_aligned) <= hi_y &&
+                         Lanes(&max_y_[j], stdx::element_aligned) >= lo_y &&
+                         Lanes(&min_z_[j], stdx::element_aligned) <= hi_z &&
+                         Lanes(&max_z_[j], stdx::element_aligned) >= lo_z;
+        if (stdx::any_of(hit))
+          for (std::size_t l = 0; l < Lanes::size(); ++l)
+            if (hit[l]) pairs_.push_back(ordered(ids_[i], ids_[j + l]));
+        if (!stdx::all_of(on_x)) break;  // sorted: the boxes after these start later still
+      }
+    }
+  }
+
+ private:
+  using Lanes = std::experimental::native_simd<float>;
+  struct Keyed {
+    float key;
+    ProxyId id;
+  };
+  std::vector<Keyed> order_;
+  std::vector<float> min_x_, max_x_, min_y_, max_y_, min_z_, max_z_;
+  std::vector<ProxyId> ids_;
+  std::vector<ProxyPair> pairs_;
+};
+
+}  // namespace
+
+std::unique_ptr<BroadPhase> make_broad_phase(BroadPhaseKind kind) {
+  switch (kind) {
+    case BroadPhaseKind::SeedSap:
+      return std::make_unique<SeedSap>();
+    case BroadPhaseKind::IncrementalSap:
+      return std::make_unique<IncrementalSap>();
+    case BroadPhaseKind::BoxPruning:
+      return std::make_unique<BoxPruning>();
+  }
+  throw std::invalid_argument("rtp: unknown broad phase kind");
+}
+
+}  // namespace rtp
