@@ -1,0 +1,134 @@
+// The broadphase scene on every engine's broad phase (bench/README in docs/broadphase.md):
+// microseconds per update and pairs/s, with each engine's pair set checked against the exact one
+// on the frames before timing (missing pairs, extra pairs as counters), and the time to build
+// from scratch.
+//
+//   build/bench/bench/broadphase_bench --benchmark_out=broadphase.json --benchmark_out_format=json
+//   build/bench/bench/broadphase_bench --benchmark_filter='coherent/10000/'
+#include <benchmark/benchmark.h>
+#include <physbench/broadphase.h>
+
+namespace {
+
+using physbench::BroadphaseMotion;
+using physbench::BroadphaseScene;
+
+// frames checked against the exact pair set before the timed loop, per case
+constexpr int kCheckedFrames = 5;
+// the timed loop replays this many precomputed frames forward and back (still coherent), so
+// generating the motion is not timed
+constexpr int kTimedFrames = 32;
+
+std::string case_name(const BroadphaseScene& s) {
+  return (s.planar ? "planar-" : "") + physbench::name_of(s.motion) + "/" + std::to_string(s.count);
+}
+
+void Update(benchmark::State& state, const physbench::BroadphaseEntry& entry,
+            const BroadphaseScene& scene) {
+  physbench::BroadphaseFrames frames(scene);
+  auto engine = entry.create();
+  engine->build(frames.boxes());
+
+  // the pair set, against the exact one, frame by frame
+  double missing = 0, extra = 0, exact = 0;
+  for (int f = 0; f < kCheckedFrames; ++f) {
+    frames.advance();
+    engine->update(frames.boxes());
+    const auto agreement =
+        physbench::compare_pairs(engine->pairs(), physbench::exact_pairs(frames.boxes()));
+    missing += double(agreement.missing);
+    extra += double(agreement.extra);
+    exact += double(agreement.exact);
+  }
+
+  std::vector<std::vector<rtp::Aabb>> replay;
+  for (int f = 0; f < kTimedFrames; ++f) {
+    frames.advance();
+    replay.push_back(frames.boxes());
+  }
+  for (int f = kTimedFrames - 2; f > 0; --f) replay.push_back(replay[std::size_t(f)]);
+
+  std::size_t frame = 0, pairs = 0;
+  for (auto _ : state) {
+    pairs += engine->update(replay[frame]);
+    frame = (frame + 1) % replay.size();
+  }
+  state.SetItemsProcessed(int64_t(pairs));  // pairs/s
+  state.counters["boxes"] = double(scene.count);
+  state.counters["exact_pairs"] = exact / kCheckedFrames;
+  state.counters["missing_pairs"] = missing;  // over the checked frames: must be 0
+  state.counters["extra_pairs_fraction"] = exact > 0 ? extra / exact : 0.0;
+  state.counters["checked_frames"] = kCheckedFrames;
+}
+
+void Build(benchmark::State& state, const physbench::BroadphaseEntry& entry,
+           const BroadphaseScene& scene) {
+  const physbench::BroadphaseFrames frames(scene);
+  for (auto _ : state) {
+    auto engine = entry.create();
+    engine->build(frames.boxes());
+    state.PauseTiming();  // tearing down is not building
+    engine.reset();
+    state.ResumeTiming();
+  }
+  state.counters["boxes"] = double(scene.count);
+}
+
+BroadphaseScene scene_of(BroadphaseMotion motion, std::size_t count, bool planar = false) {
+  BroadphaseScene s;
+  s.motion = motion;
+  s.count = count;
+  s.planar = planar;
+  return s;
+}
+
+}  // namespace
+
+int main(int argc, char** argv) {
+  benchmark::Initialize(&argc, argv);
+  if (benchmark::ReportUnrecognizedArguments(argc, argv)) return 1;
+
+  // the default suite: coherent motion over the counts, then the hard cases at fixed counts
+  std::vector<BroadphaseScene> updates;
+  for (std::size_t n : {1000, 10000, 50000, 100000})
+    updates.push_back(scene_of(BroadphaseMotion::Coherent, n));
+  updates.push_back(scene_of(BroadphaseMotion::Reshuffled, 10000));
+  updates.push_back(scene_of(BroadphaseMotion::Line, 10000));
+  updates.push_back(scene_of(BroadphaseMotion::AllOverlapping, 1000));
+  updates.push_back(scene_of(BroadphaseMotion::Coherent, 10000, /*planar=*/true));
+  const BroadphaseScene build = scene_of(BroadphaseMotion::Coherent, 50000);
+
+  const std::vector<physbench::BroadphaseEntry> entries = physbench::broadphase_engines();
+  for (const auto& scene : updates)
+    for (const auto& entry : entries) {
+      if (auto why = entry.unsupported(scene)) {
+        // visible in the output, so a missing engine is never silent
+        std::fprintf(stderr, "broadphase_bench: %s on %s: %s\n", entry.name.c_str(),
+                     case_name(scene).c_str(), why->c_str());
+        continue;
+      }
+      benchmark::RegisterBenchmark(("Update/" + case_name(scene) + "/" + entry.name).c_str(),
+                                   Update, entry, scene)
+          ->Unit(benchmark::kMicrosecond)
+          ->UseRealTime()
+          ->MinTime(0.1)
+          ->Repetitions(3)
+          ->ReportAggregatesOnly(true);
+    }
+  for (const auto& entry : entries)
+    if (!entry.unsupported(build))
+      benchmark::RegisterBenchmark(("Build/" + case_name(build) + "/" + entry.name).c_str(), Build,
+                                   entry, build)
+          ->Unit(benchmark::kMillisecond)
+          ->UseRealTime()
+          ->MinTime(0.1);
+
+  for (const auto& entry : entries) {
+    std::string settings;
+    for (const auto& s : entry.settings) settings += s.name + "=" + s.value + " (" + s.why + "); ";
+    benchmark::AddCustomContext("settings " + entry.name, entry.version + "; " + settings);
+  }
+  benchmark::RunSpecifiedBenchmarks();
+  benchmark::Shutdown();
+  return 0;
+}
