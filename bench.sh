@@ -15,5 +15,7 @@ build/bench/harness/physbench run --out "$out" "$@"
 # the particle update against the memory roofline, measured in the same session (Google Benchmark)
 mkdir -p "$out/benchmarks"
 build/bench/bench/particles_bench --benchmark_out="$out/benchmarks/particles.json" --benchmark_out_format=json
+# every engine's broad phase on the broadphase scene, pair sets checked (Google Benchmark)
+build/bench/bench/broadphase_bench --benchmark_out="$out/benchmarks/broadphase.json" --benchmark_out_format=json
 .venv/bin/python reports/build_report.py "$out"
 echo "bench: open $out/index.html"

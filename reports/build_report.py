@@ -298,6 +298,65 @@ def particles_at_rate(rows: list[dict], hz: float) -> list[dict]:
     return held
 
 
+def broadphase_benchmark(folder: Path) -> dict | None:
+    """The broadphase benchmark (bench/broadphase_bench.cpp), if bench.sh wrote one: per case
+    (motion and box count) and engine, the median µs per update with its spread over repetitions,
+    pairs/s and the pair-set agreement; per engine, the time to build from scratch; and the
+    chart of µs per update against the box count for coherent motion."""
+    path = folder / "benchmarks" / "broadphase.json"
+    if not path.is_file():
+        return None
+    try:
+        runs = json.loads(path.read_text()).get("benchmarks", [])
+    except json.JSONDecodeError as exc:
+        raise ReportError(f"{path}: not valid JSON: {exc}") from exc
+    updates: dict[tuple, dict] = {}
+    builds = []
+    for run in runs:
+        parts = run.get("run_name", run.get("name", "")).split("/")
+        if len(parts) < 5:
+            continue
+        kind, motion, count, engine = parts[0], parts[1], int(parts[2]), "/".join(parts[3:5])
+        scale = {"ns": 1e-3, "us": 1.0, "ms": 1e3, "s": 1e6}[run.get("time_unit", "us")]
+        if kind == "Build" and run.get("run_type") == "iteration":
+            builds.append(dict(engine=engine, boxes=count, ms=run["real_time"] * scale / 1e3))
+        elif kind == "Update":
+            row = updates.setdefault((motion, count, engine), dict(motion=motion, boxes=count, engine=engine))
+            aggregate = run.get("aggregate_name") if run.get("run_type") == "aggregate" else "median"
+            if aggregate == "median":
+                row.update(us=run["real_time"] * scale, pairs_per_s=run.get("items_per_second"),
+                           exact=run.get("exact_pairs"), missing=run.get("missing_pairs"),
+                           extra=run.get("extra_pairs_fraction"))
+            elif aggregate == "cv":
+                row["cv"] = run["real_time"]
+    if not updates:
+        return None
+    rows = sorted(updates.values(), key=lambda r: (r["motion"], r["boxes"], r.get("us", 0.0)))
+    # each case's fastest peer, and how many times faster rtp's best variant is
+    for motion, count in {(r["motion"], r["boxes"]) for r in rows}:
+        case = [r for r in rows if (r["motion"], r["boxes"]) == (motion, count) and "us" in r]
+        peers = [r["us"] for r in case if not r["engine"].startswith("rtp/")]
+        ours = [r["us"] for r in case if r["engine"].startswith("rtp/")]
+        for r in case:
+            r["vs_best_peer"] = min(peers) / r["us"] if peers and r["engine"].startswith("rtp/") else None
+        if peers and ours:
+            for r in case:
+                r["best"] = r["us"] == min(ours) or r["us"] == min(peers)
+    fig = go.Figure()
+    coherent = [r for r in rows if r["motion"] == "coherent" and "us" in r]
+    for engine in dict.fromkeys(r["engine"] for r in coherent):
+        points = sorted((r["boxes"], r["us"]) for r in coherent if r["engine"] == engine)
+        fig.add_trace(go.Scatter(x=[p for p, _ in points], y=[u for _, u in points], mode="lines+markers",
+                                 name=engine))
+    fig.update_layout(title="broadphase, coherent motion: time per update against box count",
+                      xaxis_title="boxes", yaxis_title="µs per update, median of 3 repetitions")
+    fig.update_xaxes(type="log", exponentformat="power")
+    fig.update_yaxes(type="log", exponentformat="power")
+    context = json.loads(path.read_text()).get("context", {})
+    settings = {k.removeprefix("settings "): v for k, v in context.items() if k.startswith("settings ")}
+    return dict(rows=rows, builds=builds, settings=settings, chart=figure_html(fig) if fig.data else "")
+
+
 def scaling_charts(results: pd.DataFrame, meta: dict, benchmark: dict | None = None) -> list[dict]:
     """For families that vary a count (particles-scaling): body- or particle-steps/s against the
     count on log-log axes, one curve per engine/variant, with the memory-bandwidth roofline when
@@ -410,6 +469,26 @@ on {{ h.threads }} thread(s){{ " (extrapolated from " ~ h.measured_up_to ~ ", th
 The seed ran 200,000 at 60 FPS.</p>{% endif %}
 </section>{% endfor %}
 
+{% if broadphase %}<section><h2>Broad phase</h2>
+<p><em>Which pairs of N moving unit boxes overlap, and how fast does each engine's broad phase say so? Only the
+broad phase runs in every engine; each pair set is compared with the exact one on the frames before timing
+(a missing pair is a failure; extra pairs come from fattened bounds). bench/broadphase_bench.cpp, same session.</em></p>
+{{ broadphase.chart | safe }}
+<table><tr><th class="l">motion</th><th>boxes</th><th class="l">engine</th><th>µs per update (median)</th><th>cv %</th>
+<th>pairs/s</th><th>exact pairs</th><th>missing</th><th>extra (fraction of exact)</th><th>best peer ÷ this</th></tr>
+{% for r in broadphase.rows %}<tr><td class="l">{{ r.motion }}</td><td>{{ r.boxes }}</td><td class="l">{{ "<b>"|safe if r.best }}{{ r.engine }}{{ "</b>"|safe if r.best }}</td>
+<td>{{ "%.4g" % r.us if r.us is defined }}</td><td>{{ "%.2g" % r.cv if r.cv is defined }}</td><td>{{ "%.3g" % r.pairs_per_s if r.pairs_per_s }}</td>
+<td>{{ "%.0f" % r.exact if r.exact is not none }}</td><td>{{ "%.0f" % r.missing if r.missing is not none }}</td>
+<td>{{ "%.3f" % r.extra if r.extra is not none }}</td><td>{{ "%.1f×" % r.vs_best_peer if r.vs_best_peer }}</td></tr>{% endfor %}
+</table>
+{% if broadphase.builds %}<table><tr><th class="l">build from scratch</th><th>boxes</th><th>ms</th></tr>
+{% for b in broadphase.builds %}<tr><td class="l">{{ b.engine }}</td><td>{{ b.boxes }}</td><td>{{ "%.3g" % b.ms }}</td></tr>{% endfor %}
+</table>{% endif %}
+<table><tr><th class="l">broad phase</th><th class="l">version and settings (setting=value (why))</th></tr>
+{% for name, text in broadphase.settings.items() %}<tr><td class="l">{{ name }}</td><td class="l">{{ text }}</td></tr>{% endfor %}
+</table>
+</section>{% endif %}
+
 <section><h2>Engine settings</h2>
 <p class="note">Every setting an adapter changes from its engine's defaults, as the adapter states it.</p>
 {% for e in engines %}<h3>{{ e.name }} <small>{{ e.version }}</small></h3>
@@ -490,7 +569,7 @@ def build_report(folder: Path) -> Path:
 
     page = TEMPLATE.render(meta=meta, plotlyjs=plotly.offline.get_plotlyjs(), summary_columns=summary_columns,
                            summary_rows=summary_rows, scenarios=scenarios, families=families, scaling=scaling,
-                           benchmark=benchmark, engines=engines)
+                           benchmark=benchmark, broadphase=broadphase_benchmark(folder), engines=engines)
     out = folder / "index.html"
     partial = folder / "index.html.partial"
     partial.write_text(page, encoding="utf-8")

@@ -148,6 +148,38 @@ def test_particle_benchmark_roofline_reaches_the_scaling_chart(tmp_path):
     assert "holds 8.3e+05 particles\non 1 thread(s) (extrapolated from 100000" in page
 
 
+def test_broadphase_benchmark_reaches_the_report(tmp_path):
+    if not PHYSBENCH:
+        pytest.skip("PHYSBENCH_EXE is not set (CTest sets it)")
+    out = tmp_path / "r"
+    subprocess.run([PHYSBENCH, "run", "-s", "projectile", "-e", "rtp", "--no-sweep", "--budget", "0",
+                    "--out", str(out)], check=True, capture_output=True)
+    (out / "benchmarks").mkdir()
+
+    def update(engine, boxes, aggregate, real_time, **counters):
+        return dict(name=f"Update/coherent/{boxes}/{engine}/real_time_{aggregate}", run_type="aggregate",
+                    run_name=f"Update/coherent/{boxes}/{engine}/min_time:0.100/repeats:3/real_time",
+                    aggregate_name=aggregate, real_time=real_time, time_unit="us", **counters)
+
+    counters = dict(items_per_second=1e6, exact_pairs=500, missing_pairs=0, extra_pairs_fraction=0.3)
+    (out / "benchmarks" / "broadphase.json").write_text(json.dumps({
+        "context": {"settings bullet/dbvt": "3.24 (float); broadphase=btDbvtBroadphase (default)"},
+        "benchmarks": [
+            update("rtp/box-pruning", 1000, "median", 50.0, **counters),
+            update("rtp/box-pruning", 1000, "cv", 2.0),
+            update("bullet/dbvt", 1000, "median", 400.0, **counters),
+            {"name": "Build/coherent/50000/rtp/box-pruning/real_time", "run_type": "iteration",
+             "run_name": "Build/coherent/50000/rtp/box-pruning/min_time:0.100/real_time", "real_time": 12.5,
+             "time_unit": "ms"},
+        ]}))
+    page = build_report.build_report(out).read_text()
+    assert "<h2>Broad phase</h2>" in page
+    # rtp's row carries the ratio to the fastest peer of its case: 400 / 50
+    assert "8.0×" in page
+    assert "btDbvtBroadphase" in page
+    assert "<td>12.5</td>" in page
+
+
 def test_particles_at_rate_takes_the_largest_count_per_thread_count():
     rows = [dict(particles=1000, threads=1, steps=1.0e8), dict(particles=4000000, threads=1, steps=6.0e7),
             dict(particles=4000000, threads=2, steps=1.2e9)]
