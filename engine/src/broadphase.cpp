@@ -374,56 +374,103 @@ class BoxPruning final : public ProxyStore {
   const std::vector<ProxyPair>& pairs() const override { return pairs_; }
 
   void update() override {
+    // the previous update's order is kept while no box arrives or leaves: a coherent scene is
+    // then nearly sorted already
+    const bool same_boxes = added_.empty() && removed_.empty();
     added_.clear();
     recycle_removed();
     pairs_.clear();
-    // the live boxes by min x: spreadsort, a radix-hybrid that sorts floats by their bits
-    order_.clear();
-    for (ProxyId id = 0; id < capacity(); ++id)
-      if (alive(id)) order_.push_back({boxes_[id].min[0], id});
-    boost::sort::spreadsort::float_sort(
-        order_.begin(), order_.end(),
-        [](const Keyed& k, unsigned offset) {
-          return boost::sort::spreadsort::float_mem_cast<float, int>(k.key) >> offset;
-        },
-        [](const Keyed& a, const Keyed& b) { return a.key < b.key; });
-
-    // sorted structure-of-arrays, padded by one vector of boxes that start at +∞ so the sweep
-    // needs no scalar tail
-    const std::size_t n = order_.size();
-    const std::size_t padded = n + Lanes::size();
-    for (auto* column : {&min_x_, &max_x_, &min_y_, &max_y_, &min_z_, &max_z_})
-      column->resize(padded);
-    ids_.resize(padded);
-    for (std::size_t i = 0; i < n; ++i) {
-      const Aabb& b = boxes_[order_[i].id];
-      min_x_[i] = b.min[0];
-      max_x_[i] = b.max[0];
-      min_y_[i] = b.min[1];
-      max_y_[i] = b.max[1];
-      min_z_[i] = b.min[2];
-      max_z_[i] = b.max[2];
-      ids_[i] = order_[i].id;
+    float low_y = std::numeric_limits<float>::infinity(), high_y = -low_y;
+    double total_height = 0.0;
+    if (!same_boxes) {
+      order_.clear();
+      for (ProxyId id = 0; id < capacity(); ++id)
+        if (alive(id)) order_.push_back({0.0f, id});
     }
-    std::fill(min_x_.begin() + n, min_x_.end(), std::numeric_limits<float>::infinity());
+    for (Keyed& k : order_) {
+      const Aabb& b = boxes_[k.id];
+      k.key = b.min[0];
+      low_y = std::min(low_y, b.min[1]);
+      high_y = std::max(high_y, b.min[1]);
+      total_height += b.max[1] - b.min[1];
+    }
+    const std::size_t n = order_.size();
+    if (n == 0) return;
+    sort_on_x(same_boxes);
 
-    // each box against the boxes after it that start before it ends on x
+    // Buckets: slabs across y, each box in every slab its y interval touches, so a sweep on x
+    // meets only the boxes near it in y as well. Slabs are twice the mean box height (a box
+    // then sits in about 1.5 of them) and at most kMaxSlabs. A pair is reported only in the slab
+    // of the larger of its two min y — one slab, which both boxes are in — so never twice.
+    const double mean_height = total_height / double(n);
+    const double span = double(high_y) - double(low_y);
+    const std::size_t slabs =
+        mean_height > 0.0
+            ? std::clamp<std::size_t>(std::size_t(span / (2.0 * mean_height)), 1, kMaxSlabs)
+            : 1;
+    const float slab_height = slabs > 1 ? float(span / double(slabs)) : 1.0f;
+    // monotonic in y, so the slab of max(a, b) is the max of the slabs
+    const auto slab_of = [&](float y) {
+      if (slabs == 1) return std::size_t(0);
+      return std::min(slabs - 1, std::size_t(std::max(0.0f, (y - low_y) / slab_height)));
+    };
+
+    // each slab's members in x order (a stable pass over the sorted boxes), then one vector of
+    // boxes starting at +∞, so the sweep needs no scalar tail
+    first_.assign(slabs + 1, 0);
+    for (const Keyed& k : order_) {
+      const Aabb& b = boxes_[k.id];
+      for (std::size_t s = slab_of(b.min[1]), last = slab_of(b.max[1]); s <= last; ++s)
+        ++first_[s + 1];
+    }
+    for (std::size_t s = 0; s < slabs; ++s) first_[s + 1] += first_[s] + Lanes::size();
+    const std::size_t total = first_[slabs];
+    for (auto* column : {&min_x_, &max_x_, &min_y_, &max_y_, &min_z_, &max_z_, &home_})
+      column->resize(total);
+    ids_.resize(total);
+    fill_.assign(first_.begin(), first_.end() - 1);
+    for (const Keyed& k : order_) {
+      const Aabb& b = boxes_[k.id];
+      const std::size_t home = slab_of(b.min[1]);
+      for (std::size_t s = home, last = slab_of(b.max[1]); s <= last; ++s) {
+        const std::size_t i = fill_[s]++;
+        min_x_[i] = b.min[0];
+        max_x_[i] = b.max[0];
+        min_y_[i] = b.min[1];
+        max_y_[i] = b.max[1];
+        min_z_[i] = b.min[2];
+        max_z_[i] = b.max[2];
+        home_[i] = float(home);
+        ids_[i] = k.id;
+      }
+    }
+    for (std::size_t s = 0; s < slabs; ++s)
+      std::fill(min_x_.begin() + std::ptrdiff_t(fill_[s]),
+                min_x_.begin() + std::ptrdiff_t(first_[s + 1]),
+                std::numeric_limits<float>::infinity());
+
+    // in each slab, each box against the boxes after it that start before it ends on x
     namespace stdx = std::experimental;
-    for (std::size_t i = 0; i < n; ++i) {
-      const float end_x = max_x_[i], lo_y = min_y_[i], hi_y = max_y_[i], lo_z = min_z_[i],
-                  hi_z = max_z_[i];
-      for (std::size_t j = i + 1;; j += Lanes::size()) {
-        const Lanes start_x(&min_x_[j], stdx::element_aligned);
-        const auto on_x = start_x <= end_x;
-        if (stdx::none_of(on_x)) break;
-        const auto hit = on_x && Lanes(&min_y_[j], stdx::element_aligned) <= hi_y &&
-                         Lanes(&max_y_[j], stdx::element_aligned) >= lo_y &&
-                         Lanes(&min_z_[j], stdx::element_aligned) <= hi_z &&
-                         Lanes(&max_z_[j], stdx::element_aligned) >= lo_z;
-        if (stdx::any_of(hit))
-          for (std::size_t l = 0; l < Lanes::size(); ++l)
-            if (hit[l]) pairs_.push_back(ordered(ids_[i], ids_[j + l]));
-        if (!stdx::all_of(on_x)) break;  // sorted: the boxes after these start later still
+    for (std::size_t s = 0; s < slabs; ++s) {
+      const Lanes this_slab = Lanes(float(s));
+      for (std::size_t i = first_[s]; i < fill_[s]; ++i) {
+        const float end_x = max_x_[i], lo_y = min_y_[i], hi_y = max_y_[i], lo_z = min_z_[i],
+                    hi_z = max_z_[i], home = home_[i];
+        for (std::size_t j = i + 1;; j += Lanes::size()) {
+          const Lanes start_x(&min_x_[j], stdx::element_aligned);
+          const auto on_x = start_x <= end_x;
+          if (stdx::none_of(on_x)) break;
+          const auto hit =
+              on_x && Lanes(&min_y_[j], stdx::element_aligned) <= hi_y &&
+              Lanes(&max_y_[j], stdx::element_aligned) >= lo_y &&
+              Lanes(&min_z_[j], stdx::element_aligned) <= hi_z &&
+              Lanes(&max_z_[j], stdx::element_aligned) >= lo_z &&
+              stdx::max(Lanes(&home_[j], stdx::element_aligned), Lanes(home)) == this_slab;
+          if (stdx::any_of(hit))
+            for (std::size_t l = 0; l < Lanes::size(); ++l)
+              if (hit[l]) pairs_.push_back(ordered(ids_[i], ids_[j + l]));
+          if (!stdx::all_of(on_x)) break;  // sorted: the boxes after these start later still
+        }
       }
     }
   }
@@ -434,8 +481,37 @@ class BoxPruning final : public ProxyStore {
     float key;
     ProxyId id;
   };
+
+  // The boxes by min x. From the previous order, insertion sort is O(n + swaps): a coherent
+  // scene needs few. It gives up after kMaxSwapsPerBox · n swaps (a scene that is not coherent)
+  // and spreadsort, a radix-hybrid that sorts floats by their bits, sorts from scratch.
+  void sort_on_x(bool nearly_sorted) {
+    if (nearly_sorted) {
+      std::size_t swaps = 0;
+      const std::size_t budget = kMaxSwapsPerBox * order_.size();
+      for (std::size_t i = 1; i < order_.size() && swaps <= budget; ++i) {
+        const Keyed moving = order_[i];
+        std::size_t j = i;
+        for (; j > 0 && moving.key < order_[j - 1].key; --j) order_[j] = order_[j - 1];
+        order_[j] = moving;
+        swaps += i - j;
+      }
+      if (swaps <= budget) return;
+    }
+    boost::sort::spreadsort::float_sort(
+        order_.begin(), order_.end(),
+        [](const Keyed& k, unsigned offset) {
+          return boost::sort::spreadsort::float_mem_cast<float, int>(k.key) >> offset;
+        },
+        [](const Keyed& a, const Keyed& b) { return a.key < b.key; });
+  }
+  static constexpr std::size_t kMaxSwapsPerBox = 8;
   std::vector<Keyed> order_;
-  std::vector<float> min_x_, max_x_, min_y_, max_y_, min_z_, max_z_;
+  // at most this many slabs: beyond it the per-slab padding and bookkeeping outweigh the gain
+  static constexpr std::size_t kMaxSlabs = 256;
+  std::vector<std::size_t> first_, fill_;  // each slab's first entry, and one past its last
+  // the slabs' members, sorted on x within each slab; home = the slab of the box's min y
+  std::vector<float> min_x_, max_x_, min_y_, max_y_, min_z_, max_z_, home_;
   std::vector<ProxyId> ids_;
   std::vector<ProxyPair> pairs_;
 };
