@@ -166,7 +166,7 @@ def test_broadphase_benchmark_reaches_the_report(tmp_path):
         "context": {"settings bullet/dbvt": "3.24 (float); broadphase=btDbvtBroadphase (default)"},
         "benchmarks": [
             update("rtp/box-pruning", 1000, "median", 50.0, **counters),
-            update("rtp/box-pruning", 1000, "cv", 2.0),
+            update("rtp/box-pruning", 1000, "cv", 0.021),
             update("bullet/dbvt", 1000, "median", 400.0, **counters),
             {"name": "Build/coherent/50000/rtp/box-pruning/real_time", "run_type": "iteration",
              "run_name": "Build/coherent/50000/rtp/box-pruning/min_time:0.100/real_time", "real_time": 12.5,
@@ -176,6 +176,8 @@ def test_broadphase_benchmark_reaches_the_report(tmp_path):
     assert "<h2>Broad phase</h2>" in page
     # rtp's row carries the ratio to the fastest peer of its case: 400 / 50
     assert "8.0×" in page
+    # the coefficient of variation in percent
+    assert "<td>2.1</td>" in page
     assert "btDbvtBroadphase" in page
     assert "<td>12.5</td>" in page
 
