@@ -21,8 +21,10 @@ class BulletBroadphase final : public BroadphaseEngine {
   explicit BulletBroadphase(BulletKind kind)
       : kind_(kind), dispatcher_(std::make_unique<btCollisionDispatcher>(&configuration_)) {}
 
+  ~BulletBroadphase() override { reset(); }
+
   void build(const std::vector<rtp::Aabb>& boxes) override {
-    proxies_.clear();
+    reset();
     if (kind_ == BulletKind::Dbvt) {
       broadphase_ = std::make_unique<btDbvtBroadphase>();
     } else {
@@ -67,6 +69,13 @@ class BulletBroadphase final : public BroadphaseEngine {
   }
 
  private:
+  // Bullet's broad phases leave their proxies to the caller (btCollisionWorld destroys them)
+  void reset() {
+    for (btBroadphaseProxy* proxy : proxies_) broadphase_->destroyProxy(proxy, dispatcher_.get());
+    proxies_.clear();
+    broadphase_.reset();
+  }
+
   BulletKind kind_;
   btDefaultCollisionConfiguration configuration_;
   std::unique_ptr<btCollisionDispatcher> dispatcher_;
