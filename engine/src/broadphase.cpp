@@ -387,16 +387,20 @@ class BoxPruning final : public ProxyStore {
       for (ProxyId id = 0; id < capacity(); ++id)
         if (alive(id)) order_.push_back({0.0f, id});
     }
-    for (Keyed& k : order_) {
-      const Aabb& b = boxes_[k.id];
-      k.key = b.min[0];
-      low_y = std::min(low_y, b.min[1]);
-      high_y = std::max(high_y, b.min[1]);
-      total_height += b.max[1] - b.min[1];
-    }
+    for (Keyed& k : order_) k.key = boxes_[k.id].min[0];
     const std::size_t n = order_.size();
     if (n == 0) return;
     sort_on_x(same_boxes);
+    // each box read once, into records in x order that every later pass reads in sequence
+    sorted_.resize(n);
+    for (std::size_t i = 0; i < n; ++i) {
+      Sorted& r = sorted_[i];
+      r.box = boxes_[order_[i].id];
+      r.id = order_[i].id;
+      low_y = std::min(low_y, r.box.min[1]);
+      high_y = std::max(high_y, r.box.min[1]);
+      total_height += r.box.max[1] - r.box.min[1];
+    }
 
     // Buckets: slabs across y, each box in every slab its y interval touches, so a sweep on x
     // meets only the boxes near it in y as well. Slabs are twice the mean box height (a box
@@ -418,10 +422,10 @@ class BoxPruning final : public ProxyStore {
     // each slab's members in x order (a stable pass over the sorted boxes), then one vector of
     // boxes starting at +∞, so the sweep needs no scalar tail
     first_.assign(slabs + 1, 0);
-    for (const Keyed& k : order_) {
-      const Aabb& b = boxes_[k.id];
-      for (std::size_t s = slab_of(b.min[1]), last = slab_of(b.max[1]); s <= last; ++s)
-        ++first_[s + 1];
+    for (Sorted& k : sorted_) {
+      k.home_slab = std::uint16_t(slab_of(k.box.min[1]));
+      k.last_slab = std::uint16_t(slab_of(k.box.max[1]));
+      for (std::size_t s = k.home_slab; s <= k.last_slab; ++s) ++first_[s + 1];
     }
     for (std::size_t s = 0; s < slabs; ++s) first_[s + 1] += first_[s] + Lanes::size();
     const std::size_t total = first_[slabs];
@@ -429,10 +433,10 @@ class BoxPruning final : public ProxyStore {
       column->resize(total);
     ids_.resize(total);
     fill_.assign(first_.begin(), first_.end() - 1);
-    for (const Keyed& k : order_) {
-      const Aabb& b = boxes_[k.id];
-      const std::size_t home = slab_of(b.min[1]);
-      for (std::size_t s = home, last = slab_of(b.max[1]); s <= last; ++s) {
+    for (const Sorted& k : sorted_) {
+      const Aabb& b = k.box;
+      const float home = float(k.home_slab);
+      for (std::size_t s = k.home_slab; s <= k.last_slab; ++s) {
         const std::size_t i = fill_[s]++;
         min_x_[i] = b.min[0];
         max_x_[i] = b.max[0];
@@ -440,7 +444,7 @@ class BoxPruning final : public ProxyStore {
         max_y_[i] = b.max[1];
         min_z_[i] = b.min[2];
         max_z_[i] = b.max[2];
-        home_[i] = float(home);
+        home_[i] = home;
         ids_[i] = k.id;
       }
     }
@@ -477,9 +481,16 @@ class BoxPruning final : public ProxyStore {
 
  private:
   using Lanes = std::experimental::native_simd<float>;
+  // a live box's min x and handle, 8 bytes: what the sort moves
   struct Keyed {
     float key;
     ProxyId id;
+  };
+  // a live box in x order, 32 bytes
+  struct Sorted {
+    Aabb box;
+    ProxyId id;
+    std::uint16_t home_slab, last_slab;  // the slabs of its min y and max y
   };
 
   // The boxes by min x. From the previous order, insertion sort is O(n + swaps): a coherent
@@ -507,6 +518,7 @@ class BoxPruning final : public ProxyStore {
   }
   static constexpr std::size_t kMaxSwapsPerBox = 8;
   std::vector<Keyed> order_;
+  std::vector<Sorted> sorted_;
   // at most this many slabs: beyond it the per-slab padding and bookkeeping outweigh the gain
   static constexpr std::size_t kMaxSlabs = 256;
   std::vector<std::size_t> first_, fill_;  // each slab's first entry, and one past its last
