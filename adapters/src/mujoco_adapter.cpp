@@ -95,7 +95,7 @@ std::string model_xml(const Scene& scene, const std::string& variant) {
   };
   for (std::size_t i = 0; i < scene.springs.size(); ++i) {
     const SpringSpec& s = scene.springs[i];
-    const std::string a = "s" + std::to_string(i) + "a", b = "s" + std::to_string(i) + "b";
+    const std::string index = std::to_string(i), a = "s" + index + "a", b = "s" + index + "b";
     const BodySpec& body_a = scene.bodies[s.body_a];
     if (body_a.mass > 0.0)
       body_sites[s.body_a].push_back(site(a, s.local_point_a));
