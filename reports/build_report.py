@@ -260,16 +260,24 @@ def stability_maps(results: pd.DataFrame, meta: dict) -> list[dict]:
     return maps
 
 
-def particle_benchmark(folder: Path) -> dict | None:
-    """The Google Benchmark run of the particle update, if bench.sh wrote one: the triad's bytes/s
-    per thread count, and per (particles, threads) the particle-steps/s and roofline fraction."""
-    path = folder / "benchmarks" / "particles.json"
+def benchmark_document(folder: Path, name: str) -> dict | None:
+    """A Google Benchmark JSON file bench.sh wrote into benchmarks/, or None when there is none."""
+    path = folder / "benchmarks" / name
     if not path.is_file():
         return None
     try:
-        runs = json.loads(path.read_text()).get("benchmarks", [])
+        return json.loads(path.read_text())
     except json.JSONDecodeError as exc:
         raise ReportError(f"{path}: not valid JSON: {exc}") from exc
+
+
+def particle_benchmark(folder: Path) -> dict | None:
+    """The Google Benchmark run of the particle update, if bench.sh wrote one: the triad's bytes/s
+    per thread count, and per (particles, threads) the particle-steps/s and roofline fraction."""
+    document = benchmark_document(folder, "particles.json")
+    if document is None:
+        return None
+    runs = document.get("benchmarks", [])
     triad, rows = {}, []
     for run in runs:
         if run.get("run_type") != "iteration":
@@ -303,13 +311,10 @@ def broadphase_benchmark(folder: Path) -> dict | None:
     (motion and box count) and engine, the median µs per update with its spread over repetitions,
     pairs/s and the pair-set agreement; per engine, the time to build from scratch; and the
     chart of µs per update against the box count for coherent motion."""
-    path = folder / "benchmarks" / "broadphase.json"
-    if not path.is_file():
+    document = benchmark_document(folder, "broadphase.json")
+    if document is None:
         return None
-    try:
-        runs = json.loads(path.read_text()).get("benchmarks", [])
-    except json.JSONDecodeError as exc:
-        raise ReportError(f"{path}: not valid JSON: {exc}") from exc
+    runs = document.get("benchmarks", [])
     updates: dict[tuple, dict] = {}
     builds = []
     for run in runs:
@@ -352,7 +357,7 @@ def broadphase_benchmark(folder: Path) -> dict | None:
                       xaxis_title="boxes", yaxis_title="µs per update, median of 3 repetitions")
     fig.update_xaxes(type="log", exponentformat="power")
     fig.update_yaxes(type="log", exponentformat="power")
-    context = json.loads(path.read_text()).get("context", {})
+    context = document.get("context", {})
     settings = {k.removeprefix("settings "): v for k, v in context.items() if k.startswith("settings ")}
     return dict(rows=rows, builds=builds, settings=settings, chart=figure_html(fig) if fig.data else "")
 

@@ -203,3 +203,11 @@ def test_chain_gets_an_error_per_body_chart(tmp_path):
     # the worst body's error is the scenario's position error
     assert errors.max() == pytest.approx(pd.read_csv(out / "results.csv")["position_err_max"].iloc[0], rel=1e-6)
     assert "Max position error of each body" in build_report.build_report(out).read_text()
+
+
+def test_a_malformed_benchmark_file_is_named(tmp_path):
+    (tmp_path / "benchmarks").mkdir()
+    (tmp_path / "benchmarks" / "broadphase.json").write_text('{"benchmarks": [')
+    with pytest.raises(build_report.ReportError, match="broadphase.json: not valid JSON"):
+        build_report.broadphase_benchmark(tmp_path)
+    assert build_report.particle_benchmark(tmp_path) is None  # absent: nothing to draw
