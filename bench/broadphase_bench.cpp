@@ -1,4 +1,4 @@
-// The broadphase scene on every engine's broad phase (bench/README in docs/broadphase.md):
+// The broadphase scene on every engine's broad phase (docs/broadphase.md):
 // microseconds per update and pairs/s, with each engine's pair set checked against the exact one
 // on the frames before timing (missing pairs, extra pairs as counters), and the time to build
 // from scratch.

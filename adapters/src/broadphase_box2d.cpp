@@ -45,7 +45,7 @@ class Box2dBroadphase final : public BroadphaseEngine {
     // drop the pairs whose fattened bounds no longer overlap, as the contact manager does
     std::erase_if(pairs_, [&](const rtp::ProxyPair& p) {
       if (broadphase_->TestOverlap(proxies_[p.a], proxies_[p.b])) return false;
-      keys_.erase(key(p));
+      keys_.erase(p.key());
       return true;
     });
     broadphase_->UpdatePairs(this);
@@ -59,12 +59,10 @@ class Box2dBroadphase final : public BroadphaseEngine {
     const auto a = std::uint32_t(reinterpret_cast<std::uintptr_t>(user_a));
     const auto b = std::uint32_t(reinterpret_cast<std::uintptr_t>(user_b));
     const rtp::ProxyPair p{std::min(a, b), std::max(a, b)};
-    if (keys_.insert(key(p)).second) pairs_.push_back(p);
+    if (keys_.insert(p.key()).second) pairs_.push_back(p);
   }
 
  private:
-  static std::uint64_t key(const rtp::ProxyPair& p) { return std::uint64_t(p.a) << 32 | p.b; }
-
   std::unique_ptr<b2BroadPhase> broadphase_;
   std::vector<std::int32_t> proxies_;
   std::vector<rtp::Aabb> previous_;

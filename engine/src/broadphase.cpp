@@ -116,16 +116,16 @@ class ProxyStore : public BroadPhase {
 class PairSet {
  public:
   void add(ProxyPair p) {
-    if (index_.try_emplace(key(p), std::uint32_t(pairs_.size())).second) pairs_.push_back(p);
+    if (index_.try_emplace(p.key(), std::uint32_t(pairs_.size())).second) pairs_.push_back(p);
   }
   void remove(ProxyPair p) {
-    const auto found = index_.find(key(p));
+    const auto found = index_.find(p.key());
     if (found == index_.end()) return;
     const std::uint32_t slot = found->second;
     index_.erase(found);
     if (slot + 1 != pairs_.size()) {
       pairs_[slot] = pairs_.back();
-      index_[key(pairs_[slot])] = slot;
+      index_[pairs_[slot].key()] = slot;
     }
     pairs_.pop_back();
   }
@@ -143,7 +143,6 @@ class PairSet {
   const std::vector<ProxyPair>& list() const { return pairs_; }
 
  private:
-  static std::uint64_t key(ProxyPair p) { return std::uint64_t(p.a) << 32 | p.b; }
   std::vector<ProxyPair> pairs_;
   std::unordered_map<std::uint64_t, std::uint32_t> index_;
 };
@@ -219,31 +218,31 @@ class SortedAxes : public ProxyStore {
   std::array<std::vector<Endpoint>, 3> axes_;
 };
 
-// every pair overlapping on all three axes, by a sweep of one sorted axis keeping the boxes
-// open on it and testing the other two axes
-template <class Emit>
-void sweep_sorted_axis(const std::vector<Endpoint>& axis, const std::vector<Aabb>& boxes,
-                       std::vector<ProxyId>& open, std::vector<std::uint32_t>& slot, Emit emit) {
-  open.clear();
-  slot.resize(boxes.size());
+// The boxes whose intervals are open while a sorted axis is swept, with each one's place in the
+// list so a closing endpoint removes its box in O(1) (swap with the last).
+struct OpenList {
+  std::vector<ProxyId> ids;
+  std::vector<std::uint32_t> slot;  // by handle
+};
+
+// calls on_overlap(id, other) once for every pair of boxes whose intervals overlap on this axis
+template <class OnOverlap>
+void for_each_overlap_on_axis(const std::vector<Endpoint>& axis, std::size_t capacity,
+                              OpenList& open, OnOverlap on_overlap) {
+  open.ids.clear();
+  open.slot.resize(capacity);
   for (const Endpoint& e : axis) {
     const ProxyId id = e.id();
-    if (e.is_max()) {  // close: swap-remove from the open list
-      const std::uint32_t s = slot[id];
-      open[s] = open.back();
-      slot[open[s]] = s;
-      open.pop_back();
+    if (e.is_max()) {  // close
+      const std::uint32_t s = open.slot[id];
+      open.ids[s] = open.ids.back();
+      open.slot[open.ids[s]] = s;
+      open.ids.pop_back();
       continue;
     }
-    const Aabb& a = boxes[id];
-    for (ProxyId other : open) {
-      const Aabb& b = boxes[other];
-      if (a.min[1] <= b.max[1] && b.min[1] <= a.max[1] && a.min[2] <= b.max[2] &&
-          b.min[2] <= a.max[2])
-        emit(ordered(id, other));
-    }
-    slot[id] = std::uint32_t(open.size());
-    open.push_back(id);
+    for (ProxyId other : open.ids) on_overlap(id, other);
+    open.slot[id] = std::uint32_t(open.ids.size());
+    open.ids.push_back(id);
   }
 }
 
@@ -285,23 +284,10 @@ class SeedSap final : public SortedAxes {
       if (overlaps_on_axis == 0) return;
     }
     // count, per pair, the axes its intervals overlap on
-    for (const auto& axis : axes_) {
-      open_.clear();
-      slot_.resize(n);
-      for (const Endpoint& e : axis) {
-        const ProxyId id = e.id();
-        if (e.is_max()) {
-          const std::uint32_t s = slot_[id];
-          open_[s] = open_.back();
-          slot_[open_[s]] = s;
-          open_.pop_back();
-        } else {
-          for (ProxyId other : open_) ++table_[cell(ordered(id, other), n)];
-          slot_[id] = std::uint32_t(open_.size());
-          open_.push_back(id);
-        }
-      }
-    }
+    for (const auto& axis : axes_)
+      for_each_overlap_on_axis(axis, n, open_, [&](ProxyId id, ProxyId other) {
+        ++table_[cell(ordered(id, other), n)];
+      });
     // the triangle: pairs counted on all three axes, each cell reset as it is read
     std::size_t c = 0;
     for (std::size_t i = 0; i + 1 < n; ++i)
@@ -318,8 +304,7 @@ class SeedSap final : public SortedAxes {
   }
 
   std::vector<std::uint8_t> table_;
-  std::vector<ProxyId> open_;
-  std::vector<std::uint32_t> slot_;
+  OpenList open_;
   std::vector<ProxyPair> pairs_;
 };
 
@@ -338,7 +323,10 @@ class IncrementalSap final : public SortedAxes {
       pairs_.remove_if([&](ProxyPair p) { return !alive(p.a) || !alive(p.b); });
     if (apply_changes()) {
       pairs_.clear();
-      sweep_sorted_axis(axes_[0], boxes_, open_, slot_, [&](ProxyPair p) { pairs_.add(p); });
+      // a sweep of x, testing y and z
+      for_each_overlap_on_axis(axes_[0], capacity(), open_, [&](ProxyId id, ProxyId other) {
+        if (overlaps(boxes_[id], boxes_[other])) pairs_.add(ordered(id, other));
+      });
     } else {
       // The endpoint moving down passes `other`. A min passing a max starts an overlap on this
       // axis: the pair is added if the boxes now overlap on every axis (their bounds are final,
@@ -359,8 +347,7 @@ class IncrementalSap final : public SortedAxes {
 
  private:
   PairSet pairs_;
-  std::vector<ProxyId> open_;
-  std::vector<std::uint32_t> slot_;
+  OpenList open_;
 };
 
 // ---------------------------------------------------------------------------------------------

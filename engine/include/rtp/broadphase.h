@@ -8,9 +8,11 @@
 //   IncrementalSap  the seed's next step: the same sorted axes, but a pair is added or removed
 //                   when a min and a max endpoint swap during the insertion sort (Baraff 1992,
 //                   Bullet's btAxisSweep3), kept in a hashed set instead of the n² table.
-//   BoxPruning      for scenes that are not coherent or very large: every update sorts the
-//                   boxes on x (radix-hybrid spreadsort) and sweeps, testing y and z for several
-//                   boxes at once with SIMD (Terdiman, "Box pruning", 2002).
+//   BoxPruning      for scenes that are not coherent or very large: every update orders the
+//                   boxes on x (insertion sort from the last order while that is cheap, else
+//                   Boost's radix-hybrid spreadsort), buckets them into slabs across y and
+//                   sweeps each slab, testing y and z for several boxes at once with SIMD
+//                   (Terdiman, "Box pruning", 2002).
 //
 // Touching counts: intervals are closed, so boxes that share a face, an edge or a corner
 // overlap (as in Bullet, ODE and Box2D). In a sorted axis a min endpoint goes before a max
@@ -51,6 +53,8 @@ using ProxyId = std::uint32_t;
 // an overlapping pair, a < b
 struct ProxyPair {
   ProxyId a, b;
+  // one 64-bit number per pair, for hashed sets
+  std::uint64_t key() const { return std::uint64_t(a) << 32 | b; }
   friend bool operator==(const ProxyPair&, const ProxyPair&) = default;
   friend auto operator<=>(const ProxyPair&, const ProxyPair&) = default;
 };
