@@ -73,13 +73,11 @@ void particles_xml(const Scene& scene, std::ostringstream& xml) {
   for (const ParticlePlaneSpec& plane : p.planes)
     xml << "    <geom type=\"plane\" size=\"0 0 1\" pos=\"" << triple(plane.point) << "\" zaxis=\""
         << triple(plane.normal) << "\" contype=\"0\" conaffinity=\"2\" " << contact << "/>\n";
-  const rtp::ParticleSystemDef def = particle_system_def(scene);
-  for (long i = 0; i < p.count; ++i) {
-    const rtp::ParticleSpawn start = rtp::particle_spawn(def, std::size_t(i), 0);
-    xml << "    <body name=\"p" << i << "\" pos=\"" << triple(start.position)
-        << "\"><freejoint/><geom type=\"sphere\" size=\"" << p.radius << "\" mass=\"" << p.mass
-        << "\" contype=\"2\" conaffinity=\"0\" " << contact << "/></body>\n";
-  }
+  // placed at the origin here: load() sets each start from the particle driver
+  for (long i = 0; i < p.count; ++i)
+    xml << "    <body name=\"p" << i << "\"><freejoint/><geom type=\"sphere\" size=\"" << p.radius
+        << "\" mass=\"" << p.mass << "\" contype=\"2\" conaffinity=\"0\" " << contact
+        << "/></body>\n";
 }
 
 // A spring is a spatial tendon between two sites, with the scene's stiffness, damping and rest
