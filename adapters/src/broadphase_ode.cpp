@@ -73,8 +73,8 @@ class OdeBroadphase final : public BroadphaseEngine {
   std::vector<rtp::ProxyPair> pairs_;
 };
 
-// one update of the hash space takes 1.5 s at 5·10⁴ boxes here (5.5 s at 10⁵): beyond this the
-// benchmark's budget goes to the broad phases that scale
+// one update of the hash space (levels −1 … 2) takes 1.06 s at 5·10⁴ boxes here (3.75 s at 10⁵):
+// beyond this the benchmark's budget goes to the broad phases that scale
 constexpr std::size_t kHashLimit = 10000;
 
 BroadphaseEntry ode_entry(OdeKind kind, std::string name, Setting space,
@@ -89,7 +89,7 @@ BroadphaseEntry ode_entry(OdeKind kind, std::string name, Setting space,
   e.unsupported = [limit](const BroadphaseScene& s) -> std::optional<std::string> {
     if (s.count > limit)
       return "not run above " + std::to_string(limit) +
-             " boxes: one update takes seconds there (1.5 s at 5·10⁴ measured here)";
+             " boxes: one update takes seconds there (1.06 s at 5·10⁴ measured here)";
     return std::nullopt;
   };
   e.create = [kind] { return std::make_unique<OdeBroadphase>(kind); };
