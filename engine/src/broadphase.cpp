@@ -325,7 +325,11 @@ class IncrementalSap final : public SortedAxes {
       pairs_.clear();
       // a sweep of x, testing y and z
       for_each_overlap_on_axis(axes_[0], capacity(), open_, [&](ProxyId id, ProxyId other) {
-        if (overlaps(boxes_[id], boxes_[other])) pairs_.add(ordered(id, other));
+        // both are open on x: only y and z are left to test
+        const Aabb &a = boxes_[id], &b = boxes_[other];
+        if (a.min[1] <= b.max[1] && b.min[1] <= a.max[1] && a.min[2] <= b.max[2] &&
+            b.min[2] <= a.max[2])
+          pairs_.add(ordered(id, other));
       });
     } else {
       // The endpoint moving down passes `other`. A min passing a max starts an overlap on this
