@@ -1,0 +1,856 @@
+// The narrow phase: the Voronoi-region triangle query, the separating axis tests, clipping.
+// The design and its sources are in rtp/collision.h.
+#include <algorithm>
+#include <cmath>
+#include <limits>
+
+#include "rtp/collision.h"
+
+namespace rtp {
+namespace {
+
+// an edge axis replaces the best face axis only when it is shallower by this fraction of the
+// depth plus this length: faces give the steadier manifold (Gregorius, GDC 2013, uses 5 %)
+constexpr double kEdgeRelativeTolerance = 0.02;
+constexpr double kEdgeAbsoluteTolerance = 1e-4;  // m
+// two edges whose unit directions' cross product is shorter than this are parallel: their axis
+// is numerically meaningless and the face axes cover them (Ericson §4.4.1)
+constexpr double kParallelSine = 1e-5;
+// the second shape's face is a duplicate of the first's when their normals are this close
+constexpr double kDuplicateCosine = 1.0 - 1e-9;
+
+bool edge_axis_wins(double edge_separation, double face_separation) {
+  return edge_separation >
+         face_separation * (1.0 - kEdgeRelativeTolerance) + kEdgeAbsoluteTolerance;
+}
+
+// ---- clipping ----
+
+struct ClipVertex {
+  Vec3 point;
+  ContactFeature feature;
+};
+
+// the most vertices a clipped polygon can have: the incident face plus one per side plane
+constexpr std::size_t kClipCapacity = 2 * kMaxFaceVertices + 2;
+
+struct ClipPolygon {
+  std::array<ClipVertex, kClipCapacity> vertices;
+  std::size_t count = 0;
+};
+
+// the reference face in the world: its plane and its side planes (normals need not be unit)
+struct ReferenceFace {
+  Vec3 normal;    // unit, outward
+  double offset;  // normal · x = offset on the face
+  std::array<Vec3, kMaxFaceVertices> side_normals;
+  std::array<double, kMaxFaceVertices> side_offsets;
+  std::size_t side_count = 0;
+  std::uint16_t face = 0;
+};
+
+// Sutherland–Hodgman: the part of the polygon where side · x ≤ offset
+void clip_against_side(const ClipPolygon& in, const Vec3& side, double offset,
+                       std::uint8_t side_index, ClipPolygon& out) {
+  out.count = 0;
+  if (in.count == 0) return;
+  const ClipVertex* previous = &in.vertices[in.count - 1];
+  double previous_distance = side.dot(previous->point) - offset;
+  for (std::size_t i = 0; i < in.count; ++i) {
+    const ClipVertex& current = in.vertices[i];
+    const double distance = side.dot(current.point) - offset;
+    if ((previous_distance <= 0.0) != (distance <= 0.0)) {
+      // the edge previous → current crosses the side plane: a new point on the incident edge
+      // that starts at previous's incident vertex
+      const double t = previous_distance / (previous_distance - distance);
+      ClipVertex& crossing = out.vertices[out.count++];
+      crossing.point = previous->point + t * (current.point - previous->point);
+      crossing.feature = previous->feature;
+      crossing.feature.type = ContactType::FaceClip;
+      crossing.feature.reference_side = side_index;
+    }
+    if (distance <= 0.0) out.vertices[out.count++] = current;
+    previous = &current;
+    previous_distance = distance;
+  }
+}
+
+// keeps four of n > 4 points: the deepest, the farthest from it, the one making the largest
+// triangle with those two, and the one adding the most area outside that triangle
+void reduce_to_four(std::array<ContactPoint, kClipCapacity>& points, std::size_t& count,
+                    const Vec3& normal) {
+  std::size_t chosen[4];
+  chosen[0] = 0;
+  for (std::size_t i = 1; i < count; ++i)
+    if (points[i].depth > points[chosen[0]].depth) chosen[0] = i;
+  const Vec3& p0 = points[chosen[0]].point;
+  double best = -1.0;
+  for (std::size_t i = 0; i < count; ++i)
+    if (double d = (points[i].point - p0).squaredNorm(); d > best) best = d, chosen[1] = i;
+  const Vec3& p1 = points[chosen[1]].point;
+  best = -1.0;
+  for (std::size_t i = 0; i < count; ++i) {
+    const double area = std::abs((p1 - p0).cross(points[i].point - p0).dot(normal));
+    if (area > best) best = area, chosen[2] = i;
+  }
+  const Vec3& p2 = points[chosen[2]].point;
+  const double orientation = (p1 - p0).cross(p2 - p0).dot(normal) >= 0.0 ? 1.0 : -1.0;
+  best = -std::numeric_limits<double>::infinity();
+  chosen[3] = chosen[0];
+  for (std::size_t i = 0; i < count; ++i) {
+    if (i == chosen[0] || i == chosen[1] || i == chosen[2]) continue;
+    const Vec3& q = points[i].point;
+    // the area q adds: the largest triangle it makes outside one of the three edges
+    const double added = -orientation * std::min({(p1 - p0).cross(q - p0).dot(normal),
+                                                  (p2 - p1).cross(q - p1).dot(normal),
+                                                  (p0 - p2).cross(q - p2).dot(normal)});
+    if (added > best) best = added, chosen[3] = i;
+  }
+  std::array<ContactPoint, 4> kept;
+  for (int k = 0; k < 4; ++k) kept[k] = points[chosen[k]];
+  std::copy(kept.begin(), kept.end(), points.begin());
+  count = 4;
+}
+
+// clips the incident polygon to the reference face and writes the manifold; `flipped` when the
+// second shape holds the reference face (the manifold's normal then opposes the face's)
+void clip_to_manifold(const ReferenceFace& reference, const ClipPolygon& incident, bool flipped,
+                      double depth, Manifold& out) {
+  ClipPolygon buffers[2];
+  const ClipPolygon* current = &incident;
+  for (std::size_t s = 0; s < reference.side_count; ++s) {
+    ClipPolygon& next = buffers[s % 2];
+    clip_against_side(*current, reference.side_normals[s], reference.side_offsets[s],
+                      std::uint8_t(s), next);
+    current = &next;
+  }
+
+  // points on or below the reference face, placed midway between the two surfaces
+  std::array<ContactPoint, kClipCapacity> points;
+  std::size_t count = 0;
+  for (std::size_t i = 0; i < current->count; ++i) {
+    const ClipVertex& v = current->vertices[i];
+    const double distance = reference.normal.dot(v.point) - reference.offset;
+    if (distance > 0.0) continue;
+    ContactPoint& p = points[count++];
+    p.point = v.point - 0.5 * distance * reference.normal;
+    p.depth = -distance;
+    p.feature = v.feature;
+    p.feature.reference = reference.face;
+    p.feature.flipped = flipped;
+  }
+  if (count > 4) reduce_to_four(points, count, reference.normal);
+
+  out.normal = flipped ? Vec3(-reference.normal) : reference.normal;
+  out.depth = depth;
+  out.count = std::uint8_t(count);
+  std::copy(points.begin(), points.begin() + count, out.points.begin());
+}
+
+// the closest points of segments p1 + s d1 and p2 + t d2, s, t ∈ [0, 1] (Ericson §5.1.9)
+void closest_points_of_segments(const Vec3& p1, const Vec3& d1, const Vec3& p2, const Vec3& d2,
+                                Vec3& c1, Vec3& c2) {
+  const Vec3 r = p1 - p2;
+  const double a = d1.squaredNorm(), e = d2.squaredNorm(), f = d2.dot(r);
+  const double c = d1.dot(r), b = d1.dot(d2);
+  const double denominator = a * e - b * b;
+  double s = denominator > 1e-30 ? std::clamp((b * f - c * e) / denominator, 0.0, 1.0) : 0.0;
+  double t = (b * s + f) / e;
+  if (t < 0.0) {
+    t = 0.0;
+    s = std::clamp(-c / a, 0.0, 1.0);
+  } else if (t > 1.0) {
+    t = 1.0;
+    s = std::clamp((b - c) / a, 0.0, 1.0);
+  }
+  c1 = p1 + s * d1;
+  c2 = p2 + t * d2;
+}
+
+// one edge–edge contact point midway between the edges' closest points
+void edge_contact(const Vec3& tail_a, const Vec3& edge_a, const Vec3& tail_b, const Vec3& edge_b,
+                  const Vec3& normal, double depth, std::uint16_t feature_a,
+                  std::uint16_t feature_b, Manifold& out) {
+  Vec3 on_a, on_b;
+  closest_points_of_segments(tail_a, edge_a, tail_b, edge_b, on_a, on_b);
+  out.normal = normal;
+  out.depth = depth;
+  out.count = 1;
+  out.points[0].point = 0.5 * (on_a + on_b);
+  out.points[0].depth = depth;
+  out.points[0].feature = {feature_a, feature_b, 0, 0, ContactType::EdgeEdge, 0};
+}
+
+// a manifold of one point, for the round shapes and the planes
+bool single_contact(const Vec3& normal, double depth, const Vec3& point, Manifold& out) {
+  out.normal = normal;
+  out.depth = depth;
+  out.count = 1;
+  out.points[0] = {point, depth, ContactFeature{}};
+  out.axes_tested = 0;
+  return true;
+}
+
+bool no_contact(Manifold& out) {
+  out.count = 0;
+  return false;
+}
+
+// the reference face `face` of a hull at a pose, with its side planes
+void reference_face_of(const ConvexHull& hull, const Pose& pose, std::uint32_t face,
+                       ReferenceFace& out) {
+  const HullFace& f = hull.faces[face];
+  out.normal = pose.rotation * f.normal;
+  out.offset = f.offset + out.normal.dot(pose.position);
+  out.face = std::uint16_t(face);
+  out.side_count = f.count;
+  Vec3 tail = pose.position + pose.rotation * hull.vertices[hull.face_vertices[f.first]];
+  for (std::uint32_t i = 0; i < f.count; ++i) {
+    const Vec3 head =
+        pose.position +
+        pose.rotation * hull.vertices[hull.face_vertices[f.first + (i + 1) % f.count]];
+    // for a counter-clockwise loop, edge × normal points out of the face
+    out.side_normals[i] = (head - tail).cross(out.normal);
+    out.side_offsets[i] = out.side_normals[i].dot(tail);
+    tail = head;
+  }
+}
+
+void incident_face_of(const ConvexHull& hull, const Pose& pose, std::uint32_t face,
+                      ClipPolygon& out) {
+  const HullFace& f = hull.faces[face];
+  out.count = f.count;
+  for (std::uint32_t i = 0; i < f.count; ++i) {
+    out.vertices[i].point =
+        pose.position + pose.rotation * hull.vertices[hull.face_vertices[f.first + i]];
+    out.vertices[i].feature = {0, std::uint16_t(face), 0, std::uint8_t(i), ContactType::FaceVertex,
+                               0};
+  }
+}
+
+// the incident face for a reference normal (world): among the faces around the incident hull's
+// deepest vertex, the one most opposed to the normal. The most opposed face of the whole hull
+// can lie beside the contact on a hull of many small faces; the faces at the deepest vertex hold
+// the deepest point.
+std::uint32_t incident_face_for(const ConvexHull& hull, const Pose& pose,
+                                const Vec3& reference_normal) {
+  const Vec3 local = pose.rotation.transpose() * reference_normal;
+  std::uint32_t deepest = 0;
+  for (std::uint32_t i = 1; i < hull.vertices.size(); ++i)
+    if (hull.vertices[i].dot(local) < hull.vertices[deepest].dot(local)) deepest = i;
+  std::uint32_t best = 0;
+  double most_opposed = std::numeric_limits<double>::infinity();
+  for (std::uint32_t f = 0; f < hull.faces.size(); ++f) {
+    const HullFace& face = hull.faces[f];
+    const double alignment = face.normal.dot(local);
+    if (alignment >= most_opposed) continue;
+    for (std::uint32_t i = 0; i < face.count; ++i)
+      if (hull.face_vertices[face.first + i] == deepest) {
+        most_opposed = alignment, best = f;
+        break;
+      }
+  }
+  return best;
+}
+
+// the face-contact manifold when `reference_face` of the reference hull is the separating axis
+void hull_face_manifold(const ConvexHull& reference_hull, const Pose& reference_pose,
+                        std::uint32_t reference_face, const ConvexHull& incident_hull,
+                        const Pose& incident_pose, bool flipped, double depth, Manifold& out) {
+  ReferenceFace reference;
+  reference_face_of(reference_hull, reference_pose, reference_face, reference);
+  ClipPolygon incident;
+  incident_face_of(incident_hull, incident_pose,
+                   incident_face_for(incident_hull, incident_pose, reference.normal), incident);
+  clip_to_manifold(reference, incident, flipped, depth, out);
+}
+
+// the extent of a hull's vertices along a direction of its own frame
+struct Extent {
+  double min, max;
+};
+Extent extent_along(const ConvexHull& hull, const Vec3& direction) {
+  Extent e{std::numeric_limits<double>::infinity(), -std::numeric_limits<double>::infinity()};
+  for (const Vec3& v : hull.vertices) {
+    const double d = v.dot(direction);
+    e.min = std::min(e.min, d);
+    e.max = std::max(e.max, d);
+  }
+  return e;
+}
+
+// do the arcs a→b and c→d on the unit sphere cross? (Gregorius, GDC 2013): the edges whose
+// adjacent face normals are a, b and −c, −d then make a face of the Minkowski difference
+bool arcs_cross(const Vec3& a, const Vec3& b, const Vec3& c, const Vec3& d) {
+  const Vec3 b_x_a = b.cross(a), d_x_c = d.cross(c);
+  const double cba = c.dot(b_x_a), dba = d.dot(b_x_a);
+  const double adc = a.dot(d_x_c), bdc = b.dot(d_x_c);
+  return cba * dba < 0.0 && adc * bdc < 0.0 && cba * bdc > 0.0;
+}
+
+}  // namespace
+
+// ---- lab 4.1 ----
+
+TrianglePoint closest_point_on_triangle(const Vec3& p, const Vec3& a, const Vec3& b,
+                                        const Vec3& c) {
+  // vertex region of a
+  const Vec3 ab = b - a, ac = c - a, ap = p - a;
+  const double d1 = ab.dot(ap), d2 = ac.dot(ap);
+  if (d1 <= 0.0 && d2 <= 0.0) return {a, TriangleFeature::VertexA};
+  // vertex region of b
+  const Vec3 bp = p - b;
+  const double d3 = ab.dot(bp), d4 = ac.dot(bp);
+  if (d3 >= 0.0 && d4 <= d3) return {b, TriangleFeature::VertexB};
+  // edge region of ab
+  const double vc = d1 * d4 - d3 * d2;
+  if (vc <= 0.0 && d1 >= 0.0 && d3 <= 0.0) {
+    const double v = d1 / (d1 - d3);
+    return {a + v * ab, TriangleFeature::EdgeAB};
+  }
+  // vertex region of c
+  const Vec3 cp = p - c;
+  const double d5 = ab.dot(cp), d6 = ac.dot(cp);
+  if (d6 >= 0.0 && d5 <= d6) return {c, TriangleFeature::VertexC};
+  // edge region of ac
+  const double vb = d5 * d2 - d1 * d6;
+  if (vb <= 0.0 && d2 >= 0.0 && d6 <= 0.0) {
+    const double w = d2 / (d2 - d6);
+    return {a + w * ac, TriangleFeature::EdgeCA};
+  }
+  // edge region of bc
+  const double va = d3 * d6 - d5 * d4;
+  if (va <= 0.0 && (d4 - d3) >= 0.0 && (d5 - d6) >= 0.0) {
+    const double w = (d4 - d3) / ((d4 - d3) + (d5 - d6));
+    return {b + w * (c - b), TriangleFeature::EdgeBC};
+  }
+  // face region: barycentric coordinates (u, v, w) = (va, vb, vc) / (va + vb + vc)
+  const double sum = va + vb + vc;
+  if (!(sum > 0.0)) {
+    // a degenerate triangle has no face region: the closest point of its three edges
+    TrianglePoint best{a, TriangleFeature::VertexA};
+    double best_distance = std::numeric_limits<double>::infinity();
+    const Vec3* corners[3] = {&a, &b, &c};
+    const TriangleFeature edges[3] = {TriangleFeature::EdgeAB, TriangleFeature::EdgeBC,
+                                      TriangleFeature::EdgeCA};
+    for (int i = 0; i < 3; ++i) {
+      const Vec3& s = *corners[i];
+      const Vec3 e = *corners[(i + 1) % 3] - s;
+      const double t =
+          e.squaredNorm() > 0.0 ? std::clamp((p - s).dot(e) / e.squaredNorm(), 0.0, 1.0) : 0.0;
+      const Vec3 q = s + t * e;
+      if (double d = (p - q).squaredNorm(); d < best_distance)
+        best_distance = d, best = {q, edges[i]};
+    }
+    return best;
+  }
+  const double v = vb / sum, w = vc / sum;
+  return {a + v * ab + w * ac, TriangleFeature::Face};
+}
+
+// ---- shapes ----
+
+Shape Shape::sphere(double radius) {
+  Shape s;
+  s.kind = ShapeKind::Sphere;
+  s.radius = radius;
+  return s;
+}
+
+Shape Shape::box(const ConvexHull& box_hull, const Vec3& half_extents) {
+  Shape s;
+  s.kind = ShapeKind::Box;
+  s.half_extents = half_extents;
+  s.hull = &box_hull;
+  return s;
+}
+
+Shape Shape::convex(const ConvexHull& hull) {
+  Shape s;
+  s.kind = ShapeKind::Hull;
+  s.hull = &hull;
+  return s;
+}
+
+Shape Shape::plane(const Vec3& normal, double offset) {
+  Shape s;
+  s.kind = ShapeKind::Plane;
+  s.plane_normal = normal.normalized();
+  s.plane_offset = offset;
+  return s;
+}
+
+// ---- round shapes and planes ----
+
+bool collide_spheres(const Shape& a, const Pose& pose_a, const Shape& b, const Pose& pose_b,
+                     Manifold& out) {
+  const Vec3 d = pose_b.position - pose_a.position;
+  const double distance = d.norm(), reach = a.radius + b.radius;
+  if (distance > reach) return no_contact(out);
+  // concentric spheres: any direction will do, up is as good as any
+  const Vec3 normal = distance > 0.0 ? Vec3(d / distance) : Vec3::UnitY();
+  const Vec3 surface_a = pose_a.position + a.radius * normal;
+  const Vec3 surface_b = pose_b.position - b.radius * normal;
+  return single_contact(normal, reach - distance, 0.5 * (surface_a + surface_b), out);
+}
+
+bool collide_sphere_box(const Shape& a, const Pose& pose_a, const Shape& b, const Pose& pose_b,
+                        Manifold& out) {
+  // the sphere's centre in the box frame, and the closest point of the box to it
+  const Vec3 centre = pose_b.rotation.transpose() * (pose_a.position - pose_b.position);
+  const Vec3 closest = centre.cwiseMax(-b.half_extents).cwiseMin(b.half_extents);
+  const Vec3 gap = centre - closest;
+  const double distance_squared = gap.squaredNorm();
+  if (distance_squared > a.radius * a.radius) return no_contact(out);
+  Vec3 normal_in_box;  // from the box towards the sphere
+  double distance;     // signed: negative when the centre is inside the box
+  Vec3 surface_in_box;
+  if (distance_squared > 0.0) {
+    distance = std::sqrt(distance_squared);
+    normal_in_box = gap / distance;
+    surface_in_box = closest;
+  } else {
+    // the centre is inside: leave through the nearest face
+    const Vec3 depth_to_face = b.half_extents - centre.cwiseAbs();
+    int axis;
+    depth_to_face.minCoeff(&axis);
+    normal_in_box = Vec3::Zero();
+    normal_in_box[axis] = centre[axis] >= 0.0 ? 1.0 : -1.0;
+    distance = -depth_to_face[axis];
+    surface_in_box = centre;
+    surface_in_box[axis] = normal_in_box[axis] * b.half_extents[axis];
+  }
+  // the manifold's normal runs from the sphere (first) to the box
+  const Vec3 normal = -(pose_b.rotation * normal_in_box);
+  const Vec3 surface_b = pose_b.position + pose_b.rotation * surface_in_box;
+  const Vec3 surface_a = pose_a.position + a.radius * normal;
+  return single_contact(normal, a.radius - distance, 0.5 * (surface_a + surface_b), out);
+}
+
+bool collide_sphere_hull(const Shape& a, const Pose& pose_a, const Shape& b, const Pose& pose_b,
+                         Manifold& out) {
+  const ConvexHull& hull = *b.hull;
+  const Vec3 centre = pose_b.rotation.transpose() * (pose_a.position - pose_b.position);
+  // the face plane farthest from the centre: beyond the radius, separated
+  double largest = -std::numeric_limits<double>::infinity();
+  std::uint32_t largest_face = 0;
+  for (std::uint32_t f = 0; f < hull.faces.size(); ++f) {
+    const double d = hull.faces[f].normal.dot(centre) - hull.faces[f].offset;
+    if (d > largest) largest = d, largest_face = f;
+  }
+  if (largest > a.radius) return no_contact(out);
+
+  Vec3 normal_in_hull, surface_in_hull;
+  double distance;
+  if (largest <= 0.0) {
+    // inside: out through the nearest face plane
+    normal_in_hull = hull.faces[largest_face].normal;
+    distance = largest;
+    surface_in_hull = centre - largest * normal_in_hull;
+  } else {
+    // outside: the closest point lies on a face the centre sees; each face is a fan of
+    // triangles, and lab 4.1 finds the closest point of each
+    double best = std::numeric_limits<double>::infinity();
+    for (const HullFace& face : hull.faces) {
+      if (face.normal.dot(centre) - face.offset <= 0.0) continue;
+      const Vec3& apex = hull.vertices[hull.face_vertices[face.first]];
+      for (std::uint32_t i = 1; i + 1 < face.count; ++i) {
+        const TrianglePoint q = closest_point_on_triangle(
+            centre, apex, hull.vertices[hull.face_vertices[face.first + i]],
+            hull.vertices[hull.face_vertices[face.first + i + 1]]);
+        if (double d = (centre - q.point).squaredNorm(); d < best)
+          best = d, surface_in_hull = q.point;
+      }
+    }
+    distance = std::sqrt(best);
+    if (distance > a.radius) return no_contact(out);
+    normal_in_hull = distance > 0.0 ? Vec3((centre - surface_in_hull) / distance)
+                                    : hull.faces[largest_face].normal;
+  }
+  const Vec3 normal = -(pose_b.rotation * normal_in_hull);
+  const Vec3 surface_b = pose_b.position + pose_b.rotation * surface_in_hull;
+  const Vec3 surface_a = pose_a.position + a.radius * normal;
+  return single_contact(normal, a.radius - distance, 0.5 * (surface_a + surface_b), out);
+}
+
+bool collide_sphere_plane(const Shape& a, const Pose& pose_a, const Shape& b, const Pose& pose_b,
+                          Manifold& out) {
+  const Vec3 plane_normal = pose_b.rotation * b.plane_normal;
+  const double plane_offset = b.plane_offset + plane_normal.dot(pose_b.position);
+  const double height = plane_normal.dot(pose_a.position) - plane_offset;
+  if (height > a.radius) return no_contact(out);
+  const Vec3 surface_a = pose_a.position - a.radius * plane_normal;
+  const Vec3 surface_b = pose_a.position - height * plane_normal;
+  return single_contact(-plane_normal, a.radius - height, 0.5 * (surface_a + surface_b), out);
+}
+
+bool collide_hull_plane(const Shape& a, const Pose& pose_a, const Shape& b, const Pose& pose_b,
+                        Manifold& out) {
+  const ConvexHull& hull = *a.hull;
+  const Vec3 plane_normal = pose_b.rotation * b.plane_normal;
+  const double plane_offset = b.plane_offset + plane_normal.dot(pose_b.position);
+  // every vertex on or below the plane, then the four that span the most
+  const Vec3 normal_in_hull = pose_a.rotation.transpose() * plane_normal;
+  const double centre_height = plane_normal.dot(pose_a.position) - plane_offset;
+  std::array<ContactPoint, kClipCapacity> points;
+  std::size_t count = 0;
+  double deepest = 0.0;
+  for (std::uint32_t i = 0; i < hull.vertices.size(); ++i) {
+    const double height = centre_height + normal_in_hull.dot(hull.vertices[i]);
+    if (height > 0.0) continue;
+    const Vec3 vertex = pose_a.position + pose_a.rotation * hull.vertices[i];
+    if (count == points.size()) break;
+    points[count++] = {vertex - 0.5 * height * plane_normal, -height,
+                       ContactFeature{0, std::uint16_t(i), 0, 0, ContactType::FaceVertex, 1}};
+    deepest = std::max(deepest, -height);
+  }
+  if (count == 0) return no_contact(out);
+  if (count > 4) reduce_to_four(points, count, plane_normal);
+  out.normal = -plane_normal;
+  out.depth = deepest;
+  out.count = std::uint8_t(count);
+  out.axes_tested = 0;
+  std::copy(points.begin(), points.begin() + count, out.points.begin());
+  return true;
+}
+
+// ---- polyhedra ----
+
+bool collide_boxes(const Shape& a, const Pose& pose_a, const Shape& b, const Pose& pose_b,
+                   Manifold& out) {
+  const Vec3& ha = a.half_extents;
+  const Vec3& hb = b.half_extents;
+  // B's axes and centre in A's frame: c(i, j) = a_i · b_j
+  const Mat3 c = pose_a.rotation.transpose() * pose_b.rotation;
+  const Mat3 abs_c = c.cwiseAbs();
+  const Vec3 t = pose_a.rotation.transpose() * (pose_b.position - pose_a.position);
+  std::uint16_t axes = 0;
+
+  // A's face axes: the separation along a_i is |t_i| − (ha_i + Σ_j hb_j |c_ij|)
+  double best_face = -std::numeric_limits<double>::infinity();
+  int best_face_axis = 0;  // 0–2: A's axis, 3–5: B's
+  const Vec3 radius_b_on_a = abs_c * hb;
+  for (int i = 0; i < 3; ++i) {
+    ++axes;
+    const double separation = std::abs(t[i]) - (ha[i] + radius_b_on_a[i]);
+    if (separation > 0.0) {
+      out.axes_tested = axes;
+      return no_contact(out);
+    }
+    if (separation > best_face) best_face = separation, best_face_axis = i;
+  }
+  // B's face axes, skipping those parallel to one of A's (tested already)
+  const Vec3 t_in_b = c.transpose() * t;
+  const Vec3 radius_a_on_b = abs_c.transpose() * ha;
+  for (int j = 0; j < 3; ++j) {
+    if (abs_c.col(j).maxCoeff() > kDuplicateCosine) continue;
+    ++axes;
+    const double separation = std::abs(t_in_b[j]) - (hb[j] + radius_a_on_b[j]);
+    if (separation > 0.0) {
+      out.axes_tested = axes;
+      return no_contact(out);
+    }
+    if (separation > best_face) best_face = separation, best_face_axis = 3 + j;
+  }
+  // edge axes a_i × b_j, skipping parallel edges
+  double best_edge = -std::numeric_limits<double>::infinity();
+  Vec3 best_edge_axis = Vec3::Zero();
+  int best_edge_i = 0, best_edge_j = 0;
+  for (int i = 0; i < 3; ++i) {
+    for (int j = 0; j < 3; ++j) {
+      const Vec3 b_j = c.col(j);
+      const Vec3 axis = Vec3::Unit(i).cross(b_j);
+      const double length = axis.norm();
+      if (length < kParallelSine) continue;
+      // an axis parallel to a face normal of either box was tested with the faces (aligned
+      // boxes need only their three face axes, as the seed says)
+      const Vec3 axis_in_b = c.transpose() * axis;
+      if (axis.cwiseAbs().maxCoeff() > kDuplicateCosine * length ||
+          axis_in_b.cwiseAbs().maxCoeff() > kDuplicateCosine * length)
+        continue;
+      ++axes;
+      const double radius_a = ha.dot(axis.cwiseAbs());
+      const double radius_b = hb.dot(axis_in_b.cwiseAbs());
+      const double separation = (std::abs(t.dot(axis)) - (radius_a + radius_b)) / length;
+      if (separation > 0.0) {
+        out.axes_tested = axes;
+        return no_contact(out);
+      }
+      if (separation > best_edge)
+        best_edge = separation, best_edge_axis = axis / length, best_edge_i = i, best_edge_j = j;
+    }
+  }
+  out.axes_tested = axes;
+
+  // edge–edge: the edge of A parallel to a_i that is farthest along the normal, and the edge of B
+  // parallel to b_j farthest against it
+  auto edge_manifold = [&] {
+    Vec3 normal_in_a = best_edge_axis;
+    if (normal_in_a.dot(t) < 0.0) normal_in_a = -normal_in_a;
+    const Vec3 normal = pose_a.rotation * normal_in_a;
+    Vec3 tail_a = pose_a.position;
+    std::uint16_t feature_a = std::uint16_t(best_edge_i * 4),
+                  feature_b = std::uint16_t(best_edge_j * 4);
+    for (int k = 0, bit = 0; k < 3; ++k) {
+      if (k == best_edge_i) continue;
+      const double s = normal_in_a[k] >= 0.0 ? 1.0 : -1.0;
+      tail_a += s * ha[k] * pose_a.rotation.col(k);
+      feature_a |= std::uint16_t((s > 0.0) << bit++);
+    }
+    tail_a -= ha[best_edge_i] * pose_a.rotation.col(best_edge_i);
+    const Vec3 normal_in_b = c.transpose() * normal_in_a;
+    Vec3 tail_b = pose_b.position;
+    for (int k = 0, bit = 0; k < 3; ++k) {
+      if (k == best_edge_j) continue;
+      const double s = normal_in_b[k] >= 0.0 ? -1.0 : 1.0;
+      tail_b += s * hb[k] * pose_b.rotation.col(k);
+      feature_b |= std::uint16_t((s > 0.0) << bit++);
+    }
+    tail_b -= hb[best_edge_j] * pose_b.rotation.col(best_edge_j);
+    edge_contact(tail_a, 2.0 * ha[best_edge_i] * pose_a.rotation.col(best_edge_i), tail_b,
+                 2.0 * hb[best_edge_j] * pose_b.rotation.col(best_edge_j), normal, -best_edge,
+                 feature_a, feature_b, out);
+    return true;
+  };
+  if (edge_axis_wins(best_edge, best_face)) return edge_manifold();
+
+  // face contact: the reference face is the face of the best axis, on the side facing the other
+  // box; the incident face is the other box's face most opposed to it
+  const bool flipped = best_face_axis >= 3;
+  const Pose& reference_pose = flipped ? pose_b : pose_a;
+  const Pose& incident_pose = flipped ? pose_a : pose_b;
+  const Vec3& reference_half = flipped ? hb : ha;
+  const Vec3& incident_half = flipped ? ha : hb;
+  const int axis = best_face_axis % 3;
+  const Vec3 to_incident = incident_pose.position - reference_pose.position;
+  const Vec3 reference_axis = reference_pose.rotation.col(axis);
+  const double sign = reference_axis.dot(to_incident) >= 0.0 ? 1.0 : -1.0;
+
+  ReferenceFace reference;
+  reference.normal = sign * reference_axis;
+  reference.offset = reference.normal.dot(reference_pose.position) + reference_half[axis];
+  reference.face = std::uint16_t(2 * axis + (sign > 0.0 ? 0 : 1));
+  reference.side_count = 4;
+  for (int k = 0, s = 0; k < 3; ++k) {
+    if (k == axis) continue;
+    const Vec3 side = reference_pose.rotation.col(k);
+    const double centre = side.dot(reference_pose.position);
+    reference.side_normals[s] = side;
+    reference.side_offsets[s++] = centre + reference_half[k];
+    reference.side_normals[s] = -side;
+    reference.side_offsets[s++] = -centre + reference_half[k];
+  }
+
+  // the incident face: the other box's axis most (anti-)parallel to the reference normal
+  const Vec3 along = incident_pose.rotation.transpose() * reference.normal;
+  int incident_axis;
+  along.cwiseAbs().maxCoeff(&incident_axis);
+  const double incident_sign = along[incident_axis] > 0.0 ? -1.0 : 1.0;
+  const int u = (incident_axis + 1) % 3, v = (incident_axis + 2) % 3;
+  const Vec3 face_centre = incident_pose.position + incident_sign * incident_half[incident_axis] *
+                                                        incident_pose.rotation.col(incident_axis);
+  const Vec3 edge_u = incident_half[u] * incident_pose.rotation.col(u);
+  const Vec3 edge_v = incident_half[v] * incident_pose.rotation.col(v);
+  const std::uint16_t incident_face =
+      std::uint16_t(2 * incident_axis + (incident_sign > 0.0 ? 0 : 1));
+  ClipPolygon incident;
+  incident.count = 4;
+  const double corner_u[4] = {1, -1, -1, 1}, corner_v[4] = {1, 1, -1, -1};
+  for (int k = 0; k < 4; ++k) {
+    incident.vertices[k].point = face_centre + corner_u[k] * edge_u + corner_v[k] * edge_v;
+    incident.vertices[k].feature = {0, incident_face, 0, std::uint8_t(k), ContactType::FaceVertex,
+                                    0};
+  }
+  clip_to_manifold(reference, incident, flipped, -best_face, out);
+  if (out.count > 0) return true;
+  // the preferred face axis was not the shallowest and its clip came out empty
+  if (best_edge > -std::numeric_limits<double>::infinity()) return edge_manifold();
+  {
+    // touching within rounding: the clip left nothing below the face; one point at the centre
+    // of the incident face keeps the verdict and the manifold consistent
+    out.count = 1;
+    out.points[0] = {face_centre, 0.0, incident.vertices[0].feature};
+  }
+  return true;
+}
+
+bool collide_hulls(const Shape& a, const Pose& pose_a, const Shape& b, const Pose& pose_b,
+                   Manifold& out) {
+  const ConvexHull& hull_a = *a.hull;
+  const ConvexHull& hull_b = *b.hull;
+  // B in A's frame: x_a = rotation · x_b + translation
+  const Mat3 rotation = pose_a.rotation.transpose() * pose_b.rotation;
+  const Vec3 translation = pose_a.rotation.transpose() * (pose_b.position - pose_a.position);
+  std::uint16_t axes = 0;
+
+  // face axes (Gregorius's face query: the other hull's deepest vertex below each face plane),
+  // grouped by unique normal so that one projection of the other hull serves the face on either
+  // side; a face of B whose opposite is a face of A tests the same gap and is skipped
+  double best_face = -std::numeric_limits<double>::infinity();
+  std::uint32_t best_face_index = 0;
+  bool best_face_on_b = false;
+  auto consider = [&](double separation, std::uint32_t face, bool on_b) {
+    if (separation > best_face)
+      best_face = separation, best_face_index = face, best_face_on_b = on_b;
+    return separation <= 0.0;
+  };
+  for (std::size_t k = 0; k < hull_a.unique_face_normals.size(); ++k) {
+    const Vec3& u = hull_a.unique_face_normals[k];
+    const auto [plus, minus] = hull_a.unique_normal_faces[k];
+    ++axes;
+    const double shift = translation.dot(u);
+    const Extent b_along = extent_along(hull_b, rotation.transpose() * u);
+    const bool apart =
+        (plus != kNoFace &&
+         !consider(b_along.min + shift - hull_a.faces[plus].offset, plus, false)) ||
+        (minus != kNoFace &&
+         !consider(-(b_along.max + shift) - hull_a.faces[minus].offset, minus, false));
+    if (apart) {
+      out.axes_tested = axes;
+      return no_contact(out);
+    }
+  }
+  for (std::size_t k = 0; k < hull_b.unique_face_normals.size(); ++k) {
+    const Vec3 u = rotation * hull_b.unique_face_normals[k];  // A's frame
+    auto [plus, minus] = hull_b.unique_normal_faces[k];
+    // A's faces with normals +u and −u, if any
+    std::uint32_t a_plus = kNoFace, a_minus = kNoFace;
+    for (std::size_t m = 0; m < hull_a.unique_face_normals.size(); ++m) {
+      const double cosine = hull_a.unique_face_normals[m].dot(u);
+      if (std::abs(cosine) <= kDuplicateCosine) continue;
+      a_plus = hull_a.unique_normal_faces[m][cosine > 0.0 ? 0 : 1];
+      a_minus = hull_a.unique_normal_faces[m][cosine > 0.0 ? 1 : 0];
+    }
+    if (a_minus != kNoFace) plus = kNoFace;  // B's +u face tests the gap A's −u face tested
+    if (a_plus != kNoFace) minus = kNoFace;
+    if (plus == kNoFace && minus == kNoFace) continue;
+    ++axes;
+    // B's face planes in A's frame: u · x = offset + u · translation
+    const double shift = translation.dot(u);
+    const Extent a_along = extent_along(hull_a, u);
+    const bool apart =
+        (plus != kNoFace &&
+         !consider(a_along.min - (hull_b.faces[plus].offset + shift), plus, true)) ||
+        (minus != kNoFace &&
+         !consider(-a_along.max - (hull_b.faces[minus].offset - shift), minus, true));
+    if (apart) {
+      out.axes_tested = axes;
+      return no_contact(out);
+    }
+  }
+
+  // edge pairs that make a face of the Minkowski difference; B's vertices and face normals are
+  // brought into A's frame once
+  std::array<Vec3, kMaxHullVertices> vertices_b;
+  for (std::size_t i = 0; i < hull_b.vertices.size(); ++i)
+    vertices_b[i] = rotation * hull_b.vertices[i] + translation;
+  std::array<Vec3, 2 * kMaxHullVertices> normals_b;
+  for (std::size_t f = 0; f < hull_b.faces.size(); ++f)
+    normals_b[f] = rotation * hull_b.faces[f].normal;
+
+  double best_edge = -std::numeric_limits<double>::infinity();
+  Vec3 best_edge_normal = Vec3::Zero();
+  std::uint32_t best_edge_a = 0, best_edge_b = 0;
+  for (std::uint32_t i = 0; i < hull_a.edges.size(); ++i) {
+    const HullEdge& ea = hull_a.edges[i];
+    const Vec3& na_left = hull_a.faces[ea.left].normal;
+    const Vec3& na_right = hull_a.faces[ea.right].normal;
+    const Vec3& tail_a = hull_a.vertices[ea.tail];
+    const Vec3 direction_a = hull_a.vertices[ea.head] - tail_a;
+    for (std::uint32_t j = 0; j < hull_b.edges.size(); ++j) {
+      const HullEdge& eb = hull_b.edges[j];
+      if (!arcs_cross(na_left, na_right, -normals_b[eb.left], -normals_b[eb.right])) continue;
+      const Vec3 direction_b = vertices_b[eb.head] - vertices_b[eb.tail];
+      Vec3 axis = direction_a.cross(direction_b);
+      const double length = axis.norm();
+      if (length < kParallelSine * direction_a.norm() * direction_b.norm()) continue;
+      ++axes;
+      axis /= length;
+      // outward from A
+      if (axis.dot(tail_a - hull_a.centre) < 0.0) axis = -axis;
+      const double separation = axis.dot(vertices_b[eb.tail] - tail_a);
+      if (separation > 0.0) {
+        out.axes_tested = axes;
+        return no_contact(out);
+      }
+      if (separation > best_edge)
+        best_edge = separation, best_edge_normal = axis, best_edge_a = i, best_edge_b = j;
+    }
+  }
+  out.axes_tested = axes;
+
+  // faces first unless an edge axis is clearly shallower; when the preferred face axis was not
+  // the shallowest, its clip can come out empty, and the edge contact stands in
+  if (!edge_axis_wins(best_edge, best_face)) {
+    if (best_face_on_b)
+      hull_face_manifold(hull_b, pose_b, best_face_index, hull_a, pose_a, true, -best_face, out);
+    else
+      hull_face_manifold(hull_a, pose_a, best_face_index, hull_b, pose_b, false, -best_face, out);
+    if (out.count > 0) return true;
+  }
+  if (best_edge > -std::numeric_limits<double>::infinity()) {
+    const HullEdge& ea = hull_a.edges[best_edge_a];
+    const HullEdge& eb = hull_b.edges[best_edge_b];
+    const Vec3 tail_a = pose_a.position + pose_a.rotation * hull_a.vertices[ea.tail];
+    const Vec3 head_a = pose_a.position + pose_a.rotation * hull_a.vertices[ea.head];
+    const Vec3 tail_b = pose_b.position + pose_b.rotation * hull_b.vertices[eb.tail];
+    const Vec3 head_b = pose_b.position + pose_b.rotation * hull_b.vertices[eb.head];
+    edge_contact(tail_a, head_a - tail_a, tail_b, head_b - tail_b,
+                 pose_a.rotation * best_edge_normal, -best_edge, std::uint16_t(best_edge_a),
+                 std::uint16_t(best_edge_b), out);
+    return true;
+  }
+  if (out.count == 0) {
+    // touching within rounding: one point midway between the two supports along the normal
+    const Vec3 normal = out.normal;
+    Vec3 support_a = hull_a.vertices[0], support_b = hull_b.vertices[0];
+    const Vec3 na = pose_a.rotation.transpose() * normal, nb = pose_b.rotation.transpose() * normal;
+    for (const Vec3& v : hull_a.vertices)
+      if (v.dot(na) > support_a.dot(na)) support_a = v;
+    for (const Vec3& v : hull_b.vertices)
+      if (v.dot(nb) < support_b.dot(nb)) support_b = v;
+    out.count = 1;
+    out.points[0] = {0.5 * (pose_a.position + pose_a.rotation * support_a + pose_b.position +
+                            pose_b.rotation * support_b),
+                     out.depth, ContactFeature{}};
+  }
+  return true;
+}
+
+// ---- dispatch ----
+
+namespace {
+
+// the table holds each pair once in the order written; the mirrored entries swap the shapes
+// and turn the normal round
+template <CollideFunction function>
+bool mirrored(const Shape& a, const Pose& pose_a, const Shape& b, const Pose& pose_b,
+              Manifold& out) {
+  const bool touching = function(b, pose_b, a, pose_a, out);
+  out.normal = -out.normal;
+  for (std::uint8_t i = 0; i < out.count; ++i) out.points[i].feature.flipped ^= 1;
+  return touching;
+}
+
+bool never(const Shape&, const Pose&, const Shape&, const Pose&, Manifold& out) {
+  return no_contact(out);
+}
+
+// sphere, box, hull, plane; a box against a hull or a plane is a hull
+constexpr CollideFunction kCollide[kShapeKinds][kShapeKinds] = {
+    {collide_spheres, collide_sphere_box, collide_sphere_hull, collide_sphere_plane},
+    {mirrored<collide_sphere_box>, collide_boxes, collide_hulls, collide_hull_plane},
+    {mirrored<collide_sphere_hull>, collide_hulls, collide_hulls, collide_hull_plane},
+    {mirrored<collide_sphere_plane>, mirrored<collide_hull_plane>, mirrored<collide_hull_plane>,
+     never},
+};
+
+}  // namespace
+
+bool collide(const Shape& a, const Pose& pose_a, const Shape& b, const Pose& pose_b,
+             Manifold& out) {
+  out.axes_tested = 0;
+  return kCollide[std::size_t(a.kind)][std::size_t(b.kind)](a, pose_a, b, pose_b, out);
+}
+
+}  // namespace rtp
