@@ -324,8 +324,99 @@ NarrowphaseAgreement compare_narrowphase(const NarrowphaseSet& set, NarrowphaseP
   return agreement;
 }
 
+namespace {
+
+class RtpNarrowphase final : public NarrowphasePeer {
+ public:
+  RtpNarrowphase(const NarrowphaseSet& set, bool boxes_as_hulls) : set_(set) {
+    shapes_ = set.shapes;
+    if (boxes_as_hulls)
+      for (rtp::Shape& s : shapes_)
+        if (s.kind == rtp::ShapeKind::Box) s = rtp::Shape::convex(*s.hull);
+  }
+  PeerContact collide(std::size_t index) override {
+    const NarrowphasePair& p = set_.pairs[index];
+    const bool touching =
+        rtp::collide(shapes_[p.shape_a], p.pose_a, shapes_[p.shape_b], p.pose_b, manifold_);
+    return rtp_contact(manifold_, touching);
+  }
+
+ private:
+  const NarrowphaseSet& set_;
+  std::vector<rtp::Shape> shapes_;
+  rtp::Manifold manifold_;
+};
+
+class RtpTriangleBatch final : public TriangleBatch {
+ public:
+  explicit RtpTriangleBatch(const std::vector<TriangleQuery>& queries) : queries_(queries) {}
+  double run() override {
+    double sum = 0.0;
+    for (const TriangleQuery& q : queries_)
+      sum += (q.point - rtp::closest_point_on_triangle(q.point, q.a, q.b, q.c).point).norm();
+    return sum;
+  }
+  rtp::Vec3 closest(std::size_t i) override {
+    const TriangleQuery& q = queries_[i];
+    return rtp::closest_point_on_triangle(q.point, q.a, q.b, q.c).point;
+  }
+
+ private:
+  std::vector<TriangleQuery> queries_;
+};
+
+}  // namespace
+
+std::vector<NarrowphasePeerEntry> rtp_narrowphases() {
+  NarrowphasePeerEntry table;
+  table.name = "rtp/sat";
+  table.version = "this build";
+  table.settings = {{"dispatch",
+                     "collide(): boxes by the closed-form test, hulls by the Gauss-map SAT",
+                     "rtp's narrow phase as a world would call it"}};
+  table.unsupported = [](const NarrowphaseSet&) { return std::optional<std::string>(); };
+  table.create = [](const NarrowphaseSet& set) {
+    return std::make_unique<RtpNarrowphase>(set, false);
+  };
+  NarrowphasePeerEntry general = table;
+  general.name = "rtp/sat-hull";
+  general.settings = {{"dispatch", "boxes as general hulls (Gauss-map SAT, clipping of hull faces)",
+                       "what the closed form saves"}};
+  general.unsupported = [](const NarrowphaseSet& set) -> std::optional<std::string> {
+    if (set.shapes_kind != NarrowphaseShapes::BoxBox)
+      return "only box-box sets have boxes to convert";
+    return std::nullopt;
+  };
+  general.create = [](const NarrowphaseSet& set) {
+    return std::make_unique<RtpNarrowphase>(set, true);
+  };
+  return {table, general};
+}
+
+std::vector<TriangleQuery> make_triangle_queries(std::size_t count, std::uint64_t seed) {
+  // unit-scale triangles and points around them: every Voronoi region is met
+  std::mt19937_64 random(seed);
+  std::uniform_real_distribution<double> u(-1.0, 1.0);
+  auto point = [&](double scale) -> rtp::Vec3 {
+    return rtp::Vec3(u(random), u(random), u(random)) * scale;
+  };
+  std::vector<TriangleQuery> queries;
+  while (queries.size() < count) {
+    TriangleQuery q{point(2.0), point(1.0), point(1.0), point(1.0)};
+    if ((q.b - q.a).cross(q.c - q.a).norm() > 0.05) queries.push_back(q);
+  }
+  return queries;
+}
+
+std::unique_ptr<TriangleBatch> make_rtp_triangle_batch(const std::vector<TriangleQuery>& queries) {
+  return std::make_unique<RtpTriangleBatch>(queries);
+}
+
 #ifndef PHYSBENCH_HAVE_BULLET
 std::vector<NarrowphasePeerEntry> bullet_narrowphases() { return {}; }
+std::unique_ptr<TriangleBatch> make_bullet_triangle_batch(const std::vector<TriangleQuery>&) {
+  return nullptr;
+}
 #endif
 
 std::vector<NarrowphasePeerEntry> narrowphase_peers() { return bullet_narrowphases(); }

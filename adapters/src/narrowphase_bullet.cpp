@@ -113,6 +113,37 @@ class BulletNarrowphase final : public NarrowphasePeer {
   btGjkEpaPenetrationDepthSolver epa_;
 };
 
+class BulletTriangleBatch final : public TriangleBatch {
+ public:
+  explicit BulletTriangleBatch(const std::vector<TriangleQuery>& queries) {
+    for (const TriangleQuery& q : queries)
+      queries_.push_back({to_bullet(q.point), to_bullet(q.a), to_bullet(q.b), to_bullet(q.c)});
+  }
+  double run() override {
+    double sum = 0.0;
+    btSubSimplexClosestResult result;
+    for (const Query& q : queries_) {
+      solver_.closestPtPointTriangle(q.point, q.a, q.b, q.c, result);
+      sum += double((q.point - result.m_closestPointOnSimplex).length());
+    }
+    return sum;
+  }
+  rtp::Vec3 closest(std::size_t i) override {
+    const Query& q = queries_[i];
+    btSubSimplexClosestResult result;
+    solver_.closestPtPointTriangle(q.point, q.a, q.b, q.c, result);
+    const btVector3& c = result.m_closestPointOnSimplex;
+    return {c.x(), c.y(), c.z()};
+  }
+
+ private:
+  struct Query {
+    btVector3 point, a, b, c;
+  };
+  std::vector<Query> queries_;
+  btVoronoiSimplexSolver solver_;
+};
+
 std::string bullet_version() {
   const int v = btGetVersion();
   return std::to_string(v / 100) + "." + std::to_string(v % 100) + " (float)";
@@ -151,6 +182,11 @@ std::vector<NarrowphasePeerEntry> bullet_narrowphases() {
     return std::make_unique<BulletNarrowphase>(set, BulletMethod::BoxBox);
   };
   return {gjk, box};
+}
+
+std::unique_ptr<TriangleBatch> make_bullet_triangle_batch(
+    const std::vector<TriangleQuery>& queries) {
+  return std::make_unique<BulletTriangleBatch>(queries);
 }
 
 }  // namespace physbench

@@ -87,6 +87,29 @@ struct NarrowphasePeerEntry {
 // every peer narrow phase this build has (none without Bullet)
 std::vector<NarrowphasePeerEntry> narrowphase_peers();
 std::vector<NarrowphasePeerEntry> bullet_narrowphases();
+// rtp behind the same interface, for the benchmark: "rtp/sat" (collide(): the table, so boxes
+// take the closed form) and "rtp/sat-hull" (boxes as general hulls, box-box sets only)
+std::vector<NarrowphasePeerEntry> rtp_narrowphases();
+
+// lab 4.1's query, for the benchmark: a point and a triangle
+struct TriangleQuery {
+  rtp::Vec3 point, a, b, c;
+};
+std::vector<TriangleQuery> make_triangle_queries(std::size_t count, std::uint64_t seed);
+
+// one engine's closest-point-on-triangle over a batch of queries, prepared once
+class TriangleBatch {
+ public:
+  virtual ~TriangleBatch() = default;
+  // answers every query once; returns the sum of the distances (so the work cannot be elided)
+  virtual double run() = 0;
+  // the closest point of one query (untimed: for checking)
+  virtual rtp::Vec3 closest(std::size_t query) = 0;
+};
+std::unique_ptr<TriangleBatch> make_rtp_triangle_batch(const std::vector<TriangleQuery>& queries);
+// Bullet's btVoronoiSimplexSolver::closestPtPointTriangle; nullptr in a build without Bullet
+std::unique_ptr<TriangleBatch> make_bullet_triangle_batch(
+    const std::vector<TriangleQuery>& queries);
 
 // rtp's answer in the peers' terms
 PeerContact rtp_contact(const rtp::Manifold& manifold, bool touching);

@@ -1,0 +1,145 @@
+// The narrow phase on every engine (docs/narrowphase.md): nanoseconds per pair over a set of
+// random pose pairs, rtp against Bullet's box-box detector and GJK/EPA on the same pairs in the
+// same run, and lab 4.1's closest point on a triangle against Bullet's. Each peer's row carries
+// how rtp agrees with it on that set (the validation tests hold the same comparison to zero
+// unexplained disagreements).
+//
+//   build/bench/bench/narrowphase_bench --benchmark_out=narrowphase.json
+//   --benchmark_out_format=json build/bench/bench/narrowphase_bench
+//   --benchmark_filter='box-box/touching'
+#include <benchmark/benchmark.h>
+#include <physbench/narrowphase.h>
+
+#include <map>
+
+namespace {
+
+using physbench::NarrowphaseRegime;
+using physbench::NarrowphaseSet;
+using physbench::NarrowphaseShapes;
+
+// pairs per set: enough to mix every configuration, few enough to stay in the L2 cache with
+// their shapes (the branch predictor cannot learn 1024 random pairs)
+constexpr std::size_t kPairs = 1024;
+constexpr std::size_t kTriangleQueries = 4096;
+
+// the sets, built once each (a 32-vertex hull set takes a fraction of a second)
+const NarrowphaseSet& set_of(NarrowphaseShapes shapes, NarrowphaseRegime regime) {
+  static std::map<std::pair<NarrowphaseShapes, NarrowphaseRegime>, NarrowphaseSet> sets;
+  auto it = sets.find({shapes, regime});
+  if (it == sets.end())
+    it = sets.emplace(std::pair{shapes, regime},
+                      physbench::make_narrowphase_set(shapes, regime, kPairs, 2026))
+             .first;
+  return it->second;
+}
+
+void Pairs(benchmark::State& state, const physbench::NarrowphasePeerEntry& entry,
+           NarrowphaseShapes shapes, NarrowphaseRegime regime) {
+  const NarrowphaseSet& set = set_of(shapes, regime);
+  auto engine = entry.create(set);
+  std::size_t touching = 0;
+  for (auto _ : state) {
+    for (std::size_t i = 0; i < set.pairs.size(); ++i) {
+      const physbench::PeerContact c = engine->collide(i);
+      touching += c.touching;
+    }
+  }
+  state.SetItemsProcessed(int64_t(state.iterations() * set.pairs.size()));  // pairs/s
+  state.counters["pairs"] = double(set.pairs.size());
+  state.counters["touching_fraction"] =
+      double(touching) / double(state.iterations() * set.pairs.size());
+  // how rtp agrees with this engine on the set (a peer's rows only)
+  if (entry.name.rfind("rtp/", 0) != 0) {
+    const physbench::NarrowphaseAgreement a = physbench::compare_narrowphase(set, *engine);
+    const double verdicts = double(a.pairs - a.in_band);
+    state.counters["verdict_agreement"] = verdicts > 0 ? double(a.verdict_agree) / verdicts : 1.0;
+    state.counters["compared_contacts"] = double(a.both_deep);
+    state.counters["depth_agreement"] =
+        a.both_deep ? double(a.depth_agree) / double(a.both_deep) : 1.0;
+    state.counters["normal_agreement"] =
+        a.both_deep ? double(a.normal_agree + a.normal_tie) / double(a.both_deep) : 1.0;
+    state.counters["peer_refuted"] = double(a.peer_refuted);
+    state.counters["unexplained"] = double(a.disagreements.size());
+    state.counters["in_band"] = double(a.in_band);
+  }
+}
+
+void Triangles(benchmark::State& state, bool bullet) {
+  static const std::vector<physbench::TriangleQuery> queries =
+      physbench::make_triangle_queries(kTriangleQueries, 2026);
+  auto batch = bullet ? physbench::make_bullet_triangle_batch(queries)
+                      : physbench::make_rtp_triangle_batch(queries);
+  double sum = 0.0;
+  for (auto _ : state) benchmark::DoNotOptimize(sum += batch->run());
+  state.SetItemsProcessed(int64_t(state.iterations() * queries.size()));
+  state.counters["pairs"] = double(queries.size());
+  if (bullet) {
+    // the largest distance between Bullet's closest point (single precision) and rtp's
+    auto ours = physbench::make_rtp_triangle_batch(queries);
+    double worst = 0.0;
+    for (std::size_t i = 0; i < queries.size(); ++i)
+      worst = std::max(worst, (batch->closest(i) - ours->closest(i)).norm());
+    state.counters["worst_point_difference"] = worst;
+  }
+}
+
+}  // namespace
+
+int main(int argc, char** argv) {
+  benchmark::Initialize(&argc, argv);
+  if (benchmark::ReportUnrecognizedArguments(argc, argv)) return 1;
+
+  std::vector<physbench::NarrowphasePeerEntry> engines = physbench::rtp_narrowphases();
+  for (auto& e : physbench::narrowphase_peers()) engines.push_back(std::move(e));
+
+  const std::pair<NarrowphaseShapes, NarrowphaseRegime> cases[] = {
+      {NarrowphaseShapes::BoxBox, NarrowphaseRegime::Separated},
+      {NarrowphaseShapes::BoxBox, NarrowphaseRegime::Touching},
+      {NarrowphaseShapes::BoxBox, NarrowphaseRegime::Deep},
+      {NarrowphaseShapes::HullHull, NarrowphaseRegime::Separated},
+      {NarrowphaseShapes::HullHull, NarrowphaseRegime::Touching},
+      {NarrowphaseShapes::HullHull, NarrowphaseRegime::Deep},
+  };
+  for (const auto& [shapes, regime] : cases) {
+    // a set only to ask each engine whether it can run the kind; sets are built once, on use
+    NarrowphaseSet probe;
+    probe.shapes_kind = shapes;
+    probe.regime = regime;
+    for (const auto& entry : engines) {
+      if (entry.unsupported(probe)) continue;
+      const std::string name = "Pairs/" + probe.name() + "/" + entry.name;
+      benchmark::RegisterBenchmark(name.c_str(), Pairs, entry, shapes, regime)
+          ->Unit(benchmark::kMicrosecond)
+          ->MinTime(0.1)
+          ->Repetitions(3)
+          ->ReportAggregatesOnly(false);
+    }
+  }
+  benchmark::RegisterBenchmark("Triangle/closest-point/rtp/voronoi", Triangles, false)
+      ->Unit(benchmark::kMicrosecond)
+      ->MinTime(0.1)
+      ->Repetitions(3);
+  if (physbench::make_bullet_triangle_batch({}))
+    benchmark::RegisterBenchmark("Triangle/closest-point/bullet/voronoi-simplex", Triangles, true)
+        ->Unit(benchmark::kMicrosecond)
+        ->MinTime(0.1)
+        ->Repetitions(3);
+
+  for (const auto& entry : engines) {
+    std::string settings;
+    for (const auto& s : entry.settings)
+      settings += (settings.empty() ? "" : "; ") + s.name + ": " + s.value + " (" + s.why + ")";
+    benchmark::AddCustomContext("settings " + entry.name, entry.version + "; " + settings);
+  }
+  const physbench::NarrowphaseTolerances t;
+  benchmark::AddCustomContext("tolerances", "verdict band " + std::to_string(t.verdict_band) +
+                                                " m; depth " + std::to_string(t.depth_absolute) +
+                                                " m + " + std::to_string(t.depth_relative * 100) +
+                                                " %; normal " + std::to_string(t.normal_degrees) +
+                                                " deg or a tie; surface " +
+                                                std::to_string(t.surface) + " m");
+  benchmark::RunSpecifiedBenchmarks();
+  benchmark::Shutdown();
+  return 0;
+}
