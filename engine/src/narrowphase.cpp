@@ -31,27 +31,35 @@ struct ClipVertex {
   ContactFeature feature;
 };
 
-// the most vertices a clipped polygon can have: the incident face plus one per side plane
-constexpr std::size_t kClipCapacity = 2 * kMaxFaceVertices + 2;
-
+// a polygon being clipped, with room for every vertex clipping can make: the incident face plus
+// one per side plane (Sides = 4, Incident = 4 for boxes: no more than the scratch a pair needs)
+template <std::size_t Capacity>
 struct ClipPolygon {
-  std::array<ClipVertex, kClipCapacity> vertices;
+  std::array<ClipVertex, Capacity> vertices;
   std::size_t count = 0;
 };
 
 // the reference face in the world: its plane and its side planes (normals need not be unit)
+template <std::size_t Sides>
 struct ReferenceFace {
   Vec3 normal;    // unit, outward
   double offset;  // normal · x = offset on the face
-  std::array<Vec3, kMaxFaceVertices> side_normals;
-  std::array<double, kMaxFaceVertices> side_offsets;
+  std::array<Vec3, Sides> side_normals;
+  std::array<double, Sides> side_offsets;
   std::size_t side_count = 0;
   std::uint16_t face = 0;
 };
 
+constexpr std::size_t kBoxSides = 4;
+constexpr std::size_t kBoxClip = 8;
+constexpr std::size_t kHullClip = 2 * kMaxFaceVertices + 2;
+// the vertices of a hull below a plane (hull against plane)
+constexpr std::size_t kPlaneContacts = kMaxHullVertices;
+
 // Sutherland–Hodgman: the part of the polygon where side · x ≤ offset
-void clip_against_side(const ClipPolygon& in, const Vec3& side, double offset,
-                       std::uint8_t side_index, ClipPolygon& out) {
+template <std::size_t Capacity>
+void clip_against_side(const ClipPolygon<Capacity>& in, const Vec3& side, double offset,
+                       std::uint8_t side_index, ClipPolygon<Capacity>& out) {
   out.count = 0;
   if (in.count == 0) return;
   const ClipVertex* previous = &in.vertices[in.count - 1];
@@ -77,7 +85,8 @@ void clip_against_side(const ClipPolygon& in, const Vec3& side, double offset,
 
 // keeps four of n > 4 points: the deepest, the farthest from it, the one making the largest
 // triangle with those two, and the one adding the most area outside that triangle
-void reduce_to_four(std::array<ContactPoint, kClipCapacity>& points, std::size_t& count,
+template <std::size_t Capacity>
+void reduce_to_four(std::array<ContactPoint, Capacity>& points, std::size_t& count,
                     const Vec3& normal) {
   std::size_t chosen[4];
   chosen[0] = 0;
@@ -114,19 +123,20 @@ void reduce_to_four(std::array<ContactPoint, kClipCapacity>& points, std::size_t
 
 // clips the incident polygon to the reference face and writes the manifold; `flipped` when the
 // second shape holds the reference face (the manifold's normal then opposes the face's)
-void clip_to_manifold(const ReferenceFace& reference, const ClipPolygon& incident, bool flipped,
-                      double depth, Manifold& out) {
-  ClipPolygon buffers[2];
-  const ClipPolygon* current = &incident;
+template <std::size_t Sides, std::size_t Capacity>
+void clip_to_manifold(const ReferenceFace<Sides>& reference, const ClipPolygon<Capacity>& incident,
+                      bool flipped, double depth, Manifold& out) {
+  ClipPolygon<Capacity> buffers[2];
+  const ClipPolygon<Capacity>* current = &incident;
   for (std::size_t s = 0; s < reference.side_count; ++s) {
-    ClipPolygon& next = buffers[s % 2];
+    ClipPolygon<Capacity>& next = buffers[s % 2];
     clip_against_side(*current, reference.side_normals[s], reference.side_offsets[s],
                       std::uint8_t(s), next);
     current = &next;
   }
 
   // points on or below the reference face, placed midway between the two surfaces
-  std::array<ContactPoint, kClipCapacity> points;
+  std::array<ContactPoint, Capacity> points;
   std::size_t count = 0;
   for (std::size_t i = 0; i < current->count; ++i) {
     const ClipVertex& v = current->vertices[i];
@@ -198,7 +208,7 @@ bool no_contact(Manifold& out) {
 
 // the reference face `face` of a hull at a pose, with its side planes
 void reference_face_of(const ConvexHull& hull, const Pose& pose, std::uint32_t face,
-                       ReferenceFace& out) {
+                       ReferenceFace<kMaxFaceVertices>& out) {
   const HullFace& f = hull.faces[face];
   out.normal = pose.rotation * f.normal;
   out.offset = f.offset + out.normal.dot(pose.position);
@@ -217,7 +227,7 @@ void reference_face_of(const ConvexHull& hull, const Pose& pose, std::uint32_t f
 }
 
 void incident_face_of(const ConvexHull& hull, const Pose& pose, std::uint32_t face,
-                      ClipPolygon& out) {
+                      ClipPolygon<kHullClip>& out) {
   const HullFace& f = hull.faces[face];
   out.count = f.count;
   for (std::uint32_t i = 0; i < f.count; ++i) {
@@ -257,9 +267,9 @@ std::uint32_t incident_face_for(const ConvexHull& hull, const Pose& pose,
 void hull_face_manifold(const ConvexHull& reference_hull, const Pose& reference_pose,
                         std::uint32_t reference_face, const ConvexHull& incident_hull,
                         const Pose& incident_pose, bool flipped, double depth, Manifold& out) {
-  ReferenceFace reference;
+  ReferenceFace<kMaxFaceVertices> reference;
   reference_face_of(reference_hull, reference_pose, reference_face, reference);
-  ClipPolygon incident;
+  ClipPolygon<kHullClip> incident;
   incident_face_of(incident_hull, incident_pose,
                    incident_face_for(incident_hull, incident_pose, reference.normal), incident);
   clip_to_manifold(reference, incident, flipped, depth, out);
@@ -492,7 +502,7 @@ bool collide_hull_plane(const Shape& a, const Pose& pose_a, const Shape& b, cons
   // every vertex on or below the plane, then the four that span the most
   const Vec3 normal_in_hull = pose_a.rotation.transpose() * plane_normal;
   const double centre_height = plane_normal.dot(pose_a.position) - plane_offset;
-  std::array<ContactPoint, kClipCapacity> points;
+  std::array<ContactPoint, kPlaneContacts> points;
   std::size_t count = 0;
   double deepest = 0.0;
   for (std::uint32_t i = 0; i < hull.vertices.size(); ++i) {
@@ -552,40 +562,44 @@ bool collide_boxes(const Shape& a, const Pose& pose_a, const Shape& b, const Pos
     }
     if (separation > best_face) best_face = separation, best_face_axis = 3 + j;
   }
-  // edge axes a_i × b_j, skipping parallel edges
-  double best_edge = -std::numeric_limits<double>::infinity();
-  Vec3 best_edge_axis = Vec3::Zero();
+  // edge axes L = a_i × b_j in closed form (Ericson §4.4.1; B's axes in A's frame are c's
+  // columns): L = (…, −c(i2, j), c(i1, j)) on A's axes i1, i2, and in B's frame it has c(i, j2)
+  // and −c(i, j1) on B's axes j1, j2, so the radii and |L|² = 1 − c(i, j)² need no products of
+  // matrices. An axis of parallel edges (|L| ≈ 0) or one parallel to a face normal (one of the two
+  // components ≈ 0) is skipped: the faces covered it. The separation (|t·L| − r)/|L| is kept
+  // squared, so only the winner takes a square root.
+  double best_edge_squared = std::numeric_limits<double>::infinity();
   int best_edge_i = 0, best_edge_j = 0;
+  constexpr double kSine2 = kParallelSine * kParallelSine;
   for (int i = 0; i < 3; ++i) {
+    const int i1 = (i + 1) % 3, i2 = (i + 2) % 3;
     for (int j = 0; j < 3; ++j) {
-      const Vec3 b_j = c.col(j);
-      const Vec3 axis = Vec3::Unit(i).cross(b_j);
-      const double length = axis.norm();
-      if (length < kParallelSine) continue;
-      // an axis parallel to a face normal of either box was tested with the faces (aligned
-      // boxes need only their three face axes, as the seed says)
-      const Vec3 axis_in_b = c.transpose() * axis;
-      if (axis.cwiseAbs().maxCoeff() > kDuplicateCosine * length ||
-          axis_in_b.cwiseAbs().maxCoeff() > kDuplicateCosine * length)
+      const int j1 = (j + 1) % 3, j2 = (j + 2) % 3;
+      const double length_squared = c(i1, j) * c(i1, j) + c(i2, j) * c(i2, j);
+      const double least_a = std::min(abs_c(i1, j), abs_c(i2, j));
+      const double least_b = std::min(abs_c(i, j1), abs_c(i, j2));
+      if (length_squared < kSine2 || least_a * least_a < kSine2 * length_squared ||
+          least_b * least_b < kSine2 * length_squared)
         continue;
       ++axes;
-      const double radius_a = ha.dot(axis.cwiseAbs());
-      const double radius_b = hb.dot(axis_in_b.cwiseAbs());
-      const double separation = (std::abs(t.dot(axis)) - (radius_a + radius_b)) / length;
-      if (separation > 0.0) {
+      const double radius_a = ha[i1] * abs_c(i2, j) + ha[i2] * abs_c(i1, j);
+      const double radius_b = hb[j1] * abs_c(i, j2) + hb[j2] * abs_c(i, j1);
+      const double gap = std::abs(t[i2] * c(i1, j) - t[i1] * c(i2, j)) - (radius_a + radius_b);
+      if (gap > 0.0) {
         out.axes_tested = axes;
         return no_contact(out);
       }
-      if (separation > best_edge)
-        best_edge = separation, best_edge_axis = axis / length, best_edge_i = i, best_edge_j = j;
+      if (const double squared = gap * gap / length_squared; squared < best_edge_squared)
+        best_edge_squared = squared, best_edge_i = i, best_edge_j = j;
     }
   }
+  const double best_edge = -std::sqrt(best_edge_squared);
   out.axes_tested = axes;
 
   // edge–edge: the edge of A parallel to a_i that is farthest along the normal, and the edge of B
   // parallel to b_j farthest against it
   auto edge_manifold = [&] {
-    Vec3 normal_in_a = best_edge_axis;
+    Vec3 normal_in_a = Vec3::Unit(best_edge_i).cross(c.col(best_edge_j)).normalized();
     if (normal_in_a.dot(t) < 0.0) normal_in_a = -normal_in_a;
     const Vec3 normal = pose_a.rotation * normal_in_a;
     Vec3 tail_a = pose_a.position;
@@ -626,7 +640,7 @@ bool collide_boxes(const Shape& a, const Pose& pose_a, const Shape& b, const Pos
   const Vec3 reference_axis = reference_pose.rotation.col(axis);
   const double sign = reference_axis.dot(to_incident) >= 0.0 ? 1.0 : -1.0;
 
-  ReferenceFace reference;
+  ReferenceFace<kBoxSides> reference;
   reference.normal = sign * reference_axis;
   reference.offset = reference.normal.dot(reference_pose.position) + reference_half[axis];
   reference.face = std::uint16_t(2 * axis + (sign > 0.0 ? 0 : 1));
@@ -653,7 +667,7 @@ bool collide_boxes(const Shape& a, const Pose& pose_a, const Shape& b, const Pos
   const Vec3 edge_v = incident_half[v] * incident_pose.rotation.col(v);
   const std::uint16_t incident_face =
       std::uint16_t(2 * incident_axis + (incident_sign > 0.0 ? 0 : 1));
-  ClipPolygon incident;
+  ClipPolygon<kBoxClip> incident;
   incident.count = 4;
   const double corner_u[4] = {1, -1, -1, 1}, corner_v[4] = {1, 1, -1, -1};
   for (int k = 0; k < 4; ++k) {
