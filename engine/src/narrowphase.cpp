@@ -83,38 +83,48 @@ void clip_against_side(const ClipPolygon<Capacity>& in, const Vec3& side, double
   }
 }
 
-// keeps four of n > 4 points: the deepest, the farthest from it, the one making the largest
-// triangle with those two, and the one adding the most area outside that triangle
-template <std::size_t Capacity>
-void reduce_to_four(std::array<ContactPoint, Capacity>& points, std::size_t& count,
-                    const Vec3& normal) {
-  std::size_t chosen[4];
-  chosen[0] = 0;
+// which four of n > 4 points to keep: the deepest, the farthest from it, the one making the
+// largest triangle with those two, and the one adding the most area outside that triangle.
+// position(i) is a point in any vector type; area(p, q, r) the signed area of pqr about the normal.
+template <typename Depth, typename Position, typename Area>
+std::array<std::size_t, 4> choose_four(std::size_t count, Depth depth, Position position,
+                                       Area area) {
+  std::array<std::size_t, 4> chosen{};
   for (std::size_t i = 1; i < count; ++i)
-    if (points[i].depth > points[chosen[0]].depth) chosen[0] = i;
-  const Vec3& p0 = points[chosen[0]].point;
+    if (depth(i) > depth(chosen[0])) chosen[0] = i;
+  const auto p0 = position(chosen[0]);
   double best = -1.0;
   for (std::size_t i = 0; i < count; ++i)
-    if (double d = (points[i].point - p0).squaredNorm(); d > best) best = d, chosen[1] = i;
-  const Vec3& p1 = points[chosen[1]].point;
+    if (double d = (position(i) - p0).squaredNorm(); d > best) best = d, chosen[1] = i;
+  const auto p1 = position(chosen[1]);
   best = -1.0;
-  for (std::size_t i = 0; i < count; ++i) {
-    const double area = std::abs((p1 - p0).cross(points[i].point - p0).dot(normal));
-    if (area > best) best = area, chosen[2] = i;
-  }
-  const Vec3& p2 = points[chosen[2]].point;
-  const double orientation = (p1 - p0).cross(p2 - p0).dot(normal) >= 0.0 ? 1.0 : -1.0;
+  for (std::size_t i = 0; i < count; ++i)
+    if (double a = std::abs(area(p0, p1, position(i))); a > best) best = a, chosen[2] = i;
+  const auto p2 = position(chosen[2]);
+  const double orientation = area(p0, p1, p2) >= 0.0 ? 1.0 : -1.0;
   best = -std::numeric_limits<double>::infinity();
   chosen[3] = chosen[0];
   for (std::size_t i = 0; i < count; ++i) {
     if (i == chosen[0] || i == chosen[1] || i == chosen[2]) continue;
-    const Vec3& q = points[i].point;
+    const auto q = position(i);
     // the area q adds: the largest triangle it makes outside one of the three edges
-    const double added = -orientation * std::min({(p1 - p0).cross(q - p0).dot(normal),
-                                                  (p2 - p1).cross(q - p1).dot(normal),
-                                                  (p0 - p2).cross(q - p2).dot(normal)});
+    const double added =
+        -orientation * std::min({area(p0, p1, q), area(p1, p2, q), area(p2, p0, q)});
     if (added > best) best = added, chosen[3] = i;
   }
+  return chosen;
+}
+
+// keeps four of n > 4 contact points (choose_four in the world)
+template <std::size_t Capacity>
+void reduce_to_four(std::array<ContactPoint, Capacity>& points, std::size_t& count,
+                    const Vec3& normal) {
+  const std::array<std::size_t, 4> chosen = choose_four(
+      count, [&](std::size_t i) { return points[i].depth; },
+      [&](std::size_t i) -> const Vec3& { return points[i].point; },
+      [&](const Vec3& p, const Vec3& q, const Vec3& r) {
+        return (q - p).cross(r - p).dot(normal);
+      });
   std::array<ContactPoint, 4> kept;
   for (int k = 0; k < 4; ++k) kept[k] = points[chosen[k]];
   std::copy(kept.begin(), kept.end(), points.begin());
@@ -450,7 +460,7 @@ bool collide_sphere_hull(const Shape& a, const Pose& pose_a, const Shape& b, con
   }
   if (largest > a.radius) return no_contact(out);
 
-  Vec3 normal_in_hull, surface_in_hull;
+  Vec3 normal_in_hull, surface_in_hull = Vec3::Zero();
   double distance;
   if (largest <= 0.0) {
     // inside: out through the nearest face plane
@@ -628,63 +638,131 @@ bool collide_boxes(const Shape& a, const Pose& pose_a, const Shape& b, const Pos
   };
   if (edge_axis_wins(best_edge, best_face)) return edge_manifold();
 
-  // face contact: the reference face is the face of the best axis, on the side facing the other
-  // box; the incident face is the other box's face most opposed to it
+  // face contact, clipped in the reference box's frame (as ODE's dBoxBox does): the incident
+  // face's quad is cut to the reference face's rectangle in the face's two coordinates, the third
+  // giving the depth. In that frame the side planes are |u| ≤ h_u and |v| ≤ h_v.
   const bool flipped = best_face_axis >= 3;
   const Pose& reference_pose = flipped ? pose_b : pose_a;
-  const Pose& incident_pose = flipped ? pose_a : pose_b;
   const Vec3& reference_half = flipped ? hb : ha;
   const Vec3& incident_half = flipped ? ha : hb;
-  const int axis = best_face_axis % 3;
-  const Vec3 to_incident = incident_pose.position - reference_pose.position;
-  const Vec3 reference_axis = reference_pose.rotation.col(axis);
-  const double sign = reference_axis.dot(to_incident) >= 0.0 ? 1.0 : -1.0;
-
-  ReferenceFace<kBoxSides> reference;
-  reference.normal = sign * reference_axis;
-  reference.offset = reference.normal.dot(reference_pose.position) + reference_half[axis];
-  reference.face = std::uint16_t(2 * axis + (sign > 0.0 ? 0 : 1));
-  reference.side_count = 4;
-  for (int k = 0, s = 0; k < 3; ++k) {
-    if (k == axis) continue;
-    const Vec3 side = reference_pose.rotation.col(k);
-    const double centre = side.dot(reference_pose.position);
-    reference.side_normals[s] = side;
-    reference.side_offsets[s++] = centre + reference_half[k];
-    reference.side_normals[s] = -side;
-    reference.side_offsets[s++] = -centre + reference_half[k];
-  }
+  // the incident box's axes (columns) and centre in the reference frame
+  const Mat3 incident_axes = flipped ? Mat3(c.transpose()) : c;
+  const Vec3 incident_centre = flipped ? Vec3(-t_in_b) : t;
+  const int axis = best_face_axis % 3, ku = (axis + 1) % 3, kv = (axis + 2) % 3;
+  const double sign = incident_centre[axis] >= 0.0 ? 1.0 : -1.0;
 
   // the incident face: the other box's axis most (anti-)parallel to the reference normal
-  const Vec3 along = incident_pose.rotation.transpose() * reference.normal;
   int incident_axis;
-  along.cwiseAbs().maxCoeff(&incident_axis);
-  const double incident_sign = along[incident_axis] > 0.0 ? -1.0 : 1.0;
-  const int u = (incident_axis + 1) % 3, v = (incident_axis + 2) % 3;
-  const Vec3 face_centre = incident_pose.position + incident_sign * incident_half[incident_axis] *
-                                                        incident_pose.rotation.col(incident_axis);
-  const Vec3 edge_u = incident_half[u] * incident_pose.rotation.col(u);
-  const Vec3 edge_v = incident_half[v] * incident_pose.rotation.col(v);
-  const std::uint16_t incident_face =
-      std::uint16_t(2 * incident_axis + (incident_sign > 0.0 ? 0 : 1));
-  ClipPolygon<kBoxClip> incident;
-  incident.count = 4;
+  incident_axes.row(axis).cwiseAbs().maxCoeff(&incident_axis);
+  const double incident_sign = sign * incident_axes(axis, incident_axis) > 0.0 ? -1.0 : 1.0;
+  const int iu = (incident_axis + 1) % 3, iv = (incident_axis + 2) % 3;
+  const Vec3 face_centre = incident_centre + incident_sign * incident_half[incident_axis] *
+                                                 incident_axes.col(incident_axis);
+  const Vec3 edge_u = incident_half[iu] * incident_axes.col(iu);
+  const Vec3 edge_v = incident_half[iv] * incident_axes.col(iv);
+  const auto incident_face = std::uint16_t(2 * incident_axis + (incident_sign > 0.0 ? 0 : 1));
+  const auto reference_face = std::uint16_t(2 * axis + (sign > 0.0 ? 0 : 1));
+
+  struct FaceVertex {
+    double u, v, w;  // reference frame: along the face's two axes and along its normal (m)
+    std::uint8_t incident_vertex, reference_side;
+    bool clipped;
+  };
+  std::array<FaceVertex, kBoxClip> polygon[2];
+  std::size_t count = 4;
   const double corner_u[4] = {1, -1, -1, 1}, corner_v[4] = {1, 1, -1, -1};
-  for (int k = 0; k < 4; ++k) {
-    incident.vertices[k].point = face_centre + corner_u[k] * edge_u + corner_v[k] * edge_v;
-    incident.vertices[k].feature = {0, incident_face, 0, std::uint8_t(k), ContactType::FaceVertex,
-                                    0};
+  for (std::uint8_t k = 0; k < 4; ++k) {
+    const Vec3 p = face_centre + corner_u[k] * edge_u + corner_v[k] * edge_v;
+    polygon[0][k] = {p[ku], p[kv], p[axis], k, 0, false};
   }
-  clip_to_manifold(reference, incident, flipped, -best_face, out);
-  if (out.count > 0) return true;
+  // Sutherland–Hodgman against u ≤ h_u, −u ≤ h_u, v ≤ h_v, −v ≤ h_v
+  int current = 0;
+  for (std::uint8_t side = 0; side < 4; ++side) {
+    const std::array<FaceVertex, kBoxClip>& in = polygon[current];
+    std::array<FaceVertex, kBoxClip>& out_polygon = polygon[1 - current];
+    const double limit = side < 2 ? reference_half[ku] : reference_half[kv];
+    const double side_sign = side % 2 == 0 ? 1.0 : -1.0;
+    auto distance = [&](const FaceVertex& x) { return side_sign * (side < 2 ? x.u : x.v) - limit; };
+    std::size_t kept = 0;
+    const FaceVertex* previous = &in[count - 1];
+    double previous_distance = distance(*previous);
+    for (std::size_t i = 0; i < count; ++i) {
+      const FaceVertex& vertex = in[i];
+      const double d = distance(vertex);
+      if ((previous_distance <= 0.0) != (d <= 0.0)) {
+        const double f = previous_distance / (previous_distance - d);
+        out_polygon[kept++] = {previous->u + f * (vertex.u - previous->u),
+                               previous->v + f * (vertex.v - previous->v),
+                               previous->w + f * (vertex.w - previous->w),
+                               previous->incident_vertex,
+                               side,
+                               true};
+      }
+      if (d <= 0.0) out_polygon[kept++] = vertex;
+      previous = &vertex;
+      previous_distance = d;
+    }
+    count = kept;
+    current = 1 - current;
+    if (count == 0) break;
+  }
+
+  // points on or below the reference face; at most four of them, chosen in the face's plane
+  std::array<FaceVertex, kBoxClip> kept;
+  std::array<double, kBoxClip> depths;
+  std::size_t below = 0;
+  for (std::size_t i = 0; i < count; ++i) {
+    const FaceVertex& x = polygon[current][i];
+    const double depth = reference_half[axis] - sign * x.w;
+    if (depth < 0.0) continue;
+    depths[below] = depth;
+    kept[below++] = x;
+  }
+  std::array<std::size_t, 4> chosen{0, 1, 2, 3};
+  if (below > 4) {
+    using Vec2 = Eigen::Vector2d;
+    chosen = choose_four(
+        below, [&](std::size_t i) { return depths[i]; },
+        [&](std::size_t i) { return Vec2(kept[i].u, kept[i].v); },
+        [](const Vec2& p, const Vec2& q, const Vec2& r) {
+          return (q.x() - p.x()) * (r.y() - p.y()) - (q.y() - p.y()) * (r.x() - p.x());
+        });
+    below = 4;
+  }
+  // midway between the surfaces, back in the world
+  const Vec3 normal = sign * reference_pose.rotation.col(axis);
+  for (std::size_t k = 0; k < below; ++k) {
+    const FaceVertex& x = kept[chosen[k]];
+    Vec3 local;
+    local[ku] = x.u;
+    local[kv] = x.v;
+    local[axis] = 0.5 * (x.w + sign * reference_half[axis]);
+    ContactPoint& p = out.points[k];
+    p.point = reference_pose.position + reference_pose.rotation * local;
+    p.depth = depths[chosen[k]];
+    p.feature = {reference_face,
+                 incident_face,
+                 x.reference_side,
+                 x.incident_vertex,
+                 x.clipped ? ContactType::FaceClip : ContactType::FaceVertex,
+                 std::uint8_t(flipped)};
+  }
+  if (below > 0) {
+    out.normal = flipped ? Vec3(-normal) : normal;
+    out.depth = -best_face;
+    out.count = std::uint8_t(below);
+    return true;
+  }
   // the preferred face axis was not the shallowest and its clip came out empty
   if (best_edge > -std::numeric_limits<double>::infinity()) return edge_manifold();
-  {
-    // touching within rounding: the clip left nothing below the face; one point at the centre
-    // of the incident face keeps the verdict and the manifold consistent
-    out.count = 1;
-    out.points[0] = {face_centre, 0.0, incident.vertices[0].feature};
-  }
+  // touching within rounding: one point at the centre of the incident face keeps the verdict and
+  // the manifold consistent
+  out.normal = flipped ? Vec3(-normal) : normal;
+  out.depth = -best_face;
+  out.count = 1;
+  out.points[0] = {reference_pose.position + reference_pose.rotation * face_centre, 0.0,
+                   ContactFeature{reference_face, incident_face, 0, 0, ContactType::FaceVertex,
+                                  std::uint8_t(flipped)}};
   return true;
 }
 
