@@ -544,41 +544,38 @@ bool collide_boxes(const Shape& a, const Pose& pose_a, const Shape& b, const Pos
   const Mat3 c = pose_a.rotation.transpose() * pose_b.rotation;
   const Mat3 abs_c = c.cwiseAbs();
   const Vec3 t = pose_a.rotation.transpose() * (pose_b.position - pose_a.position);
-  std::uint16_t axes = 0;
 
-  // A's face axes: the separation along a_i is |t_i| − (ha_i + Σ_j hb_j |c_ij|)
-  double best_face = -std::numeric_limits<double>::infinity();
-  int best_face_axis = 0;  // 0–2: A's axis, 3–5: B's
-  const Vec3 radius_b_on_a = abs_c * hb;
-  for (int i = 0; i < 3; ++i) {
-    ++axes;
-    const double separation = std::abs(t[i]) - (ha[i] + radius_b_on_a[i]);
-    if (separation > 0.0) {
-      out.axes_tested = axes;
-      return no_contact(out);
-    }
-    if (separation > best_face) best_face = separation, best_face_axis = i;
-  }
-  // B's face axes, skipping those parallel to one of A's (tested already)
+  // face axes, three at a time and without a branch per axis (random pairs defeat the branch
+  // predictor): along a_i the separation is |t_i| − (ha_i + Σ_j hb_j |c_ij|), along b_j it is
+  // |(cᵀt)_j| − (hb_j + Σ_i ha_i |c_ij|); a b_j parallel to some a_i was tested as that a_i
+  const Vec3 separation_a = t.cwiseAbs() - (ha + abs_c * hb);
   const Vec3 t_in_b = c.transpose() * t;
-  const Vec3 radius_a_on_b = abs_c.transpose() * ha;
+  Vec3 separation_b = t_in_b.cwiseAbs() - (hb + abs_c.transpose() * ha);
+  std::uint16_t axes = 3;
   for (int j = 0; j < 3; ++j) {
-    if (abs_c.col(j).maxCoeff() > kDuplicateCosine) continue;
-    ++axes;
-    const double separation = std::abs(t_in_b[j]) - (hb[j] + radius_a_on_b[j]);
-    if (separation > 0.0) {
-      out.axes_tested = axes;
-      return no_contact(out);
-    }
-    if (separation > best_face) best_face = separation, best_face_axis = 3 + j;
+    if (abs_c.col(j).maxCoeff() > kDuplicateCosine)
+      separation_b[j] = -std::numeric_limits<double>::infinity();
+    else
+      ++axes;
   }
+  int best_a, best_b;
+  const double largest_a = separation_a.maxCoeff(&best_a);
+  const double largest_b = separation_b.maxCoeff(&best_b);
+  if (largest_a > 0.0 || largest_b > 0.0) {
+    out.axes_tested = axes;
+    return no_contact(out);
+  }
+  // A's face on a tie
+  const double best_face = std::max(largest_a, largest_b);
+  const int best_face_axis = largest_b > largest_a ? 3 + best_b : best_a;  // 0–2: A's, 3–5: B's
+
   // edge axes L = a_i × b_j in closed form (Ericson §4.4.1; B's axes in A's frame are c's
   // columns): L = (…, −c(i2, j), c(i1, j)) on A's axes i1, i2, and in B's frame it has c(i, j2)
   // and −c(i, j1) on B's axes j1, j2, so the radii and |L|² = 1 − c(i, j)² need no products of
   // matrices. An axis of parallel edges (|L| ≈ 0) or one parallel to a face normal (one of the two
   // components ≈ 0) is skipped: the faces covered it. The separation (|t·L| − r)/|L| is kept
   // squared, so only the winner takes a square root.
-  double best_edge_squared = std::numeric_limits<double>::infinity();
+  double best_gap_squared = std::numeric_limits<double>::infinity(), best_length_squared = 1.0;
   int best_edge_i = 0, best_edge_j = 0;
   constexpr double kSine2 = kParallelSine * kParallelSine;
   for (int i = 0; i < 3; ++i) {
@@ -599,11 +596,13 @@ bool collide_boxes(const Shape& a, const Pose& pose_a, const Shape& b, const Pos
         out.axes_tested = axes;
         return no_contact(out);
       }
-      if (const double squared = gap * gap / length_squared; squared < best_edge_squared)
-        best_edge_squared = squared, best_edge_i = i, best_edge_j = j;
+      // gap²/|L|² < best: cross-multiplied, no division
+      if (gap * gap * best_length_squared < best_gap_squared * length_squared)
+        best_gap_squared = gap * gap, best_length_squared = length_squared, best_edge_i = i,
+        best_edge_j = j;
     }
   }
-  const double best_edge = -std::sqrt(best_edge_squared);
+  const double best_edge = -std::sqrt(best_gap_squared / best_length_squared);
   out.axes_tested = axes;
 
   // edge–edge: the edge of A parallel to a_i that is farthest along the normal, and the edge of B
