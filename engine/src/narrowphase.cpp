@@ -299,15 +299,6 @@ Extent extent_along(const ConvexHull& hull, const Vec3& direction) {
   return e;
 }
 
-// do the arcs a→b and c→d on the unit sphere cross? (Gregorius, GDC 2013): the edges whose
-// adjacent face normals are a, b and −c, −d then make a face of the Minkowski difference
-bool arcs_cross(const Vec3& a, const Vec3& b, const Vec3& c, const Vec3& d) {
-  const Vec3 b_x_a = b.cross(a), d_x_c = d.cross(c);
-  const double cba = c.dot(b_x_a), dba = d.dot(b_x_a);
-  const double adc = a.dot(d_x_c), bdc = b.dot(d_x_c);
-  return cba * dba < 0.0 && adc * bdc < 0.0 && cba * bdc > 0.0;
-}
-
 }  // namespace
 
 // ---- lab 4.1 ----
@@ -830,44 +821,76 @@ bool collide_hulls(const Shape& a, const Pose& pose_a, const Shape& b, const Pos
     }
   }
 
-  // edge pairs that make a face of the Minkowski difference; B's vertices and face normals are
-  // brought into A's frame once
+  // edge pairs that make a face of the Minkowski difference. B's vertices come into A's frame
+  // once, and B's edges are laid out as arrays of the Gauss-map arc ends −c, −d (its faces'
+  // normals, negated) so that the first half of the arc test runs over all of them at once: the
+  // test is most of the work (EA × EB pairs), and it rejects most pairs at its first line.
   std::array<Vec3, kMaxHullVertices> vertices_b;
   for (std::size_t i = 0; i < hull_b.vertices.size(); ++i)
     vertices_b[i] = rotation * hull_b.vertices[i] + translation;
-  std::array<Vec3, 2 * kMaxHullVertices> normals_b;
-  for (std::size_t f = 0; f < hull_b.faces.size(); ++f)
-    normals_b[f] = rotation * hull_b.faces[f].normal;
+  const std::size_t edge_count_b = hull_b.edges.size();
+  struct Vec3Array {  // structure of arrays, so the arc test vectorises over B's edges
+    std::array<double, kMaxHullEdges> x, y, z;
+    void set(std::size_t j, const Vec3& v) { x[j] = v.x(), y[j] = v.y(), z[j] = v.z(); }
+    double dot(std::size_t j, const Vec3& v) const {
+      return x[j] * v.x() + y[j] * v.y() + z[j] * v.z();
+    }
+  };
+  // per B edge: the arc ends −c, −d (its faces' normals negated, A's frame) and d × c
+  Vec3Array c_b, d_b, d_cross_c;
+  for (std::size_t j = 0; j < edge_count_b; ++j) {
+    const HullEdge& eb = hull_b.edges[j];
+    const Vec3 c = -(rotation * hull_b.faces[eb.left].normal);
+    const Vec3 d = -(rotation * hull_b.faces[eb.right].normal);
+    c_b.set(j, c);
+    d_b.set(j, d);
+    d_cross_c.set(j, d.cross(c));
+  }
+  std::array<std::uint8_t, kMaxHullEdges> crossing;
 
-  double best_edge = -std::numeric_limits<double>::infinity();
-  Vec3 best_edge_normal = Vec3::Zero();
+  double best_gap_squared = std::numeric_limits<double>::infinity(), best_length_squared = 1.0;
+  Vec3 best_edge_axis = Vec3::Zero();  // unnormalised
   std::uint32_t best_edge_a = 0, best_edge_b = 0;
   for (std::uint32_t i = 0; i < hull_a.edges.size(); ++i) {
     const HullEdge& ea = hull_a.edges[i];
-    const Vec3& na_left = hull_a.faces[ea.left].normal;
-    const Vec3& na_right = hull_a.faces[ea.right].normal;
+    const Vec3& a = hull_a.faces[ea.left].normal;
+    const Vec3& b = hull_a.faces[ea.right].normal;
+    const Vec3 b_x_a = b.cross(a);
+    // arcs a→b and c→d cross when c, d lie either side of a, b's plane, a, b either side of c,
+    // d's plane, and on the same hemisphere (Gregorius, GDC 2013); for all of B's edges at once,
+    // with no branch: few pairs cross, and the loop that follows skips the rest cheaply
+    for (std::size_t j = 0; j < edge_count_b; ++j) {
+      const double cba = c_b.dot(j, b_x_a), dba = d_b.dot(j, b_x_a);
+      const double adc = d_cross_c.dot(j, a), bdc = d_cross_c.dot(j, b);
+      crossing[j] = (cba * dba < 0.0) & (adc * bdc < 0.0) & (cba * bdc > 0.0);
+    }
     const Vec3& tail_a = hull_a.vertices[ea.tail];
     const Vec3 direction_a = hull_a.vertices[ea.head] - tail_a;
-    for (std::uint32_t j = 0; j < hull_b.edges.size(); ++j) {
+    const Vec3 outward_a = tail_a - hull_a.centre;
+    for (std::uint32_t j = 0; j < edge_count_b; ++j) {
+      if (!crossing[j]) continue;
       const HullEdge& eb = hull_b.edges[j];
-      if (!arcs_cross(na_left, na_right, -normals_b[eb.left], -normals_b[eb.right])) continue;
       const Vec3 direction_b = vertices_b[eb.head] - vertices_b[eb.tail];
       Vec3 axis = direction_a.cross(direction_b);
-      const double length = axis.norm();
-      if (length < kParallelSine * direction_a.norm() * direction_b.norm()) continue;
+      const double length_squared = axis.squaredNorm();
+      if (length_squared <
+          kParallelSine * kParallelSine * direction_a.squaredNorm() * direction_b.squaredNorm())
+        continue;
       ++axes;
-      axis /= length;
-      // outward from A
-      if (axis.dot(tail_a - hull_a.centre) < 0.0) axis = -axis;
-      const double separation = axis.dot(vertices_b[eb.tail] - tail_a);
-      if (separation > 0.0) {
+      // outward from A; the separation is gap / |axis|, compared squared (no root, no division)
+      if (axis.dot(outward_a) < 0.0) axis = -axis;
+      const double gap = axis.dot(vertices_b[eb.tail] - tail_a);
+      if (gap > 0.0) {
         out.axes_tested = axes;
         return no_contact(out);
       }
-      if (separation > best_edge)
-        best_edge = separation, best_edge_normal = axis, best_edge_a = i, best_edge_b = j;
+      if (gap * gap * best_length_squared < best_gap_squared * length_squared)
+        best_gap_squared = gap * gap, best_length_squared = length_squared, best_edge_axis = axis,
+        best_edge_a = i, best_edge_b = j;
     }
   }
+  const double best_edge = -std::sqrt(best_gap_squared / best_length_squared);
+  const Vec3 best_edge_normal = best_edge_axis.normalized();
   out.axes_tested = axes;
 
   // faces first unless an edge axis is clearly shallower; when the preferred face axis was not

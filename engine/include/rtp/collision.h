@@ -100,6 +100,8 @@ inline constexpr std::uint32_t kNoFace = ~std::uint32_t{0};
 // limits that let the clipper run in fixed buffers (no heap allocation per pair)
 inline constexpr std::size_t kMaxHullVertices = 256;
 inline constexpr std::size_t kMaxFaceVertices = 64;
+// a convex polyhedron has at most 3V − 6 edges
+inline constexpr std::size_t kMaxHullEdges = 3 * kMaxHullVertices - 6;
 
 // the hull of a box of half extents h: vertex i has the signs of bits 0, 1, 2 of i on x, y, z;
 // faces +x, −x, +y, −y, +z, −z
