@@ -17,5 +17,7 @@ mkdir -p "$out/benchmarks"
 build/bench/bench/particles_bench --benchmark_out="$out/benchmarks/particles.json" --benchmark_out_format=json
 # every engine's broad phase on the broadphase scene, pair sets checked (Google Benchmark)
 build/bench/bench/broadphase_bench --benchmark_out="$out/benchmarks/broadphase.json" --benchmark_out_format=json
+# every engine's narrow phase on the same random pose pairs, agreement with rtp counted (Google Benchmark)
+build/bench/bench/narrowphase_bench --benchmark_out="$out/benchmarks/narrowphase.json" --benchmark_out_format=json
 .venv/bin/python reports/build_report.py "$out"
 echo "bench: open $out/index.html"

@@ -11,6 +11,7 @@
 #include <physbench/narrowphase.h>
 
 #include <map>
+#include <sstream>
 
 namespace {
 
@@ -116,12 +117,13 @@ int main(int argc, char** argv) {
           ->ReportAggregatesOnly(false);
     }
   }
-  benchmark::RegisterBenchmark("Triangle/closest-point/rtp/voronoi", Triangles, false)
+  benchmark::RegisterBenchmark("Query/triangle/closest-point/rtp/voronoi", Triangles, false)
       ->Unit(benchmark::kMicrosecond)
       ->MinTime(0.1)
       ->Repetitions(3);
   if (physbench::make_bullet_triangle_batch({}))
-    benchmark::RegisterBenchmark("Triangle/closest-point/bullet/voronoi-simplex", Triangles, true)
+    benchmark::RegisterBenchmark("Query/triangle/closest-point/bullet/voronoi-simplex", Triangles,
+                                 true)
         ->Unit(benchmark::kMicrosecond)
         ->MinTime(0.1)
         ->Repetitions(3);
@@ -133,12 +135,11 @@ int main(int argc, char** argv) {
     benchmark::AddCustomContext("settings " + entry.name, entry.version + "; " + settings);
   }
   const physbench::NarrowphaseTolerances t;
-  benchmark::AddCustomContext("tolerances", "verdict band " + std::to_string(t.verdict_band) +
-                                                " m; depth " + std::to_string(t.depth_absolute) +
-                                                " m + " + std::to_string(t.depth_relative * 100) +
-                                                " %; normal " + std::to_string(t.normal_degrees) +
-                                                " deg or a tie; surface " +
-                                                std::to_string(t.surface) + " m");
+  std::ostringstream tolerances;
+  tolerances << "verdict band " << t.verdict_band << " m; depth " << t.depth_absolute << " m + "
+             << 100 * t.depth_relative << " %; normal " << t.normal_degrees
+             << " degrees or a tie; contact points on both surfaces within " << t.surface << " m";
+  benchmark::AddCustomContext("tolerances", tolerances.str());
   benchmark::RunSpecifiedBenchmarks();
   benchmark::Shutdown();
   return 0;

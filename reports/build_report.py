@@ -362,6 +362,45 @@ def broadphase_benchmark(folder: Path) -> dict | None:
     return dict(rows=rows, builds=builds, settings=settings, chart=figure_html(fig) if fig.data else "")
 
 
+def narrowphase_benchmark(folder: Path) -> dict | None:
+    """The narrow-phase benchmark (bench/narrowphase_bench.cpp), if bench.sh wrote one: per pair
+    set (shapes/regime) and engine, the median ns per pair with its spread, how many times rtp's
+    time this engine takes, and on a peer's row how rtp agrees with it on that set; the triangle
+    query likewise; the settings and the comparison's tolerances."""
+    document = benchmark_document(folder, "narrowphase.json")
+    if document is None:
+        return None
+    cases: dict[tuple, dict] = {}
+    for run in document.get("benchmarks", []):
+        parts = run.get("run_name", run.get("name", "")).split("/")
+        if len(parts) < 5 or parts[0] not in ("Pairs", "Query"):
+            continue
+        key = (f"{parts[1]}/{parts[2]}", f"{parts[3]}/{parts[4]}")
+        row = cases.setdefault(key, dict(set=key[0], engine=key[1]))
+        aggregate = run.get("aggregate_name") if run.get("run_type") == "aggregate" else "median"
+        if aggregate == "median":
+            scale = {"ns": 1.0, "us": 1e3, "ms": 1e6, "s": 1e9}[run.get("time_unit", "ns")]
+            row["ns"] = run["real_time"] * scale / max(run.get("pairs", 1.0), 1.0)
+            for counter in ("touching_fraction", "verdict_agreement", "depth_agreement", "normal_agreement",
+                            "compared_contacts", "peer_refuted", "unexplained", "in_band",
+                            "worst_point_difference"):
+                if counter in run:
+                    row[counter] = run[counter]
+        elif aggregate == "cv":
+            row["cv"] = 100.0 * run["real_time"]
+    rows = sorted(cases.values(), key=lambda r: (r["set"], not r["engine"].startswith("rtp/"), r["engine"]))
+    if not rows:
+        return None
+    # this engine's time over rtp's on the same set (rtp/sat, or the triangle query's rtp row)
+    for r in rows:
+        ours = [o["ns"] for o in rows if o["set"] == r["set"] and o["engine"] in ("rtp/sat", "rtp/voronoi")
+                and "ns" in o]
+        r["vs_rtp"] = r["ns"] / ours[0] if ours and "ns" in r else None
+    context = document.get("context", {})
+    settings = {k.removeprefix("settings "): v for k, v in context.items() if k.startswith("settings ")}
+    return dict(rows=rows, settings=settings, tolerances=context.get("tolerances", ""))
+
+
 def scaling_charts(results: pd.DataFrame, meta: dict, benchmark: dict | None = None) -> list[dict]:
     """For families that vary a count (particles-scaling): body- or particle-steps/s against the
     count on log-log axes, one curve per engine/variant, with the memory-bandwidth roofline when
@@ -474,6 +513,29 @@ on {{ h.threads }} thread(s){{ " (extrapolated from " ~ h.measured_up_to ~ ", th
 The seed ran 200,000 at 60 FPS.</p>{% endif %}
 </section>{% endfor %}
 
+{% if narrowphase %}<section><h2>Narrow phase</h2>
+<p><em>Do two shapes touch, along which normal, how deep? rtp's separating axis test with clipping against
+Bullet's box-box detector and GJK/EPA, on the same random pose pairs, in the same run
+(bench/narrowphase_bench.cpp). On a peer's row, how rtp agrees with that peer on the set: the verdict outside
+the tolerance band, depth and normal where both report a contact; "peer refuted" counts disagreements that
+exact geometry settles for rtp, "unexplained" the rest. Tolerances: {{ narrowphase.tolerances }}.</em></p>
+<table><tr><th class="l">pairs</th><th class="l">engine</th><th>ns per pair (median)</th><th>cv %</th>
+<th>time ÷ rtp's</th><th>touching</th><th>verdict agrees</th><th>depth agrees</th><th>normal agrees</th>
+<th>peer refuted</th><th>unexplained</th></tr>
+{% for r in narrowphase.rows %}<tr><td class="l">{{ r.set }}</td><td class="l">{{ r.engine }}</td>
+<td>{{ "%.4g" % r.ns if r.ns is defined }}</td><td>{{ "%.2g" % r.cv if r.cv is defined }}</td>
+<td>{{ "%.2f×" % r.vs_rtp if r.vs_rtp }}</td><td>{{ "%.2f" % r.touching_fraction if r.touching_fraction is defined }}</td>
+<td>{{ "%.4f" % r.verdict_agreement if r.verdict_agreement is defined }}</td>
+<td>{{ "%.4f" % r.depth_agreement if r.depth_agreement is defined }}</td>
+<td>{{ "%.4f" % r.normal_agreement if r.normal_agreement is defined }}</td>
+<td>{{ "%.0f" % r.peer_refuted if r.peer_refuted is defined }}</td>
+<td>{{ "%.0f" % r.unexplained if r.unexplained is defined }}</td></tr>{% endfor %}
+</table>
+<table><tr><th class="l">narrow phase</th><th class="l">version and settings (setting: value (why))</th></tr>
+{% for name, text in narrowphase.settings.items() %}<tr><td class="l">{{ name }}</td><td class="l">{{ text }}</td></tr>{% endfor %}
+</table>
+</section>{% endif %}
+
 {% if broadphase %}<section><h2>Broad phase</h2>
 <p><em>Which pairs of N moving unit boxes overlap, and how fast does each engine's broad phase say so? Only the
 broad phase runs in every engine; each pair set is compared with the exact one on the frames before timing
@@ -574,7 +636,8 @@ def build_report(folder: Path) -> Path:
 
     page = TEMPLATE.render(meta=meta, plotlyjs=plotly.offline.get_plotlyjs(), summary_columns=summary_columns,
                            summary_rows=summary_rows, scenarios=scenarios, families=families, scaling=scaling,
-                           benchmark=benchmark, broadphase=broadphase_benchmark(folder), engines=engines)
+                           benchmark=benchmark, broadphase=broadphase_benchmark(folder),
+                           narrowphase=narrowphase_benchmark(folder), engines=engines)
     out = folder / "index.html"
     partial = folder / "index.html.partial"
     partial.write_text(page, encoding="utf-8")

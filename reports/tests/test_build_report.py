@@ -182,6 +182,34 @@ def test_broadphase_benchmark_reaches_the_report(tmp_path):
     assert "<td>12.5</td>" in page
 
 
+def test_narrowphase_benchmark_rows_carry_time_per_pair_and_agreement(tmp_path):
+    (tmp_path / "benchmarks").mkdir()
+
+    def pairs(engine, aggregate, real_time, **counters):
+        return dict(name=f"Pairs/box-box/touching/{engine}/min_time:0.100/repeats:3_{aggregate}",
+                    run_name=f"Pairs/box-box/touching/{engine}/min_time:0.100/repeats:3", run_type="aggregate",
+                    aggregate_name=aggregate, real_time=real_time, time_unit="us", **counters)
+
+    (tmp_path / "benchmarks" / "narrowphase.json").write_text(json.dumps({
+        "context": {"settings bullet/box-box": "3.24 (float); detector: btBoxBoxDetector",
+                    "tolerances": "verdict band 0.001 m"},
+        "benchmarks": [
+            pairs("rtp/sat", "median", 102.4, pairs=1024),
+            pairs("rtp/sat", "cv", 0.012, pairs=0),
+            pairs("bullet/box-box", "median", 153.6, pairs=1024, verdict_agreement=1.0, depth_agreement=0.98,
+                  normal_agreement=0.99, peer_refuted=3, unexplained=0),
+        ]}))
+    narrow = build_report.narrowphase_benchmark(tmp_path)
+    by_engine = {r["engine"]: r for r in narrow["rows"]}
+    # 102.4 µs over 1024 pairs is 100 ns a pair; Bullet's 150 ns is 1.5 times rtp's
+    assert by_engine["rtp/sat"]["ns"] == pytest.approx(100.0)
+    assert by_engine["rtp/sat"]["cv"] == pytest.approx(1.2)
+    assert by_engine["bullet/box-box"]["vs_rtp"] == pytest.approx(1.5)
+    assert by_engine["bullet/box-box"]["peer_refuted"] == 3
+    assert narrow["tolerances"] == "verdict band 0.001 m"
+    assert "btBoxBoxDetector" in narrow["settings"]["bullet/box-box"]
+
+
 def test_particles_at_rate_takes_the_largest_count_per_thread_count():
     rows = [dict(particles=1000, threads=1, steps=1.0e8), dict(particles=4000000, threads=1, steps=6.0e7),
             dict(particles=4000000, threads=2, steps=1.2e9)]
