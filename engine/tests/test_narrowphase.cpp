@@ -146,14 +146,18 @@ void expect_closed_convex(const ConvexHull& hull) {
   for (const HullEdge& edge : hull.edges) EXPECT_NE(edge.left, edge.right);
 }
 
+// a box's topology: 8 vertices, 6 faces, 12 edges, 3 unique edge directions and face normals
+void expect_box_topology(const ConvexHull& hull) {
+  EXPECT_EQ(hull.vertices.size(), 8u);
+  EXPECT_EQ(hull.faces.size(), 6u);
+  EXPECT_EQ(hull.edges.size(), 12u);
+  EXPECT_EQ(hull.unique_edge_directions.size(), 3u);
+  EXPECT_EQ(hull.unique_face_normals.size(), 3u);
+  expect_closed_convex(hull);
+}
+
 TEST(CollisionMesh, BoxHasThreeUniqueEdgeDirectionsAndNormals) {
-  const ConvexHull box = make_box_hull({0.5, 1.0, 2.0});
-  EXPECT_EQ(box.vertices.size(), 8u);
-  EXPECT_EQ(box.faces.size(), 6u);
-  EXPECT_EQ(box.edges.size(), 12u);
-  EXPECT_EQ(box.unique_edge_directions.size(), 3u);
-  EXPECT_EQ(box.unique_face_normals.size(), 3u);
-  expect_closed_convex(box);
+  expect_box_topology(make_box_hull({0.5, 1.0, 2.0}));
 }
 
 TEST(CollisionMesh, QhullMergesCoplanarFacetsAndDropsInteriorPoints) {
@@ -164,12 +168,7 @@ TEST(CollisionMesh, QhullMergesCoplanarFacetsAndDropsInteriorPoints) {
   for (int i = 0; i < 50; ++i) points.push_back(random_vector(rng, 0.9));
   points.emplace_back(0.2, 0.3, 3.0);
   points.emplace_back(1.0, -0.5, 0.1);
-  const ConvexHull hull = make_convex_hull(points);
-  EXPECT_EQ(hull.vertices.size(), 8u);
-  EXPECT_EQ(hull.faces.size(), 6u);
-  EXPECT_EQ(hull.unique_edge_directions.size(), 3u);
-  EXPECT_EQ(hull.unique_face_normals.size(), 3u);
-  expect_closed_convex(hull);
+  expect_box_topology(make_convex_hull(points));
 }
 
 TEST(CollisionMesh, RandomPointCloudsGiveClosedConvexHulls) {
