@@ -1,6 +1,7 @@
 #include "rtp/broadphase.h"
 
 #include <algorithm>
+#include <bit>
 #include <boost/sort/spreadsort/float_sort.hpp>
 #include <experimental/simd>
 #include <limits>
@@ -461,9 +462,13 @@ class BoxPruning final : public ProxyStore {
               Lanes(&min_z_[j], stdx::element_aligned) <= hi_z &&
               Lanes(&max_z_[j], stdx::element_aligned) >= lo_z &&
               stdx::max(Lanes(&home_[j], stdx::element_aligned), Lanes(home)) == this_slab;
-          if (stdx::any_of(hit))
-            for (std::size_t l = 0; l < Lanes::size(); ++l)
-              if (hit[l]) pairs_.push_back(ordered(ids_[i], ids_[j + l]));
+          if (stdx::any_of(hit)) {
+            // the hits as bits, then one pass per set bit: usually one, and no branch per lane
+            unsigned bits = 0;
+            for (std::size_t l = 0; l < Lanes::size(); ++l) bits |= unsigned(hit[l]) << l;
+            for (; bits != 0; bits &= bits - 1)
+              pairs_.push_back(ordered(ids_[i], ids_[j + std::size_t(std::countr_zero(bits))]));
+          }
           if (!stdx::all_of(on_x)) break;  // sorted: the boxes after these start later still
         }
       }
