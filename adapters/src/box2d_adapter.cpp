@@ -5,6 +5,7 @@
 #include <cfloat>
 #include <cmath>
 
+#include "physbench/particle_driver.h"
 #include "physbench/registry.h"
 #include "physbench/springs.h"
 
@@ -14,6 +15,14 @@ namespace {
 
 constexpr int kVelocityIterations = 8;  // Box2D's recommended default
 constexpr int kPositionIterations = 3;  // Box2D's recommended default
+
+// particles touch planes only: one collision category each
+constexpr std::uint16_t kPlaneCategory = 0x0001, kParticleCategory = 0x0002;
+// a plane is an edge this long each way from its point (m): far beyond any particle scene
+constexpr float kPlaneHalfLength = 100.0f;
+// bounces below this normal speed are still restituted (Box2D's default, 1 m/s, would stop the
+// bounce scene's particle after a few apexes)
+constexpr float kRestitutionThreshold = 1e-3f;
 
 double angle_about_z(const Quat& q) { return 2.0 * std::atan2(q.z(), q.w()); }
 
@@ -62,6 +71,81 @@ class Box2dEngine final : public Engine {
       bodies_.push_back(body);
     }
     if (spring_joints_) create_spring_joints();
+    if (scene.particles) create_particles();
+  }
+
+  // particles: a dynamic circle body each (the scene's radius and mass), the planes as edges of
+  // one static body, filtered so that only particle–plane pairs collide
+  void create_particles() {
+    const ParticleSetSpec& p = *scene_.particles;
+    driver_ = std::make_unique<ParticleDriver>(scene_);
+    b2BodyDef ground_def;
+    b2Body* ground = world_->CreateBody(&ground_def);
+    for (const ParticlePlaneSpec& plane : p.planes) {
+      // the edge's 1 cm skin (b2_polygonRadius) moved below the plane, so circles rest on it
+      const b2Vec2 normal(float(plane.normal.x()), float(plane.normal.y()));
+      const b2Vec2 along(-normal.y, normal.x);
+      const b2Vec2 point =
+          b2Vec2(float(plane.point.x()), float(plane.point.y())) - b2_polygonRadius * normal;
+      b2EdgeShape edge;
+      edge.SetTwoSided(point - kPlaneHalfLength * along, point + kPlaneHalfLength * along);
+      b2FixtureDef fixture;
+      fixture.shape = &edge;
+      fixture.friction = float(p.friction);
+      fixture.restitution = 0.0f;  // Box2D keeps the larger of the two: the particle's
+      fixture.restitutionThreshold = kRestitutionThreshold;
+      fixture.filter.categoryBits = kPlaneCategory;
+      fixture.filter.maskBits = kParticleCategory;
+      ground->CreateFixture(&fixture);
+    }
+    first_particle_ = bodies_.size();
+    b2CircleShape circle;
+    circle.m_radius = float(p.radius);
+    Shape sphere;
+    sphere.kind = ShapeKind::Sphere;
+    sphere.radius = p.radius;
+    b2MassData mass;
+    mass.mass = float(p.mass);
+    mass.center.SetZero();
+    mass.I = float(principal_inertia(sphere, p.mass).z());
+    for (long i = 0; i < p.count; ++i) {
+      const rtp::ParticleSpawn start = driver_->start(i);
+      b2BodyDef def;
+      def.type = b2_dynamicBody;
+      def.position.Set(float(start.position.x()), float(start.position.y()));
+      def.linearVelocity.Set(float(start.velocity.x()), float(start.velocity.y()));
+      def.allowSleep = false;
+      b2Body* body = world_->CreateBody(&def);
+      b2FixtureDef fixture;
+      fixture.shape = &circle;
+      fixture.friction = float(p.friction);  // Box2D mixes frictions as √(a b): the scene's
+      fixture.restitution = float(p.restitution);
+      fixture.restitutionThreshold = kRestitutionThreshold;
+      fixture.filter.categoryBits = kParticleCategory;
+      fixture.filter.maskBits = kPlaneCategory;
+      body->CreateFixture(&fixture);
+      body->SetMassData(&mass);
+      bodies_.push_back(body);
+    }
+  }
+
+  // the driver's forces from the state at the start of the step; Box2D clears them after
+  void step_particles_before() {
+    for (long i = 0; i < driver_->count(); ++i) {
+      b2Body* body = bodies_[first_particle_ + std::size_t(i)];
+      const b2Vec2 p = body->GetPosition(), v = body->GetLinearVelocity();
+      const Vec3 f = driver_->force(i, Vec3(p.x, p.y, 0.0), Vec3(v.x, v.y, 0.0));
+      body->ApplyForceToCenter(b2Vec2(float(f.x()), float(f.y())), true);
+    }
+  }
+
+  void step_particles_after() {
+    driver_->age(dt_, [this](long i, const rtp::ParticleSpawn& spawn) {
+      b2Body* body = bodies_[first_particle_ + std::size_t(i)];
+      body->SetTransform(b2Vec2(float(spawn.position.x()), float(spawn.position.y())), 0.0f);
+      body->SetLinearVelocity(b2Vec2(float(spawn.velocity.x()), float(spawn.velocity.y())));
+      body->SetAngularVelocity(0.0f);
+    });
   }
 
   // springs as Box2D's own soft distance joint: rest length, stiffness (N/m) and damping (N s/m)
@@ -99,7 +183,9 @@ class Box2dEngine final : public Engine {
             bodies_[b]->ApplyForce(b2Vec2(float(f.x()), float(f.y())),
                                    b2Vec2(float(p.x()), float(p.y())), true);
           });
+    if (driver_) step_particles_before();
     world_->Step(float(dt_), kVelocityIterations, kPositionIterations);
+    if (driver_) step_particles_after();
   }
 
   BodyState body_state(int index) const override {
@@ -116,7 +202,9 @@ class Box2dEngine final : public Engine {
   bool spring_joints_;
   double dt_ = 0.0;
   std::unique_ptr<b2World> world_;
-  std::vector<b2Body*> bodies_;  // owned by world_
+  std::vector<b2Body*> bodies_;  // owned by world_; the particles follow the scene's bodies
+  std::unique_ptr<ParticleDriver> driver_;
+  std::size_t first_particle_ = 0;
 };
 
 }  // namespace
@@ -129,7 +217,14 @@ EngineInfo box2d_engine_info() {
                  std::to_string(b2_version.revision) + " (as the library reports it)";
   info.unsupported = [](const Scene& scene, const std::string&) -> std::optional<std::string> {
     if (!scene.planar) return "Box2D is a 2D engine: the scene is not marked planar";
-    if (scene.particles) return "particle sets are not mapped onto Box2D yet";
+    if (auto why = peer_particles_unsupported(scene, "Box2D")) return why;
+    if (scene.particles) {
+      // Box2D clamps translation per step to b2_maxTranslation, silently
+      const ParticleSetSpec& p = *scene.particles;
+      const double fastest = std::max(p.velocity_min.norm(), p.velocity_max.norm());
+      if (fastest * scene.dt > 0.5 * b2_maxTranslation)
+        return "particles start near Box2D's per-step limit b2_maxTranslation";
+    }
     if (scene.has_contacts())
       return "contact scenes are not mapped onto Box2D yet (its 1 cm polygon skin is not "
              "compensated)";
@@ -160,6 +255,18 @@ EngineInfo box2d_engine_info() {
         {"collision mask", "0 when the scene has collisions off",
          "model only what the scene needs"},
         {"precision", "float", "Box2D computes in single precision"},
+        {"particles",
+         "a dynamic circle body each (scene radius and mass); planes as two-sided edges 100 m each "
+         "way, moved 1 cm (b2_polygonRadius) below the plane; collision filtering lets only "
+         "particle-plane pairs meet",
+         "model only what the scene needs: no particle-particle contact; circles rest on the "
+         "plane, not on the edge's skin"},
+        {"particle contacts",
+         "restitution e on particles, 0 on planes (Box2D keeps the larger); restitution threshold "
+         "1e-3 m/s on both (default 1 m/s); friction the scene's on both (mixed as √(a b))",
+         "Box2D's restitution and Coulomb friction stand in for the seed's per-bounce factors"},
+        {"particle forces", "ApplyForceToCenter from the shared particle driver, once per step",
+         "the same attractors, drag and wind as rtp, from the state at the step's start"},
         variant == "joint"
             ? Setting{"springs", "b2DistanceJoint: the scene's rest length, stiffness and damping",
                       "Box2D's native spring, solved implicitly in the velocity solver"}

@@ -2,6 +2,7 @@
 // adapters' mapping (frames, units, mass properties), not the peers' quality.
 #include <gtest/gtest.h>
 
+#include "physbench/particle_driver.h"
 #include "physbench/scenarios.h"
 #include "support.h"
 
@@ -223,6 +224,25 @@ TEST(Box2d, SpinIsConstantInFreeFlight) {
   const double expected = scene.bodies[0].angular_velocity.z() * scene.duration;
   const double turned = 2.0 * std::atan2(last.orientation.z(), last.orientation.w());
   EXPECT_NEAR(std::remainder(turned - expected, 2.0 * M_PI), 0.0, 1e-4);
+}
+TEST(Box2d, ParticleBounceApexesFollowRestitution) {
+  // circles on an edge whose 1 cm skin sits below the plane; restitution threshold lowered
+  const std::vector<double> apexes = bounce_apexes("box2d", "default");
+  ASSERT_GE(apexes.size(), 3u);
+  EXPECT_NEAR(apexes[0], 0.64, 0.03);
+  EXPECT_NEAR(apexes[1], 0.4096, 0.03);
+  EXPECT_NEAR(apexes[2], 0.2621, 0.03);
+}
+TEST(Box2d, ParticleOrbitMatchesRtpSemiImplicitEuler) {
+  // the driver's attractor force applied once per step is semi-implicit Euler, as rtp's "euler"
+  expect_same_spring_trajectory_as_rtp("box2d", "default", "euler", particles_orbit_scene(), 1e-4);
+}
+TEST(Box2d, ParticlesAboveThePeerLimitSayWhy) {
+  Scene scene = particles_bounce_scene();
+  scene.particles->count = kMaxPeerParticles + 1;
+  const auto why = physbench::testing::engine("box2d").unsupported(scene, "default");
+  ASSERT_TRUE(why);
+  EXPECT_NE(why->find("Box2D"), std::string::npos);
 }
 TEST(Box2d, RefusesA3dScene) {
   const auto why = physbench::testing::engine("box2d").unsupported(projectile_scene(), "default");
