@@ -150,6 +150,15 @@ TEST(Bullet, SpringsMatchRtpSemiImplicitEuler) {
 }
 TEST(Bullet, ImpulsesLand) { expect_impulses_land("bullet", "float", false, 0.02); }
 TEST(Bullet, ParticlesStartWhereRtpsDo) { expect_same_particle_starts_as_rtp("bullet", "float"); }
+TEST(Bullet, ParticleBounceApexesFollowRestitution) {
+  // with split impulse at every depth: Baumgarte correction of the 2 cm the particle sinks used to
+  // add speed (first apex 0.84 m)
+  const std::vector<double> apexes = bounce_apexes("bullet", "float");
+  ASSERT_GE(apexes.size(), 3u);
+  EXPECT_NEAR(apexes[0], 0.64, 0.03);
+  EXPECT_NEAR(apexes[1], 0.4096, 0.03);
+  EXPECT_NEAR(apexes[2], 0.2621, 0.03);
+}
 TEST(Bullet, ProjectileShowsSemiImplicitEuler) {
   expect_semi_implicit_signature("bullet", "float", false, 1e-4);
 }
