@@ -31,35 +31,32 @@ struct ClipVertex {
   ContactFeature feature;
 };
 
-// a polygon being clipped, with room for every vertex clipping can make: the incident face plus
-// one per side plane (Sides = 4, Incident = 4 for boxes: no more than the scratch a pair needs)
-template <std::size_t Capacity>
+// the vertices of a clipped hull face: the incident face plus one per side plane (boxes clip in
+// their own frame, in kBoxClip)
+constexpr std::size_t kHullClip = 2 * kMaxFaceVertices + 2;
+constexpr std::size_t kBoxClip = 8;
+// the vertices of a hull below a plane (hull against plane)
+constexpr std::size_t kPlaneContacts = kMaxHullVertices;
+
+// a polygon being clipped
 struct ClipPolygon {
-  std::array<ClipVertex, Capacity> vertices;
+  std::array<ClipVertex, kHullClip> vertices;
   std::size_t count = 0;
 };
 
 // the reference face in the world: its plane and its side planes (normals need not be unit)
-template <std::size_t Sides>
 struct ReferenceFace {
   Vec3 normal;    // unit, outward
   double offset;  // normal · x = offset on the face
-  std::array<Vec3, Sides> side_normals;
-  std::array<double, Sides> side_offsets;
+  std::array<Vec3, kMaxFaceVertices> side_normals;
+  std::array<double, kMaxFaceVertices> side_offsets;
   std::size_t side_count = 0;
   std::uint16_t face = 0;
 };
 
-constexpr std::size_t kBoxSides = 4;
-constexpr std::size_t kBoxClip = 8;
-constexpr std::size_t kHullClip = 2 * kMaxFaceVertices + 2;
-// the vertices of a hull below a plane (hull against plane)
-constexpr std::size_t kPlaneContacts = kMaxHullVertices;
-
 // Sutherland–Hodgman: the part of the polygon where side · x ≤ offset
-template <std::size_t Capacity>
-void clip_against_side(const ClipPolygon<Capacity>& in, const Vec3& side, double offset,
-                       std::uint8_t side_index, ClipPolygon<Capacity>& out) {
+void clip_against_side(const ClipPolygon& in, const Vec3& side, double offset,
+                       std::uint8_t side_index, ClipPolygon& out) {
   out.count = 0;
   if (in.count == 0) return;
   const ClipVertex* previous = &in.vertices[in.count - 1];
@@ -133,20 +130,19 @@ void reduce_to_four(std::array<ContactPoint, Capacity>& points, std::size_t& cou
 
 // clips the incident polygon to the reference face and writes the manifold; `flipped` when the
 // second shape holds the reference face (the manifold's normal then opposes the face's)
-template <std::size_t Sides, std::size_t Capacity>
-void clip_to_manifold(const ReferenceFace<Sides>& reference, const ClipPolygon<Capacity>& incident,
-                      bool flipped, double depth, Manifold& out) {
-  ClipPolygon<Capacity> buffers[2];
-  const ClipPolygon<Capacity>* current = &incident;
+void clip_to_manifold(const ReferenceFace& reference, const ClipPolygon& incident, bool flipped,
+                      double depth, Manifold& out) {
+  ClipPolygon buffers[2];
+  const ClipPolygon* current = &incident;
   for (std::size_t s = 0; s < reference.side_count; ++s) {
-    ClipPolygon<Capacity>& next = buffers[s % 2];
+    ClipPolygon& next = buffers[s % 2];
     clip_against_side(*current, reference.side_normals[s], reference.side_offsets[s],
                       std::uint8_t(s), next);
     current = &next;
   }
 
   // points on or below the reference face, placed midway between the two surfaces
-  std::array<ContactPoint, Capacity> points;
+  std::array<ContactPoint, kHullClip> points;
   std::size_t count = 0;
   for (std::size_t i = 0; i < current->count; ++i) {
     const ClipVertex& v = current->vertices[i];
@@ -218,7 +214,7 @@ bool no_contact(Manifold& out) {
 
 // the reference face `face` of a hull at a pose, with its side planes
 void reference_face_of(const ConvexHull& hull, const Pose& pose, std::uint32_t face,
-                       ReferenceFace<kMaxFaceVertices>& out) {
+                       ReferenceFace& out) {
   const HullFace& f = hull.faces[face];
   out.normal = pose.rotation * f.normal;
   out.offset = f.offset + out.normal.dot(pose.position);
@@ -237,7 +233,7 @@ void reference_face_of(const ConvexHull& hull, const Pose& pose, std::uint32_t f
 }
 
 void incident_face_of(const ConvexHull& hull, const Pose& pose, std::uint32_t face,
-                      ClipPolygon<kHullClip>& out) {
+                      ClipPolygon& out) {
   const HullFace& f = hull.faces[face];
   out.count = f.count;
   for (std::uint32_t i = 0; i < f.count; ++i) {
@@ -277,9 +273,9 @@ std::uint32_t incident_face_for(const ConvexHull& hull, const Pose& pose,
 void hull_face_manifold(const ConvexHull& reference_hull, const Pose& reference_pose,
                         std::uint32_t reference_face, const ConvexHull& incident_hull,
                         const Pose& incident_pose, bool flipped, double depth, Manifold& out) {
-  ReferenceFace<kMaxFaceVertices> reference;
+  ReferenceFace reference;
   reference_face_of(reference_hull, reference_pose, reference_face, reference);
-  ClipPolygon<kHullClip> incident;
+  ClipPolygon incident;
   incident_face_of(incident_hull, incident_pose,
                    incident_face_for(incident_hull, incident_pose, reference.normal), incident);
   clip_to_manifold(reference, incident, flipped, depth, out);
