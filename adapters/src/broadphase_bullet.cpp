@@ -5,6 +5,7 @@
 
 #include <cstdint>
 
+#include "bullet_version.h"
 #include "physbench/broadphase.h"
 
 namespace physbench {
@@ -88,8 +89,7 @@ BroadphaseEntry bullet_entry(BulletKind kind, std::string name, std::vector<Sett
   BroadphaseEntry e;
   e.name = "bullet/" + name;
   e.engine = "bullet";
-  const int v = btGetVersion();
-  e.version = std::to_string(v / 100) + "." + std::to_string(v % 100) + " (float)";
+  e.version = bullet_version("float");
   settings.push_back({"proxies", "createProxy per box, group 1, mask −1; no collision objects",
                       "only the broad phase runs"});
   e.settings = std::move(settings);

@@ -7,6 +7,7 @@
 #include <BulletCollision/NarrowPhaseCollision/btVoronoiSimplexSolver.h>
 #include <btBulletCollisionCommon.h>
 
+#include "bullet_version.h"
 #include "physbench/narrowphase.h"
 
 namespace physbench {
@@ -144,11 +145,6 @@ class BulletTriangleBatch final : public TriangleBatch {
   btVoronoiSimplexSolver solver_;
 };
 
-std::string bullet_version() {
-  const int v = btGetVersion();
-  return std::to_string(v / 100) + "." + std::to_string(v % 100) + " (float)";
-}
-
 }  // namespace
 
 std::vector<NarrowphasePeerEntry> bullet_narrowphases() {
@@ -156,7 +152,7 @@ std::vector<NarrowphasePeerEntry> bullet_narrowphases() {
                         "the exact shapes rtp sees (Bullet's default margin is 4 cm)"};
   NarrowphasePeerEntry gjk;
   gjk.name = "bullet/gjk-epa";
-  gjk.version = bullet_version();
+  gjk.version = bullet_version("float");
   gjk.settings = {
       {"detector", "btGjkPairDetector, btVoronoiSimplexSolver, btGjkEpaPenetrationDepthSolver",
        "what btConvexConvexAlgorithm runs for a convex pair"},
@@ -169,7 +165,7 @@ std::vector<NarrowphasePeerEntry> bullet_narrowphases() {
 
   NarrowphasePeerEntry box;
   box.name = "bullet/box-box";
-  box.version = bullet_version();
+  box.version = bullet_version("float");
   box.settings = {{"detector", "btBoxBoxDetector (ODE's dBoxBox)",
                    "what Bullet's dispatcher runs for two boxes"},
                   margins};
