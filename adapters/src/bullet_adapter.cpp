@@ -6,6 +6,7 @@
 
 #include <cmath>
 
+#include "bullet_version.h"
 #include "physbench/particle_driver.h"
 #include "physbench/registry.h"
 #include "physbench/springs.h"
@@ -46,6 +47,12 @@ class BulletEngine final : public Engine {
     world_ = std::make_unique<btDiscreteDynamicsWorld>(dispatcher_.get(), broadphase_.get(),
                                                        solver_.get(), configuration_.get());
     world_->setGravity(to_bt(scene.gravity));
+    // Bullet resolves a penetration shallower than 4 cm (its split-impulse threshold) with
+    // Baumgarte velocity, which a bouncing body keeps: a 1 cm sphere arriving at 4.4 m/s sank
+    // 2.2 cm and rose to 0.84 m instead of 0.64 m. Split impulse at every depth moves it out
+    // without adding speed. (Only particle scenes have contacts in Bullet so far.)
+    world_->getSolverInfo().m_splitImpulse = 1;
+    world_->getSolverInfo().m_splitImpulsePenetrationThreshold = 0;
 
     for (const BodySpec& b : scene.bodies) {
       std::unique_ptr<btCollisionShape> shape;
@@ -99,12 +106,6 @@ class BulletEngine final : public Engine {
     constexpr int kPlaneGroup = 2, kParticleGroup = 4;
     const ParticleSetSpec& p = *scene_.particles;
     driver_ = std::make_unique<ParticleDriver>(scene_);
-    // Bullet resolves a penetration shallower than 4 cm (its split-impulse threshold) with
-    // Baumgarte velocity, which a bouncing particle keeps: a 1 cm sphere arriving at 4.4 m/s sank
-    // 2.2 cm and rose to 0.84 m instead of 0.64 m. Split impulse at every depth moves it out
-    // without adding speed.
-    world_->getSolverInfo().m_splitImpulse = 1;
-    world_->getSolverInfo().m_splitImpulsePenetrationThreshold = 0;
     first_particle_ = bodies_.size();
     shapes_.push_back(std::make_unique<btSphereShape>(btScalar(p.radius)));
     btCollisionShape* sphere = shapes_.back().get();
@@ -196,8 +197,7 @@ EngineInfo bullet_engine_info() {
   EngineInfo info;
   info.name = "bullet";
   info.variants = {kVariant};
-  const int v = btGetVersion();
-  info.version = std::to_string(v / 100) + "." + std::to_string(v % 100) + " (" + kVariant + ")";
+  info.version = bullet_version(kVariant);
   info.unsupported = [](const Scene& scene,
                         const std::string& variant) -> std::optional<std::string> {
     if (variant != kVariant)
@@ -231,11 +231,10 @@ EngineInfo bullet_engine_info() {
          "only through "
          "collision groups; drag, wind, attractors as applyCentralForce each step",
          "model only what the scene needs; Bullet's broad phase still sees particle pairs"},
-        {"particle scenes' solver",
+        {"contact solver",
          "split impulse at every penetration depth (threshold 0, default -0.04 m)",
          "Baumgarte correction of shallow penetrations adds bounce: apex 0.84 m for e = 0.8 "
-         "instead "
-         "of 0.64 m"},
+         "instead of 0.64 m"},
         {"particle contacts", "friction and restitution √ of the scene's on particle and plane",
          "Bullet multiplies the pair's values; its friction is Coulomb, the scene's a velocity "
          "fraction"},
