@@ -250,6 +250,9 @@ void validate(const Scene& scene) {
                      p.attractors[i].position);
       require_finite(at + ".attractors[" + std::to_string(i) + "].strength",
                      p.attractors[i].strength);
+      if (scene.planar && p.attractors[i].position.z() != 0.0)
+        fail(at + ".attractors[" + std::to_string(i) + "].position[2]",
+             "must be 0 in a planar scene");
     }
     for (std::size_t i = 0; i < p.planes.size(); ++i) {
       const std::string plane = at + ".planes[" + std::to_string(i) + "]";
@@ -257,6 +260,8 @@ void validate(const Scene& scene) {
       require_finite(plane + ".normal", p.planes[i].normal);
       if (std::abs(p.planes[i].normal.norm() - 1.0) > 1e-6)
         fail(plane + ".normal", "must be a unit vector");
+      if (scene.planar && p.planes[i].normal.z() != 0.0)
+        fail(plane + ".normal[2]", "must be 0 in a planar scene (the plane is a line in XY)");
     }
     for (std::size_t i = 0; i < p.probe.size(); ++i)
       if (p.probe[i] < 0 || p.probe[i] >= p.count)
@@ -265,6 +270,9 @@ void validate(const Scene& scene) {
         (p.spawn_min.z() != 0.0 || p.spawn_max.z() != 0.0 || p.velocity_min.z() != 0.0 ||
          p.velocity_max.z() != 0.0 || p.wind.z() != 0.0))
       fail(at, "must stay in the XY plane in a planar scene (spawn, velocity and wind z = 0)");
+    if (scene.planar && p.wind_jitter != 0.0)
+      fail(at + ".wind_jitter",
+           "must be 0 in a planar scene (each particle's offset is drawn in three dimensions)");
     if (scene.reference.kind == ReferenceKind::Ballistic ||
         scene.reference.kind == ReferenceKind::Oscillator)
       fail("reference.kind",

@@ -201,6 +201,39 @@ TEST(SceneJson, ParticlesRoundTripAndBadFieldsAreNamed) {
       << error_for(bad);
 }
 
+TEST(SceneJson, PlanarParticlesMustStayInThePlane) {
+  Scene scene;
+  scene.name = "planar particles";
+  scene.dt = 0.01;
+  scene.duration = 1.0;
+  scene.planar = true;
+  ParticleSetSpec p;
+  p.count = 10;
+  p.spawn_max = Vec3(1, 2, 0);
+  p.attractors = {{Vec3(0, 1, 0), 5.0}};
+  p.planes = {{Vec3::Zero(), Vec3(0.6, 0.8, 0.0)}};
+  scene.particles = p;
+  scene.probe.metrics = {};
+  const json doc = to_json(scene);
+  EXPECT_EQ(error_for(doc), "");
+
+  json bad = doc;
+  bad["particles"]["attractors"][0]["position"] = json::array({0.0, 1.0, 0.5});
+  EXPECT_NE(error_for(bad).find("particles.attractors[0].position[2]: must be 0 in a planar scene"),
+            std::string::npos)
+      << error_for(bad);
+  bad = doc;
+  bad["particles"]["planes"][0]["normal"] = json::array({0.0, 0.8, 0.6});
+  EXPECT_NE(error_for(bad).find("particles.planes[0].normal[2]: must be 0 in a planar scene"),
+            std::string::npos)
+      << error_for(bad);
+  bad = doc;
+  bad["particles"]["wind_jitter"] = 0.5;
+  EXPECT_NE(error_for(bad).find("particles.wind_jitter: must be 0 in a planar scene"),
+            std::string::npos)
+      << error_for(bad);
+}
+
 TEST(Scene, BoxInertiaMatchesTheClosedForm) {
   Shape box;
   box.half_extents = Vec3(0.5, 2.0, 4.5);  // a 1 x 4 x 9 box

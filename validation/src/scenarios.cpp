@@ -367,6 +367,30 @@ Scene particles_plume_scene(long count) {
   return scene;
 }
 
+Scene planar_particles(Scene scene) {
+  // every position, velocity and direction seen in the XY plane: z dropped, normals renormalised
+  auto flat = [](Vec3 v) {
+    v.z() = 0.0;
+    return v;
+  };
+  scene.name += "-planar";
+  scene.description += "; in the XY plane, so Box2D can run it too";
+  scene.planar = true;
+  scene.gravity = flat(scene.gravity);
+  ParticleSetSpec& p = *scene.particles;
+  p.spawn_min = flat(p.spawn_min);
+  p.spawn_max = flat(p.spawn_max);
+  p.velocity_min = flat(p.velocity_min);
+  p.velocity_max = flat(p.velocity_max);
+  p.wind = flat(p.wind);
+  for (ParticleAttractor& a : p.attractors) a.position = flat(a.position);
+  for (ParticlePlaneSpec& plane : p.planes) {
+    plane.point = flat(plane.point);
+    plane.normal = flat(plane.normal).normalized();
+  }
+  return scene;
+}
+
 std::vector<double> standard_dt_sweep() {
   return {1.0 / 30.0, 1.0 / 60.0, 1.0 / 120.0, 1.0 / 240.0, 1.0 / 480.0, 1.0 / 960.0};
 }
@@ -416,6 +440,12 @@ const std::vector<Scenario>& scenarios() {
     all.push_back({"particles-plume",
                    "how many particle-steps per second in the seed's plume mode?",
                    [] { return particles_plume_scene(10000); }});
+    all.push_back({"particles-attractors-planar",
+                   "the attractor mode in the XY plane: particle-steps per second with Box2D too",
+                   [] { return planar_particles(particles_attractors_scene(2000)); }});
+    all.push_back({"particles-plume-planar",
+                   "the plume mode in the XY plane: particle-steps per second with Box2D too",
+                   [] { return planar_particles(particles_plume_scene(2000)); }});
     // particle throughput against count: the seed's attractor mode at 10^4 … 4·10^6 particles
     for (long count : {10000L, 100000L, 1000000L, 4000000L}) {
       Scenario s;

@@ -3,6 +3,7 @@
 #include <gtest/gtest.h>
 
 #include <cmath>
+#include <limits>
 
 #include "physbench/particle_driver.h"
 #include "physbench/scenarios.h"
@@ -106,6 +107,40 @@ void expect_apexes_follow_restitution(const std::string& engine, const std::stri
         << engine << "/" << variant << " apex " << n;
 }
 
+// The planar attractor mode: every probed particle stays in z = 0 and above every plane. An engine
+// that detects contacts at the end of a step may find a particle below a plane by up to one
+// step's travel (they reach ~14 m/s near an attractor); by the last sample every one must be out
+// again, within `sink`. A line placed on the wrong side, or too short, loses particles for good.
+void expect_planar_particles_stay_above(const std::string& engine, const std::string& variant,
+                                        double sink) {
+  Scene scene = planar_particles(particles_attractors_scene(400));
+  scene.particles->probe.clear();
+  for (long i = 0; i < 40; ++i) scene.particles->probe.push_back(i * 10);
+  SimulateOptions options;
+  options.timing_budget = 0.0;
+  const RunResult r = simulate(physbench::testing::engine(engine), variant, scene, options);
+  ASSERT_EQ(r.status, Status::Ok) << r.message;
+  ASSERT_GT(r.trajectory.samples.size(), 100u);
+  auto lowest_in = [&](const Sample& sample) {
+    double lowest = std::numeric_limits<double>::infinity();
+    for (const BodyState& particle : sample.bodies)
+      for (const ParticlePlaneSpec& plane : scene.particles->planes)
+        lowest = std::min(lowest, plane.normal.dot(particle.position - plane.point));
+    return lowest;
+  };
+  double lowest = std::numeric_limits<double>::infinity(), fastest = 0.0, off_plane = 0.0;
+  for (const Sample& sample : r.trajectory.samples) {
+    lowest = std::min(lowest, lowest_in(sample));
+    for (const BodyState& particle : sample.bodies) {
+      fastest = std::max(fastest, particle.linear_velocity.norm());
+      off_plane = std::max(off_plane, std::abs(particle.position.z()));
+    }
+  }
+  EXPECT_LT(off_plane, 1e-9) << engine;
+  EXPECT_GT(lowest, -(sink + fastest * scene.dt)) << engine << "/" << variant;
+  EXPECT_GT(lowest_in(r.trajectory.samples.back()), -sink) << engine << "/" << variant;
+}
+
 // every engine starts the same particles: the shared driver reproduces rtp's emitter
 void expect_same_particle_starts_as_rtp(const std::string& engine, const std::string& variant) {
   const Scene scene = particles_attractors_scene(1000);
@@ -128,6 +163,10 @@ TEST(Rtp, ParticleBounceApexesFollowRestitution) {
   expect_apexes_follow_restitution("rtp", "midpoint", 2);
 }
 
+TEST(Rtp, PlanarParticlesStayAboveThePlanes) {
+  // points, kept on or above every plane by the bounce
+  expect_planar_particles_stay_above("rtp", "midpoint", 1e-5);
+}
 TEST(Rtp, ImpulsesLand) { expect_impulses_land("rtp", "rk4", false, 1e-9); }
 
 TEST(Rtp, ReadsBackTheInitialState) { expect_initial_state_read_back("rtp", "rk4", false, 1e-12); }
@@ -164,6 +203,9 @@ TEST(Bullet, ParticleBounceApexesFollowRestitution) {
   // add speed (first apex 0.84 m)
   expect_apexes_follow_restitution("bullet", "float", 3);
 }
+TEST(Bullet, PlanarParticlesStayAboveThePlanes) {
+  expect_planar_particles_stay_above("bullet", "float", 0.03);
+}
 TEST(Bullet, ProjectileShowsSemiImplicitEuler) {
   expect_semi_implicit_signature("bullet", "float", false, 1e-4);
 }
@@ -197,6 +239,9 @@ TEST(Ode, ParticleBounceApexesFollowRestitution) {
   expect_apexes_follow_restitution("ode", "step", 2);
 }
 TEST(Ode, ParticlesStartWhereRtpsDo) { expect_same_particle_starts_as_rtp("ode", "quickstep"); }
+TEST(Ode, PlanarParticlesStayAboveThePlanes) {
+  expect_planar_particles_stay_above("ode", "quickstep", 0.03);
+}
 TEST(Ode, ProjectileShowsSemiImplicitEuler) {
   expect_semi_implicit_signature("ode", "step", false, 1e-9);
 }
@@ -243,6 +288,9 @@ TEST(Box2d, ParticleBounceApexesFollowRestitution) {
 TEST(Box2d, ParticleOrbitMatchesRtpSemiImplicitEuler) {
   // the driver's attractor force applied once per step is semi-implicit Euler, as rtp's "euler"
   expect_same_spring_trajectory_as_rtp("box2d", "default", "euler", particles_orbit_scene(), 1e-4);
+}
+TEST(Box2d, PlanarParticlesStayAboveThePlanes) {
+  expect_planar_particles_stay_above("box2d", "default", 0.03);
 }
 TEST(Box2d, ParticlesAboveThePeerLimitSayWhy) {
   Scene scene = particles_bounce_scene();

@@ -44,5 +44,8 @@ Scene particles_orbit_scene();
 Scene particles_attractors_scene(long count = 100000);
 Scene particles_snow_scene(long count = 100000);
 Scene particles_plume_scene(long count = 100000);
+// a particle scene in the XY plane (z of every position, velocity and direction dropped, plane
+// normals renormalised), marked planar so Box2D can run it; the scene must have no wind jitter
+Scene planar_particles(Scene scene);
 
 }  // namespace physbench
