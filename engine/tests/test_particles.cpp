@@ -104,7 +104,9 @@ TEST(Particles, SnowSticksToThePlane) {
     for (std::size_t i = 0; i < def.count; ++i) {
       const double y = snow.position(i).y();
       ASSERT_GE(y, -1e-6) << "particle " << i << " sank";
-      if (landed[i]) ASSERT_LT(y, 1e-5) << "particle " << i << " left the ground";
+      if (landed[i]) {
+        ASSERT_LT(y, 1e-5) << "particle " << i << " left the ground";
+      }
       landed[i] = landed[i] || y < 1e-6;
     }
   }

@@ -331,7 +331,10 @@ int run_suite(const RunOptions& options, const fs::path& self) {
   }
   for (const std::string& file : options.scene_files) {
     try {
-      scenes.push_back({load_scene_file(file), "scene file " + file, {}});
+      PreparedScene p;  // no dt sweep and no family: the file's own step only
+      p.scene = load_scene_file(file);
+      p.question = "scene file " + file;
+      scenes.push_back(std::move(p));
     } catch (const SceneError& e) {
       throw RunError(e.what());
     }
