@@ -2,6 +2,7 @@
 
 #include <cmath>
 #include <sstream>
+#include <stdexcept>
 
 namespace physbench {
 
@@ -368,7 +369,9 @@ Scene particles_plume_scene(long count) {
 }
 
 Scene planar_particles(Scene scene) {
+  if (!scene.particles) throw std::invalid_argument(scene.name + ": no particles to make planar");
   // every position, velocity and direction seen in the XY plane: z dropped, normals renormalised
+  // (a plane facing along z has no line in XY: its normal stays zero and validation names it)
   auto flat = [](Vec3 v) {
     v.z() = 0.0;
     return v;
@@ -386,7 +389,8 @@ Scene planar_particles(Scene scene) {
   for (ParticleAttractor& a : p.attractors) a.position = flat(a.position);
   for (ParticlePlaneSpec& plane : p.planes) {
     plane.point = flat(plane.point);
-    plane.normal = flat(plane.normal).normalized();
+    const Vec3 normal = flat(plane.normal);
+    plane.normal = normal.norm() > 0.0 ? Vec3(normal.normalized()) : normal;
   }
   return scene;
 }
