@@ -2,6 +2,7 @@
 
 #include <algorithm>
 #include <bit>
+#include <cmath>
 #include <boost/sort/spreadsort/float_sort.hpp>
 #include <experimental/simd>
 #include <limits>
@@ -366,90 +367,206 @@ class BoxPruning final : public ProxyStore {
   const std::vector<ProxyPair>& pairs() const override { return pairs_; }
 
   void update() override {
-    // the previous update's order is kept while no box arrives or leaves: a coherent scene is
-    // then nearly sorted already
+    // the previous update's slabs, and each slab's order on x, are kept while no box arrives or
+    // leaves and the scene stays coherent: each slab is then nearly sorted already
     const bool same_boxes = added_.empty() && removed_.empty();
     added_.clear();
     recycle_removed();
     pairs_.clear();
-    float low_y = std::numeric_limits<float>::infinity(), high_y = -low_y;
+    if (!same_boxes || !update_slabs()) rebuild_slabs();
+    fill_columns();
+    sweep();
+  }
+
+ private:
+  using Lanes = std::experimental::native_simd<float>;
+  // a box's min x and handle, 8 bytes: what the sorts move
+  struct Keyed {
+    float key;
+    ProxyId id;
+  };
+  // the slabs a box's y interval touches: those of its min y and of its max y
+  struct SlabRange {
+    std::uint16_t home = 0, last = 0;
+    bool operator==(const SlabRange&) const = default;
+    bool covers(std::size_t slab) const { return home <= slab && slab <= last; }
+  };
+
+  // Buckets: slabs across y, each box in every slab its y interval touches, so a sweep on x
+  // meets only the boxes near it in y as well. Slabs are twice the mean box height (a box then
+  // sits in about 1.5 of them) and at most kMaxSlabs. A pair is reported only in the slab of the
+  // larger of its two min y — one slab, which both boxes are in — so never twice. The slab of a
+  // y value is monotonic in y and clamped to the slabs, so that holds for boxes outside the
+  // range the slabs were laid out for, too: a kept layout is never wrong, only slower.
+  struct Layout {
+    float low_y = 0.0f, high_y = 0.0f;  // the least and the largest min y
+    std::size_t slabs = 1;
+    float slab_height = 1.0f;
+  };
+  Layout layout_of_live_boxes() const {
+    Layout layout;
+    layout.low_y = std::numeric_limits<float>::infinity();
+    layout.high_y = -layout.low_y;
     double total_height = 0.0;
-    if (!same_boxes) {
-      order_.clear();
-      for (ProxyId id = 0; id < capacity(); ++id)
-        if (alive(id)) order_.push_back({0.0f, id});
+    std::size_t n = 0;
+    for (ProxyId id = 0; id < capacity(); ++id) {
+      if (!alive(id)) continue;
+      const Aabb& b = boxes_[id];
+      layout.low_y = std::min(layout.low_y, b.min[1]);
+      layout.high_y = std::max(layout.high_y, b.min[1]);
+      total_height += b.max[1] - b.min[1];
+      ++n;
     }
-    for (Keyed& k : order_) k.key = boxes_[k.id].min[0];
-    const std::size_t n = order_.size();
-    if (n == 0) return;
-    sort_on_x(same_boxes);
-    // each box read once, into records in x order that every later pass reads in sequence
-    sorted_.resize(n);
-    for (std::size_t i = 0; i < n; ++i) {
-      Sorted& r = sorted_[i];
-      r.box = boxes_[order_[i].id];
-      r.id = order_[i].id;
-      low_y = std::min(low_y, r.box.min[1]);
-      high_y = std::max(high_y, r.box.min[1]);
-      total_height += r.box.max[1] - r.box.min[1];
-    }
-
-    // Buckets: slabs across y, each box in every slab its y interval touches, so a sweep on x
-    // meets only the boxes near it in y as well. Slabs are twice the mean box height (a box
-    // then sits in about 1.5 of them) and at most kMaxSlabs. A pair is reported only in the slab
-    // of the larger of its two min y — one slab, which both boxes are in — so never twice.
+    if (n == 0) return Layout{};
     const double mean_height = total_height / double(n);
-    const double span = double(high_y) - double(low_y);
-    const std::size_t slabs =
-        mean_height > 0.0
-            ? std::clamp<std::size_t>(std::size_t(span / (2.0 * mean_height)), 1, kMaxSlabs)
-            : 1;
-    const float slab_height = slabs > 1 ? float(span / double(slabs)) : 1.0f;
-    // monotonic in y, so the slab of max(a, b) is the max of the slabs
-    const auto slab_of = [&](float y) {
-      if (slabs == 1) return std::size_t(0);
-      return std::min(slabs - 1, std::size_t(std::max(0.0f, (y - low_y) / slab_height)));
-    };
+    const double span = double(layout.high_y) - double(layout.low_y);
+    layout.slabs = mean_height > 0.0 ? std::clamp<std::size_t>(
+                                           std::size_t(span / (2.0 * mean_height)), 1, kMaxSlabs)
+                                     : 1;
+    layout.slab_height = layout.slabs > 1 ? float(span / double(layout.slabs)) : 1.0f;
+    return layout;
+  }
+  std::size_t slab_of(float y) const {
+    if (layout_.slabs == 1) return 0;
+    return std::min(layout_.slabs - 1,
+                    std::size_t(std::max(0.0f, (y - layout_.low_y) / layout_.slab_height)));
+  }
+  SlabRange range_of(const Aabb& b) const {
+    return {std::uint16_t(slab_of(b.min[1])), std::uint16_t(slab_of(b.max[1]))};
+  }
 
-    // each slab's members in x order (a stable pass over the sorted boxes), then one vector of
-    // boxes starting at +∞, so the sweep needs no scalar tail
-    first_.assign(slabs + 1, 0);
-    for (Sorted& k : sorted_) {
-      k.home_slab = std::uint16_t(slab_of(k.box.min[1]));
-      k.last_slab = std::uint16_t(slab_of(k.box.max[1]));
-      for (std::size_t s = k.home_slab; s <= k.last_slab; ++s) ++first_[s + 1];
+  // From scratch: every live box ordered on x by spreadsort (Boost's radix hybrid, which sorts
+  // floats by their bits), then dealt into its slabs in that order, so each slab is in x order.
+  void rebuild_slabs() {
+    layout_ = layout_of_live_boxes();
+    keyed_.clear();
+    for (ProxyId id = 0; id < capacity(); ++id)
+      if (alive(id)) keyed_.push_back({boxes_[id].min[0], id});
+    sort_keyed(keyed_);
+    members_.resize(layout_.slabs);
+    for (auto& m : members_) m.clear();
+    ranges_.assign(capacity(), SlabRange{});
+    for (const Keyed& k : keyed_) {
+      const SlabRange r = range_of(boxes_[k.id]);
+      ranges_[k.id] = r;
+      for (std::size_t s = r.home; s <= r.last; ++s) members_[s].push_back(k.id);
     }
-    for (std::size_t s = 0; s < slabs; ++s) first_[s + 1] += first_[s] + Lanes::size();
+  }
+
+  // While coherent: the kept slabs, each brought back into x order by insertion sort (a slab
+  // holds a few hundred boxes, so a box passes few others in it per step: far fewer swaps than
+  // one order of every box), with the boxes that left a slab dropped and those that entered it
+  // merged in. False when the scene is not coherent enough for that to pay (the caller rebuilds).
+  bool update_slabs() {
+    if (members_.empty()) return false;
+    const Layout now = layout_of_live_boxes();
+    // the boxes spread or moved by a slab or more, or the slab count would change by a quarter
+    if (std::abs(now.low_y - layout_.low_y) > layout_.slab_height ||
+        std::abs(now.high_y - layout_.high_y) > layout_.slab_height ||
+        4 * std::max(now.slabs, layout_.slabs) > 5 * std::min(now.slabs, layout_.slabs))
+      return false;
+    // each box's slabs now; a box entering a slab is an arrival there
+    arrivals_.resize(layout_.slabs);
+    for (auto& a : arrivals_) a.clear();
+    std::size_t changed = 0;
+    for (ProxyId id = 0; id < capacity(); ++id) {
+      if (!alive(id)) continue;  // a handle freed earlier, not yet reused
+      const SlabRange r = range_of(boxes_[id]);
+      if (r == ranges_[id]) continue;
+      for (std::size_t s = r.home; s <= r.last; ++s)
+        if (!ranges_[id].covers(s)) arrivals_[s].push_back({boxes_[id].min[0], id});
+      ranges_[id] = r;
+      ++changed;
+    }
+    if (changed > capacity() / kMaxChangedFraction) return false;
+    for (std::size_t s = 0; s < layout_.slabs; ++s) {
+      // the members that stay, with their new min x, in last step's order
+      keyed_.clear();
+      for (ProxyId id : members_[s])
+        if (ranges_[id].covers(s)) keyed_.push_back({boxes_[id].min[0], id});
+      insertion_sort_or_resort(keyed_);
+      std::vector<ProxyId>& m = members_[s];
+      m.clear();
+      if (arrivals_[s].empty()) {
+        for (const Keyed& k : keyed_) m.push_back(k.id);
+        continue;
+      }
+      sort_keyed(arrivals_[s]);
+      const auto before = [](const Keyed& a, const Keyed& b) { return a.key < b.key; };
+      std::size_t i = 0, j = 0;
+      const std::vector<Keyed>& arriving = arrivals_[s];
+      while (i < keyed_.size() || j < arriving.size())
+        m.push_back(j == arriving.size() ||
+                            (i < keyed_.size() && !before(arriving[j], keyed_[i]))
+                        ? keyed_[i++].id
+                        : arriving[j++].id);
+    }
+    return true;
+  }
+
+  static void sort_keyed(std::vector<Keyed>& keyed) {
+    boost::sort::spreadsort::float_sort(
+        keyed.begin(), keyed.end(),
+        [](const Keyed& k, unsigned offset) {
+          return boost::sort::spreadsort::float_mem_cast<float, int>(k.key) >> offset;
+        },
+        [](const Keyed& a, const Keyed& b) { return a.key < b.key; });
+  }
+  // insertion sort is O(n + swaps) from a nearly sorted order; it gives up after
+  // kMaxSwapsPerBox · n swaps (a scene that is not coherent) for spreadsort
+  static void insertion_sort_or_resort(std::vector<Keyed>& keyed) {
+    std::size_t swaps = 0;
+    const std::size_t budget = kMaxSwapsPerBox * keyed.size();
+    for (std::size_t i = 1; i < keyed.size(); ++i) {
+      const Keyed moving = keyed[i];
+      std::size_t j = i;
+      for (; j > 0 && moving.key < keyed[j - 1].key; --j) keyed[j] = keyed[j - 1];
+      keyed[j] = moving;
+      swaps += i - j;
+      if (swaps > budget) {
+        sort_keyed(keyed);
+        return;
+      }
+    }
+  }
+
+  // each slab's members in x order as columns, then one vector of boxes starting at +∞, so the
+  // sweep needs no scalar tail
+  void fill_columns() {
+    const std::size_t slabs = members_.size();
+    first_.assign(slabs + 1, 0);
+    for (std::size_t s = 0; s < slabs; ++s)
+      first_[s + 1] = first_[s] + members_[s].size() + Lanes::size();
     const std::size_t total = first_[slabs];
     for (auto* column : {&min_x_, &max_x_, &min_y_, &max_y_, &min_z_, &max_z_, &home_})
       column->resize(total);
     ids_.resize(total);
-    fill_.assign(first_.begin(), first_.end() - 1);
-    for (const Sorted& k : sorted_) {
-      const Aabb& b = k.box;
-      const float home = float(k.home_slab);
-      for (std::size_t s = k.home_slab; s <= k.last_slab; ++s) {
-        const std::size_t i = fill_[s]++;
+    for (std::size_t s = 0; s < slabs; ++s) {
+      std::size_t i = first_[s];
+      for (ProxyId id : members_[s]) {
+        const Aabb& b = boxes_[id];
         min_x_[i] = b.min[0];
         max_x_[i] = b.max[0];
         min_y_[i] = b.min[1];
         max_y_[i] = b.max[1];
         min_z_[i] = b.min[2];
         max_z_[i] = b.max[2];
-        home_[i] = home;
-        ids_[i] = k.id;
+        home_[i] = float(ranges_[id].home);
+        ids_[i] = id;
+        ++i;
       }
-    }
-    for (std::size_t s = 0; s < slabs; ++s)
-      std::fill(min_x_.begin() + std::ptrdiff_t(fill_[s]),
-                min_x_.begin() + std::ptrdiff_t(first_[s + 1]),
+      std::fill(min_x_.begin() + std::ptrdiff_t(i), min_x_.begin() + std::ptrdiff_t(first_[s + 1]),
                 std::numeric_limits<float>::infinity());
+    }
+  }
 
-    // in each slab, each box against the boxes after it that start before it ends on x
+  // in each slab, each box against the boxes after it that start before it ends on x
+  void sweep() {
     namespace stdx = std::experimental;
-    for (std::size_t s = 0; s < slabs; ++s) {
+    for (std::size_t s = 0; s < members_.size(); ++s) {
       const Lanes this_slab = Lanes(float(s));
-      for (std::size_t i = first_[s]; i < fill_[s]; ++i) {
+      const std::size_t end = first_[s] + members_[s].size();
+      for (std::size_t i = first_[s]; i < end; ++i) {
         const float end_x = max_x_[i], lo_y = min_y_[i], hi_y = max_y_[i], lo_z = min_z_[i],
                     hi_z = max_z_[i], home = home_[i];
         for (std::size_t j = i + 1;; j += Lanes::size()) {
@@ -475,50 +592,18 @@ class BoxPruning final : public ProxyStore {
     }
   }
 
- private:
-  using Lanes = std::experimental::native_simd<float>;
-  // a live box's min x and handle, 8 bytes: what the sort moves
-  struct Keyed {
-    float key;
-    ProxyId id;
-  };
-  // a live box in x order, 32 bytes
-  struct Sorted {
-    Aabb box;
-    ProxyId id;
-    std::uint16_t home_slab, last_slab;  // the slabs of its min y and max y
-  };
-
-  // The boxes by min x. From the previous order, insertion sort is O(n + swaps): a coherent
-  // scene needs few. It gives up after kMaxSwapsPerBox · n swaps (a scene that is not coherent)
-  // and spreadsort, a radix-hybrid that sorts floats by their bits, sorts from scratch.
-  void sort_on_x(bool nearly_sorted) {
-    if (nearly_sorted) {
-      std::size_t swaps = 0;
-      const std::size_t budget = kMaxSwapsPerBox * order_.size();
-      for (std::size_t i = 1; i < order_.size() && swaps <= budget; ++i) {
-        const Keyed moving = order_[i];
-        std::size_t j = i;
-        for (; j > 0 && moving.key < order_[j - 1].key; --j) order_[j] = order_[j - 1];
-        order_[j] = moving;
-        swaps += i - j;
-      }
-      if (swaps <= budget) return;
-    }
-    boost::sort::spreadsort::float_sort(
-        order_.begin(), order_.end(),
-        [](const Keyed& k, unsigned offset) {
-          return boost::sort::spreadsort::float_mem_cast<float, int>(k.key) >> offset;
-        },
-        [](const Keyed& a, const Keyed& b) { return a.key < b.key; });
-  }
   static constexpr std::size_t kMaxSwapsPerBox = 8;
-  std::vector<Keyed> order_;
-  std::vector<Sorted> sorted_;
+  // more than this fraction (1/k) of the boxes changing slabs in one step: rebuild instead
+  static constexpr std::size_t kMaxChangedFraction = 4;
   // at most this many slabs: beyond it the per-slab padding and bookkeeping outweigh the gain
   static constexpr std::size_t kMaxSlabs = 256;
-  std::vector<std::size_t> first_, fill_;  // each slab's first entry, and one past its last
-  // the slabs' members, sorted on x within each slab; home = the slab of the box's min y
+  Layout layout_;
+  std::vector<std::vector<ProxyId>> members_;  // each slab's boxes, in x order
+  std::vector<SlabRange> ranges_;              // each box's slabs (by handle)
+  std::vector<std::vector<Keyed>> arrivals_;   // boxes entering each slab this update
+  std::vector<Keyed> keyed_;                   // scratch: one slab (or every box) with its keys
+  // the slabs' members as columns, each slab in x order; home = the slab of the box's min y
+  std::vector<std::size_t> first_;  // each slab's first entry
   std::vector<float> min_x_, max_x_, min_y_, max_y_, min_z_, max_z_, home_;
   std::vector<ProxyId> ids_;
   std::vector<ProxyPair> pairs_;

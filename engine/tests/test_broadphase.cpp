@@ -123,6 +123,37 @@ TEST_P(BroadPhaseVariant, BatchBuildThenCoherentFramesMatchBruteForce) {
   }
 }
 
+// every box carried upwards a little each frame (past any layout of y kept from an earlier frame,
+// so boxes sit above it until it is laid out again), some faster than others, and then squeezed
+// into a thin layer: the pair set stays exact through all of it
+TEST_P(BroadPhaseVariant, BoxesDriftingOutOfAKeptLayoutMatchBruteForce) {
+  GridWorld world(4);
+  auto phase = rtp::make_broad_phase(GetParam());
+  std::vector<rtp::Aabb> boxes;
+  for (int i = 0; i < 600; ++i) {
+    boxes.push_back(world.random_box());
+    phase->add(boxes.back());
+  }
+  for (int frame = 0; frame < 80; ++frame) {
+    phase->update();
+    ASSERT_EQ(sorted_pairs(*phase), rtp::brute_force_pairs(boxes)) << "frame " << frame;
+    for (std::size_t id = 0; id < boxes.size(); ++id) {
+      rtp::Aabb& b = boxes[id];
+      if (frame < 60) {
+        const float rise = 0.25f * float(1 + id % 3);  // some boxes overtake others
+        b.min[1] += rise;
+        b.max[1] += rise;
+      } else {  // every box's bottom into a layer a quarter of a box high
+        const float height = b.max[1] - b.min[1];
+        b.min[1] = 0.25f * float(id % 2);
+        b.max[1] = b.min[1] + height;
+      }
+      b = world.moved(b, 0.0);
+      phase->move(rtp::ProxyId(id), b);
+    }
+  }
+}
+
 TEST_P(BroadPhaseVariant, TouchingBoxesOverlapAndSeparatedOnesDoNot) {
   auto phase = rtp::make_broad_phase(GetParam());
   const rtp::Aabb unit{{0, 0, 0}, {1, 1, 1}};
