@@ -1,8 +1,6 @@
 #include "rtp/particles.h"
 
 #include <algorithm>
-#include <bit>
-#include <cstdint>
 #include <cmath>
 #include <stdexcept>
 
@@ -110,20 +108,6 @@ struct Block {
 };
 
 }  // namespace
-
-// 1/√x for x > 0 without the divider: a first guess from the float's bits (the exponent halved
-// and negated, Lomont 2003) refined by three Newton steps y ← y (3/2 − x y²/2), each of which
-// squares the relative error (3.4e-2, 1.8e-3, 4.7e-6, then float rounding). Only multiplies and
-// adds, so it vectorises on every instruction set and pipelines, where a square root and a divide
-// per attractor and particle queue on the one divider (the update's bottleneck on an Intel core).
-inline float reciprocal_sqrt(float x) {
-  float y = std::bit_cast<float>(0x5f375a86u - (std::bit_cast<std::uint32_t>(x) >> 1));
-  const float half_x = 0.5f * x;
-  y *= 1.5f - half_x * y * y;
-  y *= 1.5f - half_x * y * y;
-  y *= 1.5f - half_x * y * y;
-  return y;
-}
 
 // a = g + drag (wind − v) + Σ attractors, for n particles of one block
 void ParticleSystem::accelerate(std::size_t first, std::size_t n, const float* __restrict px,
