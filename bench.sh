@@ -15,9 +15,13 @@ build/bench/harness/physbench run --out "$out" "$@"
 # the particle update against the memory roofline, measured in the same session (Google Benchmark)
 mkdir -p "$out/benchmarks"
 build/bench/bench/particles_bench --benchmark_out="$out/benchmarks/particles.json" --benchmark_out_format=json
+# Repetitions of different engines are interleaved in random order, so a slow spell of the machine
+# (these VMs drift by up to 2x over minutes) falls on every engine alike instead of on whichever
+# ran then: the ratios between engines are what the report claims (docs/metrics.md).
+interleave=(--benchmark_enable_random_interleaving=true)
 # every engine's broad phase on the broadphase scene, pair sets checked (Google Benchmark)
-build/bench/bench/broadphase_bench --benchmark_out="$out/benchmarks/broadphase.json" --benchmark_out_format=json
+build/bench/bench/broadphase_bench "${interleave[@]}" --benchmark_out="$out/benchmarks/broadphase.json" --benchmark_out_format=json
 # every engine's narrow phase on the same random pose pairs, agreement with rtp counted (Google Benchmark)
-build/bench/bench/narrowphase_bench --benchmark_out="$out/benchmarks/narrowphase.json" --benchmark_out_format=json
+build/bench/bench/narrowphase_bench "${interleave[@]}" --benchmark_out="$out/benchmarks/narrowphase.json" --benchmark_out_format=json
 .venv/bin/python reports/build_report.py "$out"
 echo "bench: open $out/index.html"

@@ -113,20 +113,20 @@ int main(int argc, char** argv) {
       benchmark::RegisterBenchmark(name.c_str(), Pairs, entry, shapes, regime)
           ->Unit(benchmark::kMicrosecond)
           ->MinTime(0.1)
-          ->Repetitions(3)
+          ->Repetitions(5)
           ->ReportAggregatesOnly(false);
     }
   }
   benchmark::RegisterBenchmark("Query/triangle/closest-point/rtp/voronoi", Triangles, false)
       ->Unit(benchmark::kMicrosecond)
       ->MinTime(0.1)
-      ->Repetitions(3);
+      ->Repetitions(5);
   if (physbench::make_bullet_triangle_batch({}))
     benchmark::RegisterBenchmark("Query/triangle/closest-point/bullet/voronoi-simplex", Triangles,
                                  true)
         ->Unit(benchmark::kMicrosecond)
         ->MinTime(0.1)
-        ->Repetitions(3);
+        ->Repetitions(5);
 
   for (const auto& entry : engines) {
     std::string settings;
