@@ -8,6 +8,8 @@
 #include <benchmark/benchmark.h>
 #include <physbench/broadphase.h>
 
+#include <map>
+
 namespace {
 
 using physbench::BroadphaseMotion;
@@ -35,11 +37,14 @@ struct PreparedCase {
   double missing = 0, extra = 0, exact = 0;
 };
 
+// Each case is prepared once and kept: bench.sh interleaves the repetitions of every engine, and
+// an engine must meet each of its repetitions in the state the last one left it (Bullet's dbvt
+// keeps improving its tree update by update; a fresh build every repetition would time it cold).
 PreparedCase& prepare(const physbench::BroadphaseEntry& entry, const BroadphaseScene& scene) {
-  static PreparedCase prepared;
+  static std::map<std::string, PreparedCase> cases;
   const std::string key = entry.name + "@" + case_name(scene);
-  if (prepared.key == key) return prepared;
-  prepared = PreparedCase{};  // the previous case's memory goes first
+  if (auto found = cases.find(key); found != cases.end()) return found->second;
+  PreparedCase& prepared = cases[key];
   prepared.key = key;
   physbench::BroadphaseFrames frames(scene);
   prepared.engine = entry.create();
@@ -133,7 +138,7 @@ int main(int argc, char** argv) {
           ->Unit(benchmark::kMicrosecond)
           ->UseRealTime()
           ->MinTime(0.1)
-          ->Repetitions(3)
+          ->Repetitions(5)
           ->ReportAggregatesOnly(true);
     }
   for (const auto& entry : entries)

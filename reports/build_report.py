@@ -354,7 +354,7 @@ def broadphase_benchmark(folder: Path) -> dict | None:
         fig.add_trace(go.Scatter(x=[p for p, _ in points], y=[u for _, u in points], mode="lines+markers",
                                  name=engine))
     fig.update_layout(title="broadphase, coherent motion: time per update against box count",
-                      xaxis_title="boxes", yaxis_title="µs per update, median of 3 repetitions")
+                      xaxis_title="boxes", yaxis_title="µs per update, median of 5 repetitions")
     fig.update_xaxes(type="log", exponentformat="power")
     fig.update_yaxes(type="log", exponentformat="power")
     context = document.get("context", {})

@@ -403,29 +403,28 @@ class BoxPruning final : public ProxyStore {
     std::size_t slabs = 1;
     float slab_height = 1.0f;
   };
-  Layout layout_of_live_boxes() const {
-    Layout layout;
-    layout.low_y = std::numeric_limits<float>::infinity();
-    layout.high_y = -layout.low_y;
+  // the layout for a set of boxes, gathered a box at a time
+  struct LayoutOfBoxes {
+    float low_y = std::numeric_limits<float>::infinity(), high_y = -low_y;
     double total_height = 0.0;
     std::size_t n = 0;
-    for (ProxyId id = 0; id < capacity(); ++id) {
-      if (!alive(id)) continue;
-      const Aabb& b = boxes_[id];
-      layout.low_y = std::min(layout.low_y, b.min[1]);
-      layout.high_y = std::max(layout.high_y, b.min[1]);
+    void add(const Aabb& b) {
+      low_y = std::min(low_y, b.min[1]);
+      high_y = std::max(high_y, b.min[1]);
       total_height += b.max[1] - b.min[1];
       ++n;
     }
-    if (n == 0) return Layout{};
-    const double mean_height = total_height / double(n);
-    const double span = double(layout.high_y) - double(layout.low_y);
-    layout.slabs = mean_height > 0.0 ? std::clamp<std::size_t>(
-                                           std::size_t(span / (2.0 * mean_height)), 1, kMaxSlabs)
-                                     : 1;
-    layout.slab_height = layout.slabs > 1 ? float(span / double(layout.slabs)) : 1.0f;
-    return layout;
-  }
+    Layout layout() const {
+      if (n == 0) return Layout{};
+      Layout layout{low_y, high_y, 1, 1.0f};
+      const double mean_height = total_height / double(n);
+      const double span = double(high_y) - double(low_y);
+      if (mean_height > 0.0)
+        layout.slabs = std::clamp<std::size_t>(std::size_t(span / (2.0 * mean_height)), 1, kMaxSlabs);
+      if (layout.slabs > 1) layout.slab_height = float(span / double(layout.slabs));
+      return layout;
+    }
+  };
   std::size_t slab_of(float y) const {
     if (layout_.slabs == 1) return 0;
     return std::min(layout_.slabs - 1,
@@ -438,10 +437,14 @@ class BoxPruning final : public ProxyStore {
   // From scratch: every live box ordered on x by spreadsort (Boost's radix hybrid, which sorts
   // floats by their bits), then dealt into its slabs in that order, so each slab is in x order.
   void rebuild_slabs() {
-    layout_ = layout_of_live_boxes();
+    LayoutOfBoxes layout;
     keyed_.clear();
     for (ProxyId id = 0; id < capacity(); ++id)
-      if (alive(id)) keyed_.push_back({boxes_[id].min[0], id});
+      if (alive(id)) {
+        layout.add(boxes_[id]);
+        keyed_.push_back({boxes_[id].min[0], id});
+      }
+    layout_ = layout.layout();
     sort_keyed(keyed_);
     members_.resize(layout_.slabs);
     for (auto& m : members_) m.clear();
@@ -459,25 +462,29 @@ class BoxPruning final : public ProxyStore {
   // merged in. False when the scene is not coherent enough for that to pay (the caller rebuilds).
   bool update_slabs() {
     if (members_.empty()) return false;
-    const Layout now = layout_of_live_boxes();
+    // one pass over the boxes: each box's slabs in the kept layout (a box entering a slab is an
+    // arrival there), and the layout the boxes would be given now
+    arrivals_.resize(layout_.slabs);
+    for (auto& a : arrivals_) a.clear();
+    LayoutOfBoxes boxes_now;
+    std::size_t changed = 0;
+    for (ProxyId id = 0; id < capacity(); ++id) {
+      if (!alive(id)) continue;  // a handle freed earlier, not yet reused
+      const Aabb& b = boxes_[id];
+      boxes_now.add(b);
+      const SlabRange r = range_of(b);
+      if (r == ranges_[id]) continue;
+      for (std::size_t s = r.home; s <= r.last; ++s)
+        if (!ranges_[id].covers(s)) arrivals_[s].push_back({b.min[0], id});
+      ranges_[id] = r;
+      ++changed;
+    }
     // the boxes spread or moved by a slab or more, or the slab count would change by a quarter
+    const Layout now = boxes_now.layout();
     if (std::abs(now.low_y - layout_.low_y) > layout_.slab_height ||
         std::abs(now.high_y - layout_.high_y) > layout_.slab_height ||
         4 * std::max(now.slabs, layout_.slabs) > 5 * std::min(now.slabs, layout_.slabs))
       return false;
-    // each box's slabs now; a box entering a slab is an arrival there
-    arrivals_.resize(layout_.slabs);
-    for (auto& a : arrivals_) a.clear();
-    std::size_t changed = 0;
-    for (ProxyId id = 0; id < capacity(); ++id) {
-      if (!alive(id)) continue;  // a handle freed earlier, not yet reused
-      const SlabRange r = range_of(boxes_[id]);
-      if (r == ranges_[id]) continue;
-      for (std::size_t s = r.home; s <= r.last; ++s)
-        if (!ranges_[id].covers(s)) arrivals_[s].push_back({boxes_[id].min[0], id});
-      ranges_[id] = r;
-      ++changed;
-    }
     if (changed > capacity() / kMaxChangedFraction) return false;
     for (std::size_t s = 0; s < layout_.slabs; ++s) {
       // the members that stay, with their new min x, in last step's order
