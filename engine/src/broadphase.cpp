@@ -374,7 +374,6 @@ class BoxPruning final : public ProxyStore {
     recycle_removed();
     pairs_.clear();
     if (!same_boxes || !update_slabs()) rebuild_slabs();
-    fill_columns();
     sweep();
   }
 
@@ -454,6 +453,10 @@ class BoxPruning final : public ProxyStore {
       ranges_[k.id] = r;
       for (std::size_t s = r.home; s <= r.last; ++s) members_[s].push_back(k.id);
     }
+    std::size_t entries = 0;
+    for (const auto& m : members_) entries += m.size();
+    begin_columns(entries);
+    for (const auto& m : members_) append_columns(m);
   }
 
   // While coherent: the kept slabs, each brought back into x order by insertion sort (a slab
@@ -468,6 +471,7 @@ class BoxPruning final : public ProxyStore {
     for (auto& a : arrivals_) a.clear();
     LayoutOfBoxes boxes_now;
     std::size_t changed = 0;
+    const std::size_t most_changed = capacity() / kMaxChangedFraction;
     for (ProxyId id = 0; id < capacity(); ++id) {
       if (!alive(id)) continue;  // a handle freed earlier, not yet reused
       const Aabb& b = boxes_[id];
@@ -477,7 +481,7 @@ class BoxPruning final : public ProxyStore {
       for (std::size_t s = r.home; s <= r.last; ++s)
         if (!ranges_[id].covers(s)) arrivals_[s].push_back({b.min[0], id});
       ranges_[id] = r;
-      ++changed;
+      if (++changed > most_changed) return false;  // not coherent: the caller rebuilds
     }
     // the boxes spread or moved by a slab or more, or the slab count would change by a quarter
     const Layout now = boxes_now.layout();
@@ -485,7 +489,9 @@ class BoxPruning final : public ProxyStore {
         std::abs(now.high_y - layout_.high_y) > layout_.slab_height ||
         4 * std::max(now.slabs, layout_.slabs) > 5 * std::min(now.slabs, layout_.slabs))
       return false;
-    if (changed > capacity() / kMaxChangedFraction) return false;
+    std::size_t entries = 0;  // at most: the members so far and the arrivals
+    for (std::size_t s = 0; s < layout_.slabs; ++s) entries += members_[s].size() + arrivals_[s].size();
+    begin_columns(entries);
     for (std::size_t s = 0; s < layout_.slabs; ++s) {
       // the members that stay, with their new min x, in last step's order
       keyed_.clear();
@@ -496,6 +502,7 @@ class BoxPruning final : public ProxyStore {
       m.clear();
       if (arrivals_[s].empty()) {
         for (const Keyed& k : keyed_) m.push_back(k.id);
+        append_columns(m);  // while the slab's boxes are in the cache
         continue;
       }
       sort_keyed(arrivals_[s]);
@@ -507,6 +514,7 @@ class BoxPruning final : public ProxyStore {
                             (i < keyed_.size() && !before(arriving[j], keyed_[i]))
                         ? keyed_[i++].id
                         : arriving[j++].id);
+      append_columns(m);
     }
     return true;
   }
@@ -537,34 +545,34 @@ class BoxPruning final : public ProxyStore {
     }
   }
 
-  // each slab's members in x order as columns, then one vector of boxes starting at +∞, so the
-  // sweep needs no scalar tail
-  void fill_columns() {
-    const std::size_t slabs = members_.size();
-    first_.assign(slabs + 1, 0);
-    for (std::size_t s = 0; s < slabs; ++s)
-      first_[s + 1] = first_[s] + members_[s].size() + Lanes::size();
-    const std::size_t total = first_[slabs];
+  // Each slab's members in x order as columns, slab after slab, each followed by one vector of
+  // boxes starting at +∞ so the sweep needs no scalar tail. begin_columns makes room for that
+  // many members in all; append_columns writes the next slab.
+  void begin_columns(std::size_t members) {
+    const std::size_t total = members + members_.size() * Lanes::size();
     for (auto* column : {&min_x_, &max_x_, &min_y_, &max_y_, &min_z_, &max_z_, &home_})
-      column->resize(total);
-    ids_.resize(total);
-    for (std::size_t s = 0; s < slabs; ++s) {
-      std::size_t i = first_[s];
-      for (ProxyId id : members_[s]) {
-        const Aabb& b = boxes_[id];
-        min_x_[i] = b.min[0];
-        max_x_[i] = b.max[0];
-        min_y_[i] = b.min[1];
-        max_y_[i] = b.max[1];
-        min_z_[i] = b.min[2];
-        max_z_[i] = b.max[2];
-        home_[i] = float(ranges_[id].home);
-        ids_[i] = id;
-        ++i;
-      }
-      std::fill(min_x_.begin() + std::ptrdiff_t(i), min_x_.begin() + std::ptrdiff_t(first_[s + 1]),
-                std::numeric_limits<float>::infinity());
+      if (column->size() < total) column->resize(total);
+    if (ids_.size() < total) ids_.resize(total);
+    first_.assign(1, 0);
+  }
+  void append_columns(const std::vector<ProxyId>& members) {
+    std::size_t i = first_.back();
+    for (ProxyId id : members) {
+      const Aabb& b = boxes_[id];
+      min_x_[i] = b.min[0];
+      max_x_[i] = b.max[0];
+      min_y_[i] = b.min[1];
+      max_y_[i] = b.max[1];
+      min_z_[i] = b.min[2];
+      max_z_[i] = b.max[2];
+      home_[i] = float(ranges_[id].home);
+      ids_[i] = id;
+      ++i;
     }
+    const std::size_t end = i + Lanes::size();
+    std::fill(min_x_.begin() + std::ptrdiff_t(i), min_x_.begin() + std::ptrdiff_t(end),
+              std::numeric_limits<float>::infinity());
+    first_.push_back(end);
   }
 
   // in each slab, each box against the boxes after it that start before it ends on x
@@ -610,7 +618,7 @@ class BoxPruning final : public ProxyStore {
   std::vector<std::vector<Keyed>> arrivals_;   // boxes entering each slab this update
   std::vector<Keyed> keyed_;                   // scratch: one slab (or every box) with its keys
   // the slabs' members as columns, each slab in x order; home = the slab of the box's min y
-  std::vector<std::size_t> first_;  // each slab's first entry
+  std::vector<std::size_t> first_;  // each slab's first entry (and one past the last slab's padding)
   std::vector<float> min_x_, max_x_, min_y_, max_y_, min_z_, max_z_, home_;
   std::vector<ProxyId> ids_;
   std::vector<ProxyPair> pairs_;
