@@ -8,6 +8,9 @@
 #include <benchmark/benchmark.h>
 #include <physbench/broadphase.h>
 
+#include <algorithm>
+#include <chrono>
+#include <limits>
 #include <map>
 
 namespace {
@@ -98,6 +101,52 @@ void Build(benchmark::State& state, const physbench::BroadphaseEntry& entry,
   state.counters["boxes"] = double(scene.count);
 }
 
+// rtp's box pruning and one peer on the same case, updated in turn: each round times one update
+// of each, back to back, so both see the same state of the machine (a slow spell of seconds, a
+// neighbour's load) and the ratio of their times is free of it. A peer's update can cost very
+// different amounts from frame to frame (Bullet's dbvt re-inserts the boxes that left their
+// fattened bounds, many on some frames and few on others), so what is compared is time summed
+// over rounds: the ratio of sums over all rounds, and its spread as the least and largest ratio
+// of sums over kBlocks consecutive blocks of rounds. Counters in µs per update and peer ÷ rtp.
+constexpr int kPairedRounds = 400, kBlocks = 8;
+void Paired(benchmark::State& state, const physbench::BroadphaseEntry& ours,
+            const physbench::BroadphaseEntry& peer, const BroadphaseScene& scene) {
+  PreparedCase& a = prepare(ours, scene);
+  PreparedCase& b = prepare(peer, scene);
+  using Clock = std::chrono::steady_clock;
+  std::vector<double> ours_us, peer_us;
+  for (auto _ : state) {
+    const auto t0 = Clock::now();
+    a.engine->update(a.replay[a.frame]);
+    const auto t1 = Clock::now();
+    b.engine->update(b.replay[b.frame]);
+    const auto t2 = Clock::now();
+    a.frame = (a.frame + 1) % a.replay.size();
+    b.frame = (b.frame + 1) % b.replay.size();
+    ours_us.push_back(std::chrono::duration<double, std::micro>(t1 - t0).count());
+    peer_us.push_back(std::chrono::duration<double, std::micro>(t2 - t1).count());
+    state.SetIterationTime((ours_us.back() + peer_us.back()) * 1e-6);
+  }
+  const auto sum = [](const std::vector<double>& v, std::size_t from, std::size_t to) {
+    double total = 0.0;
+    for (std::size_t i = from; i < to; ++i) total += v[i];
+    return total;
+  };
+  const std::size_t rounds = ours_us.size(), block = rounds / kBlocks;
+  double least = std::numeric_limits<double>::infinity(), largest = 0.0;
+  for (std::size_t k = 0; block > 0 && k < kBlocks; ++k) {
+    const double r = sum(peer_us, k * block, (k + 1) * block) / sum(ours_us, k * block, (k + 1) * block);
+    least = std::min(least, r), largest = std::max(largest, r);
+  }
+  state.counters["boxes"] = double(scene.count);
+  state.counters["rounds"] = double(rounds);
+  state.counters["rtp_us"] = sum(ours_us, 0, rounds) / double(rounds);
+  state.counters["peer_us"] = sum(peer_us, 0, rounds) / double(rounds);
+  state.counters["ratio"] = sum(peer_us, 0, rounds) / sum(ours_us, 0, rounds);
+  state.counters["ratio_least_block"] = least;
+  state.counters["ratio_largest_block"] = largest;
+}
+
 BroadphaseScene scene_of(BroadphaseMotion motion, std::size_t count, bool planar = false) {
   BroadphaseScene s;
   s.motion = motion;
@@ -140,6 +189,19 @@ int main(int argc, char** argv) {
           ->MinTime(0.1)
           ->Repetitions(5)
           ->ReportAggregatesOnly(true);
+    }
+  // the target case (10⁴ coherent boxes): rtp's box pruning paired with every peer, round by round
+  const BroadphaseScene target = scene_of(BroadphaseMotion::Coherent, 10000);
+  const auto ours = std::find_if(entries.begin(), entries.end(),
+                                 [](const auto& e) { return e.name == "rtp/box-pruning"; });
+  if (ours != entries.end())
+    for (const auto& entry : entries) {
+      if (entry.engine == "rtp" || entry.unsupported(target)) continue;
+      benchmark::RegisterBenchmark(
+          ("Paired/" + case_name(target) + "/" + entry.name).c_str(), Paired, *ours, entry, target)
+          ->Unit(benchmark::kMicrosecond)
+          ->UseManualTime()
+          ->Iterations(kPairedRounds);
     }
   for (const auto& entry : entries)
     if (!entry.unsupported(build))

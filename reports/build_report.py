@@ -316,14 +316,19 @@ def broadphase_benchmark(folder: Path) -> dict | None:
         return None
     runs = document.get("benchmarks", [])
     updates: dict[tuple, dict] = {}
-    builds = []
+    builds, paired = [], []
     for run in runs:
         parts = run.get("run_name", run.get("name", "")).split("/")
         if len(parts) < 5:
             continue
         kind, motion, count, engine = parts[0], parts[1], int(parts[2]), "/".join(parts[3:5])
         scale = {"ns": 1e-3, "us": 1.0, "ms": 1e3, "s": 1e6}[run.get("time_unit", "us")]
-        if kind == "Build" and run.get("run_type") == "iteration":
+        if kind == "Paired" and run.get("run_type") == "iteration":
+            # rtp's box pruning and this peer updated in turn, round by round (counters in µs)
+            paired.append(dict(motion=motion, boxes=count, engine=engine, rounds=run.get("rounds"),
+                               rtp_us=run.get("rtp_us"), peer_us=run.get("peer_us"), ratio=run.get("ratio"),
+                               least=run.get("ratio_least_block"), largest=run.get("ratio_largest_block")))
+        elif kind == "Build" and run.get("run_type") == "iteration":
             builds.append(dict(engine=engine, boxes=count, ms=run["real_time"] * scale / 1e3))
         elif kind == "Update":
             row = updates.setdefault((motion, count, engine), dict(motion=motion, boxes=count, engine=engine))
@@ -359,7 +364,9 @@ def broadphase_benchmark(folder: Path) -> dict | None:
     fig.update_yaxes(type="log", exponentformat="power")
     context = document.get("context", {})
     settings = {k.removeprefix("settings "): v for k, v in context.items() if k.startswith("settings ")}
-    return dict(rows=rows, builds=builds, settings=settings, chart=figure_html(fig) if fig.data else "")
+    paired.sort(key=lambda r: r["ratio"] or 0.0)
+    return dict(rows=rows, builds=builds, paired=paired, settings=settings,
+                chart=figure_html(fig) if fig.data else "")
 
 
 def narrowphase_benchmark(folder: Path) -> dict | None:
@@ -548,6 +555,15 @@ broad phase runs in every engine; each pair set is compared with the exact one o
 <td>{{ "%.0f" % r.exact if r.exact is not none }}</td><td>{{ "%.0f" % r.missing if r.missing is not none }}</td>
 <td>{{ "%.3f" % r.extra if r.extra is not none }}</td><td>{{ "%.1f×" % r.vs_best_peer if r.vs_best_peer }}</td></tr>{% endfor %}
 </table>
+{% if broadphase.paired %}<p class="note">Paired: rtp/box-pruning and one peer updated in turn on the same
+case, one update each per round, so both meet the same state of the machine; the ratio is of the times summed
+over all rounds, its spread the least and largest ratio over eight consecutive blocks of rounds.</p>
+<table><tr><th class="l">motion</th><th>boxes</th><th class="l">peer</th><th>rounds</th><th>peer µs per update</th>
+<th>rtp/box-pruning µs</th><th>peer ÷ rtp</th><th>least–largest block</th></tr>
+{% for r in broadphase.paired %}<tr><td class="l">{{ r.motion }}</td><td>{{ r.boxes }}</td><td class="l">{{ r.engine }}</td>
+<td>{{ "%.0f" % r.rounds if r.rounds }}</td><td>{{ "%.4g" % r.peer_us if r.peer_us }}</td><td>{{ "%.4g" % r.rtp_us if r.rtp_us }}</td>
+<td>{{ "%.2f×" % r.ratio if r.ratio }}</td><td>{{ "%.2f–%.2f" % (r.least, r.largest) if r.least and r.largest }}</td></tr>{% endfor %}
+</table>{% endif %}
 {% if broadphase.builds %}<table><tr><th class="l">build from scratch</th><th>boxes</th><th>ms</th></tr>
 {% for b in broadphase.builds %}<tr><td class="l">{{ b.engine }}</td><td>{{ b.boxes }}</td><td>{{ "%.3g" % b.ms }}</td></tr>{% endfor %}
 </table>{% endif %}

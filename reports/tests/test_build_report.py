@@ -168,6 +168,10 @@ def test_broadphase_benchmark_reaches_the_report(tmp_path):
             update("rtp/box-pruning", 1000, "median", 50.0, **counters),
             update("rtp/box-pruning", 1000, "cv", 0.021),
             update("bullet/dbvt", 1000, "median", 400.0, **counters),
+            {"name": "Paired/coherent/10000/bullet/dbvt/iterations:400/manual_time", "run_type": "iteration",
+             "run_name": "Paired/coherent/10000/bullet/dbvt/iterations:400/manual_time", "real_time": 7000.0,
+             "time_unit": "us", "rounds": 400, "rtp_us": 640.0, "peer_us": 6912.0, "ratio": 10.8,
+             "ratio_least_block": 10.25, "ratio_largest_block": 11.5},
             {"name": "Build/coherent/50000/rtp/box-pruning/real_time", "run_type": "iteration",
              "run_name": "Build/coherent/50000/rtp/box-pruning/min_time:0.100/real_time", "real_time": 12.5,
              "time_unit": "ms"},
@@ -180,6 +184,9 @@ def test_broadphase_benchmark_reaches_the_report(tmp_path):
     assert "<td>2.1</td>" in page
     assert "btDbvtBroadphase" in page
     assert "<td>12.5</td>" in page
+    # the paired row: its ratio and the spread over blocks, not mixed into the update rows
+    assert "<td>10.80×</td><td>10.25–11.50</td>" in page
+    assert "<td>6912</td><td>640</td>" in page
 
 
 def test_narrowphase_benchmark_rows_carry_time_per_pair_and_agreement(tmp_path):
