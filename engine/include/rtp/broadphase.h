@@ -8,11 +8,14 @@
 //   IncrementalSap  the seed's next step: the same sorted axes, but a pair is added or removed
 //                   when a min and a max endpoint swap during the insertion sort (Baraff 1992,
 //                   Bullet's btAxisSweep3), kept in a hashed set instead of the n² table.
-//   BoxPruning      for scenes that are not coherent or very large: every update orders the
-//                   boxes on x (insertion sort from the last order while that is cheap, else
-//                   Boost's radix-hybrid spreadsort), buckets them into slabs across y and
-//                   sweeps each slab, testing y and z for several boxes at once with SIMD
-//                   (Terdiman, "Box pruning", 2002).
+//   BoxPruning      for every scene, coherent or not, and very large ones: the boxes bucketed
+//                   into slabs across y, each slab ordered on x and swept, testing y and z for
+//                   several boxes at once with SIMD (Terdiman, "Box pruning", 2002). While the
+//                   scene is coherent the slabs are kept between updates and each slab's order
+//                   is repaired by insertion sort (few swaps: a slab holds a few hundred boxes),
+//                   boxes that changed slabs dropped or merged in; otherwise (boxes added or
+//                   removed, a quarter of them changing slabs, the layout outgrown) every box is
+//                   ordered from scratch by Boost's radix-hybrid spreadsort and dealt out again.
 //
 // Touching counts: intervals are closed, so boxes that share a face, an edge or a corner
 // overlap (as in Bullet, ODE and Box2D). In a sorted axis a min endpoint goes before a max
