@@ -451,7 +451,7 @@ class BoxPruning final : public ProxyStore {
     for (const Keyed& k : keyed_) {
       const SlabRange r = range_of(boxes_[k.id]);
       ranges_[k.id] = r;
-      for (std::size_t s = r.home; s <= r.last; ++s) members_[s].push_back(k.id);
+      for (std::size_t s = r.home; s <= r.last; ++s) members_[s].push_back(k);
     }
     std::size_t entries = 0;
     for (const auto& m : members_) entries += m.size();
@@ -493,28 +493,26 @@ class BoxPruning final : public ProxyStore {
     for (std::size_t s = 0; s < layout_.slabs; ++s) entries += members_[s].size() + arrivals_[s].size();
     begin_columns(entries);
     for (std::size_t s = 0; s < layout_.slabs; ++s) {
-      // the members that stay, with their new min x, in last step's order
-      keyed_.clear();
-      for (ProxyId id : members_[s])
-        if (ranges_[id].covers(s)) keyed_.push_back({boxes_[id].min[0], id});
-      insertion_sort_or_resort(keyed_);
-      std::vector<ProxyId>& m = members_[s];
-      m.clear();
-      if (arrivals_[s].empty()) {
-        for (const Keyed& k : keyed_) m.push_back(k.id);
-        append_columns(m);  // while the slab's boxes are in the cache
-        continue;
+      // the members that stay, with their new min x, in last step's order (kept in place by
+      // advancing a count)
+      std::vector<Keyed>& m = members_[s];
+      std::size_t kept = 0;
+      for (const Keyed& k : m) {
+        const ProxyId id = k.id;
+        m[kept] = {boxes_[id].min[0], id};
+        kept += ranges_[id].covers(s);
       }
-      sort_keyed(arrivals_[s]);
-      const auto before = [](const Keyed& a, const Keyed& b) { return a.key < b.key; };
-      std::size_t i = 0, j = 0;
-      const std::vector<Keyed>& arriving = arrivals_[s];
-      while (i < keyed_.size() || j < arriving.size())
-        m.push_back(j == arriving.size() ||
-                            (i < keyed_.size() && !before(arriving[j], keyed_[i]))
-                        ? keyed_[i++].id
-                        : arriving[j++].id);
-      append_columns(m);
+      m.resize(kept);
+      insertion_sort_or_resort(m);
+      if (!arrivals_[s].empty()) {
+        std::vector<Keyed>& arriving = arrivals_[s];
+        sort_keyed(arriving);
+        keyed_.resize(m.size() + arriving.size());
+        std::merge(m.begin(), m.end(), arriving.begin(), arriving.end(), keyed_.begin(),
+                   [](const Keyed& a, const Keyed& b) { return a.key < b.key; });
+        m.swap(keyed_);
+      }
+      append_columns(m);  // while the slab's boxes are in the cache
     }
     return true;
   }
@@ -555,9 +553,10 @@ class BoxPruning final : public ProxyStore {
     if (ids_.size() < total) ids_.resize(total);
     first_.assign(1, 0);
   }
-  void append_columns(const std::vector<ProxyId>& members) {
+  void append_columns(const std::vector<Keyed>& members) {
     std::size_t i = first_.back();
-    for (ProxyId id : members) {
+    for (const Keyed& k : members) {
+      const ProxyId id = k.id;
       const Aabb& b = boxes_[id];
       min_x_[i] = b.min[0];
       max_x_[i] = b.max[0];
@@ -613,7 +612,7 @@ class BoxPruning final : public ProxyStore {
   // at most this many slabs: beyond it the per-slab padding and bookkeeping outweigh the gain
   static constexpr std::size_t kMaxSlabs = 256;
   Layout layout_;
-  std::vector<std::vector<ProxyId>> members_;  // each slab's boxes, in x order
+  std::vector<std::vector<Keyed>> members_;  // each slab's boxes with their min x, in x order
   std::vector<SlabRange> ranges_;              // each box's slabs (by handle)
   std::vector<std::vector<Keyed>> arrivals_;   // boxes entering each slab this update
   std::vector<Keyed> keyed_;                   // scratch: one slab (or every box) with its keys
