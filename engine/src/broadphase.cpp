@@ -402,6 +402,7 @@ class BoxPruning final : public ProxyStore {
     float low_y = 0.0f, high_y = 0.0f;  // the least and the largest min y
     std::size_t slabs = 1;
     float slab_height = 1.0f;
+    float per_slab_height = 1.0f;  // its reciprocal: a multiply is monotonic in y as well
   };
   // the layout for a set of boxes, gathered a box at a time
   struct LayoutOfBoxes {
@@ -416,19 +417,22 @@ class BoxPruning final : public ProxyStore {
     }
     Layout layout() const {
       if (n == 0) return Layout{};
-      Layout layout{low_y, high_y, 1, 1.0f};
+      Layout layout{low_y, high_y, 1, 1.0f, 1.0f};
       const double mean_height = total_height / double(n);
       const double span = double(high_y) - double(low_y);
       if (mean_height > 0.0)
         layout.slabs = std::clamp<std::size_t>(std::size_t(span / (3.0 * mean_height)), 1, kMaxSlabs);
-      if (layout.slabs > 1) layout.slab_height = float(span / double(layout.slabs));
+      if (layout.slabs > 1) {
+        layout.slab_height = float(span / double(layout.slabs));
+        layout.per_slab_height = 1.0f / layout.slab_height;
+      }
       return layout;
     }
   };
   std::size_t slab_of(float y) const {
     if (layout_.slabs == 1) return 0;
     return std::min(layout_.slabs - 1,
-                    std::size_t(std::max(0.0f, (y - layout_.low_y) / layout_.slab_height)));
+                    std::size_t(std::max(0.0f, (y - layout_.low_y) * layout_.per_slab_height)));
   }
   SlabRange range_of(const Aabb& b) const {
     return {std::uint16_t(slab_of(b.min[1])), std::uint16_t(slab_of(b.max[1]))};
