@@ -135,7 +135,8 @@ void Paired(benchmark::State& state, const physbench::BroadphaseEntry& ours,
   const std::size_t rounds = ours_us.size(), block = rounds / kBlocks;
   double least = std::numeric_limits<double>::infinity(), largest = 0.0;
   for (std::size_t k = 0; block > 0 && k < kBlocks; ++k) {
-    const double r = sum(peer_us, k * block, (k + 1) * block) / sum(ours_us, k * block, (k + 1) * block);
+    const std::size_t from = k * block, to = (k + 1) * block;
+    const double r = sum(peer_us, from, to) / sum(ours_us, from, to);
     least = std::min(least, r), largest = std::max(largest, r);
   }
   state.counters["boxes"] = double(scene.count);
