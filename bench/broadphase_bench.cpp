@@ -12,6 +12,7 @@
 #include <chrono>
 #include <limits>
 #include <map>
+#include <numeric>
 
 namespace {
 
@@ -105,8 +106,9 @@ void Build(benchmark::State& state, const physbench::BroadphaseEntry& entry,
 // of each, back to back, so both see the same state of the machine (a slow spell of seconds, a
 // neighbour's load) and the ratio of their times is free of it. A peer's update can cost very
 // different amounts from frame to frame (dbvt's time over rtp's, round by round, ran from 0.6x at
-// the 10th percentile to 21x at the 90th), so what is compared is time summed over rounds: the ratio of sums over all rounds, and its spread as the least and largest ratio
-// of sums over kBlocks consecutive blocks of rounds. Counters in µs per update and peer ÷ rtp.
+// the 10th percentile to 21x at the 90th), so what is compared is time summed over rounds: the
+// ratio of sums over all rounds, and its spread as the least and largest ratio of sums over
+// kBlocks consecutive blocks of rounds. Counters in µs per update and peer ÷ rtp.
 constexpr int kPairedRounds = 400, kBlocks = 8;
 void Paired(benchmark::State& state, const physbench::BroadphaseEntry& ours,
             const physbench::BroadphaseEntry& peer, const BroadphaseScene& scene) {
@@ -114,6 +116,7 @@ void Paired(benchmark::State& state, const physbench::BroadphaseEntry& ours,
   PreparedCase& b = prepare(peer, scene);
   using Clock = std::chrono::steady_clock;
   std::vector<double> ours_us, peer_us;
+  ours_us.reserve(kPairedRounds), peer_us.reserve(kPairedRounds);
   for (auto _ : state) {
     const auto t0 = Clock::now();
     a.engine->update(a.replay[a.frame]);
@@ -127,9 +130,7 @@ void Paired(benchmark::State& state, const physbench::BroadphaseEntry& ours,
     state.SetIterationTime((ours_us.back() + peer_us.back()) * 1e-6);
   }
   const auto sum = [](const std::vector<double>& v, std::size_t from, std::size_t to) {
-    double total = 0.0;
-    for (std::size_t i = from; i < to; ++i) total += v[i];
-    return total;
+    return std::accumulate(v.begin() + std::ptrdiff_t(from), v.begin() + std::ptrdiff_t(to), 0.0);
   };
   const std::size_t rounds = ours_us.size(), block = rounds / kBlocks;
   double least = std::numeric_limits<double>::infinity(), largest = 0.0;
