@@ -98,9 +98,9 @@ std::size_t ParticleSystem::bytes_per_particle_step() const {
 namespace {
 
 // Particles are updated in blocks small enough for their temporaries to stay in L1. Every loop
-// below is branch-free over a block, so the compiler vectorises it (with -fno-math-errno for
-// sqrt: engine/CMakeLists.txt); the per-attractor and per-plane loops sit outside the particle
-// loop.
+// below is branch-free over a block, so the compiler vectorises it (with -fno-trapping-math for
+// the selects: engine/CMakeLists.txt); the per-attractor and per-plane loops sit outside the
+// particle loop.
 constexpr std::size_t kBlock = 256;
 
 struct Block {
