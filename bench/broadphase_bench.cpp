@@ -30,26 +30,24 @@ std::string case_name(const BroadphaseScene& s) {
 }
 
 // One case made ready: the engine built, its pairs checked, the frames to replay. Google
-// Benchmark calls a benchmark several times (to size its iteration count, then per repetition);
-// the case is prepared on the first call and kept for the calls that follow, so the build and
-// the exact pair sets (the slow part at 10⁵ boxes) are done once per case.
+// Benchmark calls a benchmark several times (to size its iteration count, then per repetition,
+// which bench.sh interleaves with every other engine's); each case is prepared on its first call
+// and kept for the rest of the run, so the build and the exact pair sets (the slow part at 10⁵
+// boxes) are done once, and an engine meets each repetition in the state its last one left it
+// (Bullet's dbvt keeps improving its tree update by update; a fresh build each time would time
+// it cold).
 struct PreparedCase {
-  std::string key;
   std::unique_ptr<physbench::BroadphaseEngine> engine;
   std::vector<std::vector<rtp::Aabb>> replay;
   std::size_t frame = 0;
   double missing = 0, extra = 0, exact = 0;
 };
 
-// Each case is prepared once and kept: bench.sh interleaves the repetitions of every engine, and
-// an engine must meet each of its repetitions in the state the last one left it (Bullet's dbvt
-// keeps improving its tree update by update; a fresh build every repetition would time it cold).
 PreparedCase& prepare(const physbench::BroadphaseEntry& entry, const BroadphaseScene& scene) {
   static std::map<std::string, PreparedCase> cases;
   const std::string key = entry.name + "@" + case_name(scene);
   if (auto found = cases.find(key); found != cases.end()) return found->second;
   PreparedCase& prepared = cases[key];
-  prepared.key = key;
   physbench::BroadphaseFrames frames(scene);
   prepared.engine = entry.create();
   prepared.engine->build(frames.boxes());

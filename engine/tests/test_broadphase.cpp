@@ -104,23 +104,36 @@ TEST_P(BroadPhaseVariant, MatchesBruteForceEveryFrameWithAddsAndRemovals) {
   }
 }
 
+// n random boxes added to the phase, by handle
+std::vector<rtp::Aabb> add_random_boxes(GridWorld& world, rtp::BroadPhase& phase, int n) {
+  std::vector<rtp::Aabb> boxes;
+  for (int i = 0; i < n; ++i) {
+    boxes.push_back(world.random_box());
+    phase.add(boxes.back());
+  }
+  return boxes;
+}
+
+// frames of update, exact equality with brute force, then every box moved by step(id, frame, box)
+template <typename Step>
+void check_frames(rtp::BroadPhase& phase, std::vector<rtp::Aabb>& boxes, int frames, Step step) {
+  for (int frame = 0; frame < frames; ++frame) {
+    phase.update();
+    ASSERT_EQ(sorted_pairs(phase), rtp::brute_force_pairs(boxes)) << "frame " << frame;
+    for (std::size_t id = 0; id < boxes.size(); ++id) {
+      boxes[id] = step(id, frame, boxes[id]);
+      phase.move(rtp::ProxyId(id), boxes[id]);
+    }
+  }
+}
+
 // a batch large enough to be sorted from scratch, then coherent frames
 TEST_P(BroadPhaseVariant, BatchBuildThenCoherentFramesMatchBruteForce) {
   GridWorld world(3);
   auto phase = rtp::make_broad_phase(GetParam());
-  std::vector<rtp::Aabb> boxes;
-  for (int i = 0; i < 800; ++i) {
-    boxes.push_back(world.random_box());
-    phase->add(boxes.back());
-  }
-  for (int frame = 0; frame < 20; ++frame) {
-    phase->update();
-    ASSERT_EQ(sorted_pairs(*phase), rtp::brute_force_pairs(boxes)) << "frame " << frame;
-    for (std::size_t id = 0; id < boxes.size(); ++id) {
-      boxes[id] = world.moved(boxes[id], 0.0);
-      phase->move(rtp::ProxyId(id), boxes[id]);
-    }
-  }
+  std::vector<rtp::Aabb> boxes = add_random_boxes(world, *phase, 800);
+  check_frames(*phase, boxes, 20,
+               [&](std::size_t, int, const rtp::Aabb& b) { return world.moved(b, 0.0); });
 }
 
 // every box carried upwards a little each frame (past any layout of y kept from an earlier frame,
@@ -129,29 +142,19 @@ TEST_P(BroadPhaseVariant, BatchBuildThenCoherentFramesMatchBruteForce) {
 TEST_P(BroadPhaseVariant, BoxesDriftingOutOfAKeptLayoutMatchBruteForce) {
   GridWorld world(4);
   auto phase = rtp::make_broad_phase(GetParam());
-  std::vector<rtp::Aabb> boxes;
-  for (int i = 0; i < 600; ++i) {
-    boxes.push_back(world.random_box());
-    phase->add(boxes.back());
-  }
-  for (int frame = 0; frame < 80; ++frame) {
-    phase->update();
-    ASSERT_EQ(sorted_pairs(*phase), rtp::brute_force_pairs(boxes)) << "frame " << frame;
-    for (std::size_t id = 0; id < boxes.size(); ++id) {
-      rtp::Aabb& b = boxes[id];
-      if (frame < 60) {
-        const float rise = 0.25f * float(1 + id % 3);  // some boxes overtake others
-        b.min[1] += rise;
-        b.max[1] += rise;
-      } else {  // every box's bottom into a layer a quarter of a box high
-        const float height = b.max[1] - b.min[1];
-        b.min[1] = 0.25f * float(id % 2);
-        b.max[1] = b.min[1] + height;
-      }
-      b = world.moved(b, 0.0);
-      phase->move(rtp::ProxyId(id), b);
+  std::vector<rtp::Aabb> boxes = add_random_boxes(world, *phase, 600);
+  check_frames(*phase, boxes, 80, [&](std::size_t id, int frame, rtp::Aabb b) {
+    if (frame < 60) {
+      const float rise = 0.25f * float(1 + id % 3);  // some boxes overtake others
+      b.min[1] += rise;
+      b.max[1] += rise;
+    } else {  // every box's bottom into a layer a quarter of a box high
+      const float height = b.max[1] - b.min[1];
+      b.min[1] = 0.25f * float(id % 2);
+      b.max[1] = b.min[1] + height;
     }
-  }
+    return world.moved(b, 0.0);
+  });
 }
 
 TEST_P(BroadPhaseVariant, TouchingBoxesOverlapAndSeparatedOnesDoNot) {
