@@ -98,6 +98,8 @@ int main(int argc, char** argv) {
   benchmark::Initialize(&argc, argv);
   if (benchmark::ReportUnrecognizedArguments(argc, argv)) return 1;
   benchmark::AddCustomContext("particle_integrator", "midpoint");
+  benchmark::AddCustomContext("particle_kernels",
+                              rtp::ParticleSystem(attractor_mode(16, 1)).kernels());
   benchmark::AddCustomContext("scene", "particles-attractors (3 attractors, 3 planes, drag)");
   // the triad first, on its own, so its bandwidth is known when the particle runs report
   TriadCapture console;

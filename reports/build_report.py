@@ -290,7 +290,9 @@ def particle_benchmark(folder: Path) -> dict | None:
             rows.append(dict(particles=int(fields["particles"]), threads=int(fields["threads"]),
                              steps=run["items_per_second"], bytes_per_step=run["bytes_per_particle_step"],
                              fraction=run.get("roofline_fraction")))
-    return dict(triad=triad, rows=rows, at_60hz=particles_at_rate(rows, 60.0)) if rows else None
+    kernels = document.get("context", {}).get("particle_kernels", "")
+    return dict(triad=triad, rows=rows, at_60hz=particles_at_rate(rows, 60.0),
+                kernels=kernels) if rows else None
 
 
 def particles_at_rate(rows: list[dict], hz: float) -> list[dict]:
@@ -510,7 +512,7 @@ system lost over half its energy; exploded: the state became non-finite or ran a
 {{ f.chart | safe }}
 {% if f.skipped %}<p class="note">Not run: {% for u in f.skipped %}<br>{{ u }}{% endfor %}</p>{% endif %}
 {% if benchmark and f.name == "particles-scaling" %}
-<table><tr><th class="l" colspan="5">rtp particle update (midpoint, attractor mode), Google Benchmark, same session</th></tr>
+<table><tr><th class="l" colspan="5">rtp particle update (midpoint, attractor mode{{ ", " ~ benchmark.kernels ~ " kernels" if benchmark.kernels else "" }}), Google Benchmark, same session</th></tr>
 <tr><th>particles</th><th>threads</th><th>particle-steps/s</th><th>bytes per particle-step</th><th>fraction of the triad roofline</th></tr>
 {% for r in benchmark.rows %}<tr><td>{{ r.particles }}</td><td>{{ r.threads }}</td><td>{{ "%.3g" % r.steps }}</td>
 <td>{{ r.bytes_per_step }}</td><td>{{ "%.2f" % r.fraction if r.fraction is not none else "" }}</td></tr>{% endfor %}

@@ -135,7 +135,8 @@ def test_particle_benchmark_roofline_reaches_the_scaling_chart(tmp_path):
                     "--budget", "0", "--out", str(out)], check=True, capture_output=True)
     # the shape Google Benchmark's JSON reporter writes, for one triad and one particle run
     (out / "benchmarks").mkdir()
-    (out / "benchmarks" / "particles.json").write_text(json.dumps({"benchmarks": [
+    (out / "benchmarks" / "particles.json").write_text(json.dumps({"context": {"particle_kernels": "avx512"},
+                                                                 "benchmarks": [
         {"name": "Triad/1/real_time", "run_type": "iteration", "threads": 1, "bytes_per_second": 3.0e10},
         {"name": "ParticleUpdate/particles:100000/threads:1/real_time", "run_type": "iteration",
          "items_per_second": 5.0e7, "bytes_per_particle_step": 60, "roofline_fraction": 0.1},
@@ -144,6 +145,7 @@ def test_particle_benchmark_roofline_reaches_the_scaling_chart(tmp_path):
     assert "Scaling: particles-scaling" in page
     assert "roofline, 1 thread(s)" in page
     assert "<td>100000</td><td>1</td><td>5e+07</td>" in page
+    assert "attractor mode, avx512 kernels)" in page
     # 5e7 particle-steps/s at 60 steps/s: 8.3e5 particles, more than the 1e5 measured
     assert "holds 8.3e+05 particles\non 1 thread(s) (extrapolated from 100000" in page
 

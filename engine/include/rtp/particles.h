@@ -6,6 +6,7 @@
 // offset is drawn once at emission, so a step draws no random numbers and allocates nothing.
 #pragma once
 
+#include <array>
 #include <bit>
 #include <cstdint>
 #include <vector>
@@ -34,6 +35,11 @@ struct ParticlePlane {
   Vec3 normal = Vec3::UnitY();  // unit
 };
 
+// which code updates the particles: the best the core runs (AVX-512 kernels written by hand where
+// the core has AVX-512F, chosen at run time), or the portable loops the compiler vectorises for
+// the instruction set it was told (tests compare the two)
+enum class ParticleKernels : std::uint8_t { Best, Portable };
+
 struct ParticleSystemDef {
   std::size_t count = 0;
   Vec3 spawn_min = Vec3::Zero(), spawn_max = Vec3::Zero();  // uniform initial positions (m)
@@ -52,6 +58,7 @@ struct ParticleSystemDef {
   std::uint64_t seed = 1;
   ParticleIntegrator integrator = ParticleIntegrator::Midpoint;
   int threads = 1;  // OpenMP threads for the update
+  ParticleKernels kernels = ParticleKernels::Best;
 };
 
 // 1/√x for x > 0 without the divider: a first guess from the float's bits (the exponent halved
@@ -99,6 +106,8 @@ class ParticleSystem {
   const ParticleSystemDef& def() const { return def_; }
   // bytes of particle state one step reads and writes, for the roofline
   std::size_t bytes_per_particle_step() const;
+  // the kernels in use: "avx512" or "portable"
+  const char* kernels() const { return avx512_ ? "avx512" : "portable"; }
 
  private:
   void emit(std::size_t i);
@@ -108,6 +117,9 @@ class ParticleSystem {
                   float* ay, float* az) const;
 
   ParticleSystemDef def_;
+  bool avx512_ = false;  // the hand-written AVX-512 kernels run
+  // the attractors in float: x, y, z, strength
+  std::vector<std::array<float, 4>> attractors_;
   // hot: positions and velocities (m, m/s)
   std::vector<float> px_, py_, pz_, vx_, vy_, vz_;
   // per-particle wind (m/s), only when the scene has drag
