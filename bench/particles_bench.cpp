@@ -1,13 +1,17 @@
 // The particle update against the memory roofline, in one run: a STREAM-style triad measures
 // what one core (and both) can move, then the seed's attractor mode is timed at 10^4 … 4·10^6
 // particles. Counters: particle-steps/s (items), bytes/s of particle state moved, and the
-// fraction of the triad's bandwidth that is (roofline_fraction, same thread count).
+// fraction of the triad's bandwidth that is (roofline_fraction, same thread count). ThreadsPaired
+// steps a one-thread and a two-thread system in turn for the two-core speedup.
 //
 //   build/bench/bench/particles_bench --benchmark_out=particles.json --benchmark_out_format=json
 #include <benchmark/benchmark.h>
 #include <rtp/particles.h>
 
+#include <chrono>
+#include <limits>
 #include <map>
+#include <numeric>
 #include <vector>
 
 namespace {
@@ -73,6 +77,46 @@ void ParticleUpdate(benchmark::State& state) {
         benchmark::Counter(bytes / triad_bandwidth[threads], benchmark::Counter::kIsRate);
 }
 
+// one thread against two on the same count, stepped in turn: each round times a step of a
+// one-thread system and then of a two-thread one, so both see the same state of the machine (its
+// speed drifts by up to 2x over minutes) and the ratio of their summed times is free of it. The
+// spread is the least and largest ratio over kBlocks consecutive blocks of rounds.
+constexpr int kPairedRounds = 40, kBlocks = 5;
+void ThreadsPaired(benchmark::State& state) {
+  const auto count = static_cast<std::size_t>(state.range(0));
+  rtp::ParticleSystem one(attractor_mode(count, 1)), two(attractor_mode(count, 2));
+  for (int i = 0; i < 120; ++i) one.step(1.0 / 60.0), two.step(1.0 / 60.0);
+  using Clock = std::chrono::steady_clock;
+  std::vector<double> one_ms, two_ms;
+  one_ms.reserve(kPairedRounds), two_ms.reserve(kPairedRounds);
+  for (auto _ : state) {
+    const auto t0 = Clock::now();
+    one.step(1.0 / 60.0);
+    const auto t1 = Clock::now();
+    two.step(1.0 / 60.0);
+    const auto t2 = Clock::now();
+    one_ms.push_back(std::chrono::duration<double, std::milli>(t1 - t0).count());
+    two_ms.push_back(std::chrono::duration<double, std::milli>(t2 - t1).count());
+    state.SetIterationTime((one_ms.back() + two_ms.back()) * 1e-3);
+  }
+  const auto sum = [](const std::vector<double>& v, std::size_t from, std::size_t to) {
+    return std::accumulate(v.begin() + std::ptrdiff_t(from), v.begin() + std::ptrdiff_t(to), 0.0);
+  };
+  const std::size_t rounds = one_ms.size(), block = rounds / kBlocks;
+  double least = std::numeric_limits<double>::infinity(), largest = 0.0;
+  for (std::size_t k = 0; block > 0 && k < kBlocks; ++k) {
+    const double r = sum(one_ms, k * block, (k + 1) * block) / sum(two_ms, k * block, (k + 1) * block);
+    least = std::min(least, r), largest = std::max(largest, r);
+  }
+  state.counters["particles"] = double(count);
+  state.counters["rounds"] = double(rounds);
+  state.counters["one_thread_ms"] = sum(one_ms, 0, rounds) / double(rounds);
+  state.counters["two_threads_ms"] = sum(two_ms, 0, rounds) / double(rounds);
+  state.counters["speedup"] = sum(one_ms, 0, rounds) / sum(two_ms, 0, rounds);
+  state.counters["speedup_least_block"] = least;
+  state.counters["speedup_largest_block"] = largest;
+}
+
 // records the triad's bytes/s so the particle benchmarks can state their fraction of it
 class TriadCapture : public benchmark::ConsoleReporter {
  public:
@@ -93,6 +137,13 @@ BENCHMARK(ParticleUpdate)
     ->ArgNames({"particles", "threads"})
     ->Unit(benchmark::kMillisecond)
     ->UseRealTime();
+BENCHMARK(ThreadsPaired)
+    ->Arg(1000000)
+    ->Arg(4000000)
+    ->ArgNames({"particles"})
+    ->Iterations(kPairedRounds)
+    ->UseManualTime()
+    ->Unit(benchmark::kMillisecond);
 
 int main(int argc, char** argv) {
   benchmark::Initialize(&argc, argv);

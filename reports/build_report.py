@@ -278,13 +278,18 @@ def particle_benchmark(folder: Path) -> dict | None:
     if document is None:
         return None
     runs = document.get("benchmarks", [])
-    triad, rows = {}, []
+    triad, rows, paired = {}, [], []
     for run in runs:
         if run.get("run_type") != "iteration":
             continue
         name = run.get("name", "")
         if name.startswith("Triad/"):
             triad[int(run["threads"])] = run["bytes_per_second"]
+        elif name.startswith("ThreadsPaired/"):
+            paired.append(dict(particles=int(run["particles"]), speedup=run["speedup"],
+                               least=run["speedup_least_block"], largest=run["speedup_largest_block"],
+                               one_ms=run["one_thread_ms"], two_ms=run["two_threads_ms"],
+                               rounds=int(run["rounds"])))
         elif name.startswith("ParticleUpdate/"):
             fields = dict(part.split(":") for part in name.split("/")[1:] if ":" in part)
             rows.append(dict(particles=int(fields["particles"]), threads=int(fields["threads"]),
@@ -292,7 +297,7 @@ def particle_benchmark(folder: Path) -> dict | None:
                              fraction=run.get("roofline_fraction")))
     kernels = document.get("context", {}).get("particle_kernels", "")
     return dict(triad=triad, rows=rows, at_60hz=particles_at_rate(rows, 60.0),
-                kernels=kernels) if rows else None
+                kernels=kernels, paired=paired) if rows else None
 
 
 def particles_at_rate(rows: list[dict], hz: float) -> list[dict]:
@@ -519,7 +524,13 @@ system lost over half its energy; exploded: the state became non-finite or ran a
 </table>
 <p>At 60 Hz (16.7 ms per step) rtp's update holds {% for h in benchmark.at_60hz %}{{ "%.2g" % h.particles }} particles
 on {{ h.threads }} thread(s){{ " (extrapolated from " ~ h.measured_up_to ~ ", the largest count measured)" if h.extrapolated else "" }}{{ "; " if not loop.last else "." }}{% endfor %}
-The seed ran 200,000 at 60 FPS.</p>{% endif %}
+The seed ran 200,000 at 60 FPS.</p>
+{% if benchmark.paired %}<table><tr><th class="l" colspan="5">two threads against one, stepped in turn (each round a step of
+each, so both meet the machine in the same state)</th></tr>
+<tr><th>particles</th><th>rounds</th><th>1 thread (ms/step)</th><th>2 threads (ms/step)</th><th>speedup (least–largest of 5 blocks)</th></tr>
+{% for r in benchmark.paired %}<tr><td>{{ r.particles }}</td><td>{{ r.rounds }}</td><td>{{ "%.2f" % r.one_ms }}</td><td>{{ "%.2f" % r.two_ms }}</td>
+<td>{{ "%.2f" % r.speedup }}× ({{ "%.2f" % r.least }}–{{ "%.2f" % r.largest }})</td></tr>{% endfor %}
+</table>{% endif %}{% endif %}
 </section>{% endfor %}
 
 {% if narrowphase %}<section><h2>Narrow phase</h2>

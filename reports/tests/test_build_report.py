@@ -140,12 +140,16 @@ def test_particle_benchmark_roofline_reaches_the_scaling_chart(tmp_path):
         {"name": "Triad/1/real_time", "run_type": "iteration", "threads": 1, "bytes_per_second": 3.0e10},
         {"name": "ParticleUpdate/particles:100000/threads:1/real_time", "run_type": "iteration",
          "items_per_second": 5.0e7, "bytes_per_particle_step": 60, "roofline_fraction": 0.1},
+        {"name": "ThreadsPaired/particles:4000000/iterations:40/manual_time", "run_type": "iteration",
+         "particles": 4e6, "rounds": 40, "one_thread_ms": 20.0, "two_threads_ms": 11.0, "speedup": 1.818,
+         "speedup_least_block": 1.7, "speedup_largest_block": 1.9},
     ]}))
     page = build_report.build_report(out).read_text()
     assert "Scaling: particles-scaling" in page
     assert "roofline, 1 thread(s)" in page
     assert "<td>100000</td><td>1</td><td>5e+07</td>" in page
     assert "attractor mode, avx512 kernels)" in page
+    assert "<td>4000000</td><td>40</td><td>20.00</td><td>11.00</td>\n<td>1.82× (1.70–1.90)</td>" in page
     # 5e7 particle-steps/s at 60 steps/s: 8.3e5 particles, more than the 1e5 measured
     assert "holds 8.3e+05 particles\non 1 thread(s) (extrapolated from 100000" in page
 
