@@ -105,7 +105,8 @@ void ThreadsPaired(benchmark::State& state) {
   const std::size_t rounds = one_ms.size(), block = rounds / kBlocks;
   double least = std::numeric_limits<double>::infinity(), largest = 0.0;
   for (std::size_t k = 0; block > 0 && k < kBlocks; ++k) {
-    const double r = sum(one_ms, k * block, (k + 1) * block) / sum(two_ms, k * block, (k + 1) * block);
+    const std::size_t from = k * block, to = (k + 1) * block;
+    const double r = sum(one_ms, from, to) / sum(two_ms, from, to);
     least = std::min(least, r), largest = std::max(largest, r);
   }
   state.counters["particles"] = double(count);

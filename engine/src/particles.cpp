@@ -124,11 +124,11 @@ struct Block {
 
 #ifdef RTP_PARTICLES_AVX512
 // The AVX-512 kernels, for cores that have it (chosen at run time, so a portable build uses them
-// too): 16 particles per register, and the two operations the portable loops leave to the divider
-// — 1/√r² at each attractor and the bounce's 1/vₙ — by the core's 14-bit estimates and one
-// Newton step each (relative error ≤ 1.5 (2⁻¹⁴)² and (2⁻¹⁴)², under float rounding): five
-// operations for 1/√r² where the portable reciprocal_sqrt takes fourteen. In cache, the update is
-// bound by the number of vector operations.
+// too): 16 particles per register, and 1/√r² at each attractor and the bounce's 1/vₙ by the
+// core's 14-bit estimates and one Newton step each (relative error ≤ 1.5 (2⁻¹⁴)² and (2⁻¹⁴)²,
+// under float rounding): five operations for 1/√r² where the portable reciprocal_sqrt takes
+// fourteen, and three multiply-adds for 1/vₙ where the portable loop divides. In cache, the update
+// is bound by the number of vector operations (docs/particles.md).
 //
 // The unmasked forms of these four fill a register from an "undefined" one, which GCC 12 reports
 // as maybe uninitialised at every use (GCC bug 105593); the zero-masked forms under a full mask
@@ -151,8 +151,8 @@ inline __mmask16 lanes(std::size_t n, std::size_t j) {
   return static_cast<__mmask16>(n - j >= 16 ? 0xFFFFu : (1u << (n - j)) - 1u);
 }
 
-// a = g + drag (wind − v) + Σ attractors for n particles; wx is null when the wind is uniform (its
-// value then in `wind`). The attractors are summed in registers.
+// a = g + drag (wind − v) + Σ attractors for n particles; wx is null when the scene has no drag
+// (no wind is kept then). The attractors are summed in registers.
 __attribute__((target("avx512f"))) void accelerate_avx512(
     std::size_t n, const float* px, const float* py, const float* pz, const float* vx,
     const float* vy, const float* vz, const float* wx, const float* wy, const float* wz,
@@ -356,7 +356,6 @@ void collide(std::size_t n, float nx, float ny, float nz, float offset, float gr
   }
 }
 
-
 #ifdef RTP_PARTICLES_AVX512
 // collide() with AVX-512: the same arithmetic, 1/vₙ from the estimate and r ← r (2 − vₙ r)
 __attribute__((target("avx512f"))) void collide_avx512(
@@ -383,8 +382,7 @@ __attribute__((target("avx512f"))) void collide_avx512(
     const __m512 tau = _mm512_maskz_mul_ps(hit, depth, reciprocal);
     const __m512 impact = min16(_mm512_fmadd_ps(gn, tau, vn), zero);
     const __m512 rise = _mm512_mul_ps(minus_e, impact);
-    const __m512 height =
-        max16(_mm512_mul_ps(tau, _mm512_fnmadd_ps(half_gn, tau, rise)), zero);
+    const __m512 height = max16(_mm512_mul_ps(tau, _mm512_fnmadd_ps(half_gn, tau, rise)), zero);
     const __m512 climb = _mm512_fnmadd_ps(gn, tau, rise);
     const __m512 after = _mm512_mask_mov_ps(max16(climb, zero),
                                             _mm512_cmp_ps_mask(height, zero, _CMP_GT_OQ), climb);
@@ -407,6 +405,11 @@ __attribute__((target("avx512f"))) void collide_avx512(
 void ParticleSystem::update_range(std::size_t begin, std::size_t end, float dt) {
   const float restitution = static_cast<float>(def_.restitution);
   const float keep_tangential = static_cast<float>(1.0 - def_.friction);
+#ifdef RTP_PARTICLES_AVX512
+  const auto collide_block = avx512_ ? collide_avx512 : collide;
+#else
+  const auto collide_block = collide;
+#endif
   Block a, stage_p, stage_v;
   for (std::size_t first = begin; first < end; first += kBlock) {
     const std::size_t n = std::min(kBlock, end - first);
@@ -430,14 +433,9 @@ void ParticleSystem::update_range(std::size_t begin, std::size_t end, float dt) 
     }
 
     for (const ParticlePlane& plane : def_.planes)
-#ifdef RTP_PARTICLES_AVX512
-      (avx512_ ? collide_avx512 : collide)(
-#else
-      collide(
-#endif
-          n, float(plane.normal.x()), float(plane.normal.y()), float(plane.normal.z()),
-              float(plane.point.dot(plane.normal)), float(-def_.gravity.dot(plane.normal)),
-              restitution, keep_tangential, x, y, z, vx, vy, vz);
+      collide_block(n, float(plane.normal.x()), float(plane.normal.y()), float(plane.normal.z()),
+                    float(plane.point.dot(plane.normal)), float(-def_.gravity.dot(plane.normal)),
+                    restitution, keep_tangential, x, y, z, vx, vy, vz);
   }
 }
 
