@@ -8,6 +8,8 @@
 #include <benchmark/benchmark.h>
 #include <physbench/broadphase.h>
 
+#include "paired.h"
+
 #include <algorithm>
 #include <chrono>
 #include <limits>
@@ -127,23 +129,15 @@ void Paired(benchmark::State& state, const physbench::BroadphaseEntry& ours,
     peer_us.push_back(std::chrono::duration<double, std::micro>(t2 - t1).count());
     state.SetIterationTime((ours_us.back() + peer_us.back()) * 1e-6);
   }
-  const auto sum = [](const std::vector<double>& v, std::size_t from, std::size_t to) {
-    return std::accumulate(v.begin() + std::ptrdiff_t(from), v.begin() + std::ptrdiff_t(to), 0.0);
-  };
-  const std::size_t rounds = ours_us.size(), block = rounds / kBlocks;
-  double least = std::numeric_limits<double>::infinity(), largest = 0.0;
-  for (std::size_t k = 0; block > 0 && k < kBlocks; ++k) {
-    const std::size_t from = k * block, to = (k + 1) * block;
-    const double r = sum(peer_us, from, to) / sum(ours_us, from, to);
-    least = std::min(least, r), largest = std::max(largest, r);
-  }
+  const std::size_t rounds = ours_us.size();
+  const physbench_bench::PairedRatio r = physbench_bench::paired_ratio(peer_us, ours_us, kBlocks);
   state.counters["boxes"] = double(scene.count);
   state.counters["rounds"] = double(rounds);
-  state.counters["rtp_us"] = sum(ours_us, 0, rounds) / double(rounds);
-  state.counters["peer_us"] = sum(peer_us, 0, rounds) / double(rounds);
-  state.counters["ratio"] = sum(peer_us, 0, rounds) / sum(ours_us, 0, rounds);
-  state.counters["ratio_least_block"] = least;
-  state.counters["ratio_largest_block"] = largest;
+  state.counters["rtp_us"] = physbench_bench::sum_of(ours_us, 0, rounds) / double(rounds);
+  state.counters["peer_us"] = physbench_bench::sum_of(peer_us, 0, rounds) / double(rounds);
+  state.counters["ratio"] = r.ratio;
+  state.counters["ratio_least_block"] = r.least;
+  state.counters["ratio_largest_block"] = r.largest;
 }
 
 BroadphaseScene scene_of(BroadphaseMotion motion, std::size_t count, bool planar = false) {

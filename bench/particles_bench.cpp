@@ -8,10 +8,10 @@
 #include <benchmark/benchmark.h>
 #include <rtp/particles.h>
 
+#include "paired.h"
+
 #include <chrono>
-#include <limits>
 #include <map>
-#include <numeric>
 #include <vector>
 
 namespace {
@@ -99,23 +99,15 @@ void ThreadsPaired(benchmark::State& state) {
     two_ms.push_back(std::chrono::duration<double, std::milli>(t2 - t1).count());
     state.SetIterationTime((one_ms.back() + two_ms.back()) * 1e-3);
   }
-  const auto sum = [](const std::vector<double>& v, std::size_t from, std::size_t to) {
-    return std::accumulate(v.begin() + std::ptrdiff_t(from), v.begin() + std::ptrdiff_t(to), 0.0);
-  };
-  const std::size_t rounds = one_ms.size(), block = rounds / kBlocks;
-  double least = std::numeric_limits<double>::infinity(), largest = 0.0;
-  for (std::size_t k = 0; block > 0 && k < kBlocks; ++k) {
-    const std::size_t from = k * block, to = (k + 1) * block;
-    const double r = sum(one_ms, from, to) / sum(two_ms, from, to);
-    least = std::min(least, r), largest = std::max(largest, r);
-  }
+  const std::size_t rounds = one_ms.size();
+  const physbench_bench::PairedRatio r = physbench_bench::paired_ratio(one_ms, two_ms, kBlocks);
   state.counters["particles"] = double(count);
   state.counters["rounds"] = double(rounds);
-  state.counters["one_thread_ms"] = sum(one_ms, 0, rounds) / double(rounds);
-  state.counters["two_threads_ms"] = sum(two_ms, 0, rounds) / double(rounds);
-  state.counters["speedup"] = sum(one_ms, 0, rounds) / sum(two_ms, 0, rounds);
-  state.counters["speedup_least_block"] = least;
-  state.counters["speedup_largest_block"] = largest;
+  state.counters["one_thread_ms"] = physbench_bench::sum_of(one_ms, 0, rounds) / double(rounds);
+  state.counters["two_threads_ms"] = physbench_bench::sum_of(two_ms, 0, rounds) / double(rounds);
+  state.counters["speedup"] = r.ratio;
+  state.counters["speedup_least_block"] = r.least;
+  state.counters["speedup_largest_block"] = r.largest;
 }
 
 // records the triad's bytes/s so the particle benchmarks can state their fraction of it
