@@ -10,6 +10,9 @@
 #include <benchmark/benchmark.h>
 #include <physbench/narrowphase.h>
 
+#include "paired.h"
+
+#include <chrono>
 #include <map>
 #include <sstream>
 
@@ -66,6 +69,43 @@ void Pairs(benchmark::State& state, const physbench::NarrowphasePeerEntry& entry
   }
 }
 
+// rtp and one peer on the same set, in turn: each round times rtp over every pair of the set and
+// then the peer over the same pairs, so both meet the machine in the same state (its speed
+// drifts by up to 2x within minutes, which moved the ratio of interleaved medians by as much).
+// Counters: ns per pair of each, peer ÷ rtp as the ratio of summed times, and its least and
+// largest over kBlocks blocks of rounds (bench/paired.h).
+constexpr int kPairedRounds = 200, kBlocks = 8;
+void Paired(benchmark::State& state, const physbench::NarrowphasePeerEntry& ours,
+            const physbench::NarrowphasePeerEntry& peer, NarrowphaseShapes shapes,
+            NarrowphaseRegime regime) {
+  const NarrowphaseSet& set = set_of(shapes, regime);
+  auto a = ours.create(set), b = peer.create(set);
+  using Clock = std::chrono::steady_clock;
+  std::vector<double> ours_ns, peer_ns;
+  ours_ns.reserve(kPairedRounds), peer_ns.reserve(kPairedRounds);
+  std::size_t touching = 0;
+  const auto pairs = double(set.pairs.size());
+  for (auto _ : state) {
+    const auto t0 = Clock::now();
+    for (std::size_t i = 0; i < set.pairs.size(); ++i) touching += a->collide(i).touching;
+    const auto t1 = Clock::now();
+    for (std::size_t i = 0; i < set.pairs.size(); ++i) touching += b->collide(i).touching;
+    const auto t2 = Clock::now();
+    ours_ns.push_back(std::chrono::duration<double, std::nano>(t1 - t0).count() / pairs);
+    peer_ns.push_back(std::chrono::duration<double, std::nano>(t2 - t1).count() / pairs);
+    state.SetIterationTime((ours_ns.back() + peer_ns.back()) * pairs * 1e-9);
+  }
+  benchmark::DoNotOptimize(touching);
+  const std::size_t rounds = ours_ns.size();
+  const physbench_bench::PairedRatio r = physbench_bench::paired_ratio(peer_ns, ours_ns, kBlocks);
+  state.counters["rounds"] = double(rounds);
+  state.counters["rtp_ns"] = physbench_bench::sum_of(ours_ns, 0, rounds) / double(rounds);
+  state.counters["peer_ns"] = physbench_bench::sum_of(peer_ns, 0, rounds) / double(rounds);
+  state.counters["ratio"] = r.ratio;
+  state.counters["ratio_least_block"] = r.least;
+  state.counters["ratio_largest_block"] = r.largest;
+}
+
 void Triangles(benchmark::State& state, bool bullet) {
   static const std::vector<physbench::TriangleQuery> queries =
       physbench::make_triangle_queries(kTriangleQueries, 2026);
@@ -116,6 +156,27 @@ int main(int argc, char** argv) {
           ->Repetitions(5)
           ->ReportAggregatesOnly(false);
     }
+  }
+  // the box-box target, paired: rtp's closed-form test against Bullet's box-box detector
+  const auto find = [&](const std::string& name) -> const physbench::NarrowphasePeerEntry* {
+    for (const auto& e : engines)
+      if (e.name == name) return &e;
+    return nullptr;
+  };
+  const physbench::NarrowphasePeerEntry* ours = find("rtp/sat");
+  const physbench::NarrowphasePeerEntry* box_box = find("bullet/box-box");
+  for (const NarrowphaseRegime regime :
+       {NarrowphaseRegime::Separated, NarrowphaseRegime::Touching, NarrowphaseRegime::Deep}) {
+    if (!ours || !box_box) break;
+    NarrowphaseSet probe;
+    probe.shapes_kind = NarrowphaseShapes::BoxBox;
+    probe.regime = regime;
+    const std::string name = "Paired/" + probe.name() + "/" + box_box->name;
+    benchmark::RegisterBenchmark(name.c_str(), Paired, *ours, *box_box, NarrowphaseShapes::BoxBox,
+                                 regime)
+        ->Iterations(kPairedRounds)
+        ->UseManualTime()
+        ->Unit(benchmark::kMicrosecond);
   }
   benchmark::RegisterBenchmark("Query/triangle/closest-point/rtp/voronoi", Triangles, false)
       ->Unit(benchmark::kMicrosecond)

@@ -385,8 +385,15 @@ def narrowphase_benchmark(folder: Path) -> dict | None:
     if document is None:
         return None
     cases: dict[tuple, dict] = {}
+    paired = []
     for run in document.get("benchmarks", []):
         parts = run.get("run_name", run.get("name", "")).split("/")
+        if len(parts) >= 5 and parts[0] == "Paired" and run.get("run_type") == "iteration":
+            paired.append(dict(set=f"{parts[1]}/{parts[2]}", engine=f"{parts[3]}/{parts[4]}",
+                               rounds=int(run["rounds"]), rtp_ns=run["rtp_ns"], peer_ns=run["peer_ns"],
+                               ratio=run["ratio"], least=run["ratio_least_block"],
+                               largest=run["ratio_largest_block"]))
+            continue
         if len(parts) < 5 or parts[0] not in ("Pairs", "Query"):
             continue
         key = (f"{parts[1]}/{parts[2]}", f"{parts[3]}/{parts[4]}")
@@ -412,7 +419,7 @@ def narrowphase_benchmark(folder: Path) -> dict | None:
         r["vs_rtp"] = r["ns"] / ours[0] if ours and "ns" in r else None
     context = document.get("context", {})
     settings = {k.removeprefix("settings "): v for k, v in context.items() if k.startswith("settings ")}
-    return dict(rows=rows, settings=settings, tolerances=context.get("tolerances", ""))
+    return dict(rows=rows, settings=settings, tolerances=context.get("tolerances", ""), paired=paired)
 
 
 def scaling_charts(results: pd.DataFrame, meta: dict, benchmark: dict | None = None) -> list[dict]:
@@ -551,6 +558,14 @@ exact geometry settles for rtp, "unexplained" the rest. Tolerances: {{ narrowpha
 <td>{{ "%.0f" % r.peer_refuted if r.peer_refuted is defined }}</td>
 <td>{{ "%.0f" % r.unexplained if r.unexplained is defined }}</td></tr>{% endfor %}
 </table>
+{% if narrowphase.paired %}<table><tr><th class="l" colspan="6">rtp/sat and a peer on the same set in turn (each round
+every pair by rtp, then by the peer, so both meet the machine in the same state)</th></tr>
+<tr><th class="l">pairs</th><th class="l">peer</th><th>rounds</th><th>rtp ns per pair</th><th>peer ns per pair</th>
+<th>peer ÷ rtp (least–largest of 8 blocks)</th></tr>
+{% for r in narrowphase.paired %}<tr><td class="l">{{ r.set }}</td><td class="l">{{ r.engine }}</td><td>{{ r.rounds }}</td>
+<td>{{ "%.1f" % r.rtp_ns }}</td><td>{{ "%.1f" % r.peer_ns }}</td>
+<td>{{ "%.2f" % r.ratio }}× ({{ "%.2f" % r.least }}–{{ "%.2f" % r.largest }})</td></tr>{% endfor %}
+</table>{% endif %}
 <table><tr><th class="l">narrow phase</th><th class="l">version and settings (setting: value (why))</th></tr>
 {% for name, text in narrowphase.settings.items() %}<tr><td class="l">{{ name }}</td><td class="l">{{ text }}</td></tr>{% endfor %}
 </table>

@@ -211,6 +211,10 @@ def test_narrowphase_benchmark_rows_carry_time_per_pair_and_agreement(tmp_path):
             pairs("rtp/sat", "cv", 0.012, pairs=0),
             pairs("bullet/box-box", "median", 153.6, pairs=1024, verdict_agreement=1.0, depth_agreement=0.98,
                   normal_agreement=0.99, peer_refuted=3, unexplained=0),
+            dict(name="Paired/box-box/deep/bullet/box-box/iterations:200/manual_time", run_type="iteration",
+                 run_name="Paired/box-box/deep/bullet/box-box/iterations:200/manual_time", rounds=200,
+                 rtp_ns=150.0, peer_ns=300.0, ratio=2.0, ratio_least_block=1.9, ratio_largest_block=2.1,
+                 real_time=460.0, time_unit="us"),
         ]}))
     narrow = build_report.narrowphase_benchmark(tmp_path)
     by_engine = {r["engine"]: r for r in narrow["rows"]}
@@ -221,6 +225,10 @@ def test_narrowphase_benchmark_rows_carry_time_per_pair_and_agreement(tmp_path):
     assert by_engine["bullet/box-box"]["peer_refuted"] == 3
     assert narrow["tolerances"] == "verdict band 0.001 m"
     assert "btBoxBoxDetector" in narrow["settings"]["bullet/box-box"]
+    # the paired rounds are their own table, not a row of the per-set one
+    assert "box-box/deep" not in {r["set"] for r in narrow["rows"]}
+    assert narrow["paired"] == [dict(set="box-box/deep", engine="bullet/box-box", rounds=200, rtp_ns=150.0,
+                                     peer_ns=300.0, ratio=2.0, least=1.9, largest=2.1)]
 
 
 def test_particles_at_rate_takes_the_largest_count_per_thread_count():
