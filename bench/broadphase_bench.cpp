@@ -135,9 +135,7 @@ void Paired(benchmark::State& state, const physbench::BroadphaseEntry& ours,
   state.counters["rounds"] = double(rounds);
   state.counters["rtp_us"] = physbench_bench::sum_of(ours_us, 0, rounds) / double(rounds);
   state.counters["peer_us"] = physbench_bench::sum_of(peer_us, 0, rounds) / double(rounds);
-  state.counters["ratio"] = r.ratio;
-  state.counters["ratio_least_block"] = r.least;
-  state.counters["ratio_largest_block"] = r.largest;
+  physbench_bench::report_paired(state, "ratio", r);
 }
 
 BroadphaseScene scene_of(BroadphaseMotion motion, std::size_t count, bool planar = false) {

@@ -101,9 +101,7 @@ void Paired(benchmark::State& state, const physbench::NarrowphasePeerEntry& ours
   state.counters["rounds"] = double(rounds);
   state.counters["rtp_ns"] = physbench_bench::sum_of(ours_ns, 0, rounds) / double(rounds);
   state.counters["peer_ns"] = physbench_bench::sum_of(peer_ns, 0, rounds) / double(rounds);
-  state.counters["ratio"] = r.ratio;
-  state.counters["ratio_least_block"] = r.least;
-  state.counters["ratio_largest_block"] = r.largest;
+  physbench_bench::report_paired(state, "ratio", r);
 }
 
 void Triangles(benchmark::State& state, bool bullet) {

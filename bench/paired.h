@@ -3,7 +3,10 @@
 // sums, and its spread as the least and largest ratio of sums over consecutive blocks of rounds.
 #pragma once
 
+#include <benchmark/benchmark.h>
+
 #include <algorithm>
+#include <string>
 #include <cstddef>
 #include <limits>
 #include <numeric>
@@ -34,6 +37,13 @@ inline PairedRatio paired_ratio(const std::vector<double>& numerator,
     r.least = std::min(r.least, b), r.largest = std::max(r.largest, b);
   }
   return r;
+}
+
+// the ratio as counters: `name`, `name`_least_block and `name`_largest_block
+inline void report_paired(benchmark::State& state, const std::string& name, const PairedRatio& r) {
+  state.counters[name] = r.ratio;
+  state.counters[name + "_least_block"] = r.least;
+  state.counters[name + "_largest_block"] = r.largest;
 }
 
 }  // namespace physbench_bench

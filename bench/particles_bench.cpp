@@ -105,9 +105,7 @@ void ThreadsPaired(benchmark::State& state) {
   state.counters["rounds"] = double(rounds);
   state.counters["one_thread_ms"] = physbench_bench::sum_of(one_ms, 0, rounds) / double(rounds);
   state.counters["two_threads_ms"] = physbench_bench::sum_of(two_ms, 0, rounds) / double(rounds);
-  state.counters["speedup"] = r.ratio;
-  state.counters["speedup_least_block"] = r.least;
-  state.counters["speedup_largest_block"] = r.largest;
+  physbench_bench::report_paired(state, "speedup", r);
 }
 
 // records the triad's bytes/s so the particle benchmarks can state their fraction of it
