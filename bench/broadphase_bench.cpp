@@ -12,9 +12,7 @@
 
 #include <algorithm>
 #include <chrono>
-#include <limits>
 #include <map>
-#include <numeric>
 
 namespace {
 
@@ -129,12 +127,10 @@ void Paired(benchmark::State& state, const physbench::BroadphaseEntry& ours,
     peer_us.push_back(std::chrono::duration<double, std::micro>(t2 - t1).count());
     state.SetIterationTime((ours_us.back() + peer_us.back()) * 1e-6);
   }
-  const std::size_t rounds = ours_us.size();
   const physbench_bench::PairedRatio r = physbench_bench::paired_ratio(peer_us, ours_us, kBlocks);
   state.counters["boxes"] = double(scene.count);
-  state.counters["rounds"] = double(rounds);
-  state.counters["rtp_us"] = physbench_bench::sum_of(ours_us, 0, rounds) / double(rounds);
-  state.counters["peer_us"] = physbench_bench::sum_of(peer_us, 0, rounds) / double(rounds);
+  state.counters["rtp_us"] = r.mean_denominator;
+  state.counters["peer_us"] = r.mean_numerator;
   physbench_bench::report_paired(state, "ratio", r);
 }
 

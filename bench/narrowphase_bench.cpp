@@ -96,11 +96,9 @@ void Paired(benchmark::State& state, const physbench::NarrowphasePeerEntry& ours
     state.SetIterationTime((ours_ns.back() + peer_ns.back()) * pairs * 1e-9);
   }
   benchmark::DoNotOptimize(touching);
-  const std::size_t rounds = ours_ns.size();
   const physbench_bench::PairedRatio r = physbench_bench::paired_ratio(peer_ns, ours_ns, kBlocks);
-  state.counters["rounds"] = double(rounds);
-  state.counters["rtp_ns"] = physbench_bench::sum_of(ours_ns, 0, rounds) / double(rounds);
-  state.counters["peer_ns"] = physbench_bench::sum_of(peer_ns, 0, rounds) / double(rounds);
+  state.counters["rtp_ns"] = r.mean_denominator;
+  state.counters["peer_ns"] = r.mean_numerator;
   physbench_bench::report_paired(state, "ratio", r);
 }
 

@@ -6,10 +6,10 @@
 #include <benchmark/benchmark.h>
 
 #include <algorithm>
-#include <string>
 #include <cstddef>
 #include <limits>
 #include <numeric>
+#include <string>
 #include <vector>
 
 namespace physbench_bench {
@@ -17,6 +17,8 @@ namespace physbench_bench {
 struct PairedRatio {
   double ratio = 0.0;  // Σ numerator / Σ denominator over every round
   double least = 0.0, largest = 0.0;  // of the same ratio over each of `blocks` blocks of rounds
+  std::size_t rounds = 0, blocks = 0;
+  double mean_numerator = 0.0, mean_denominator = 0.0;  // per round
 };
 
 inline double sum_of(const std::vector<double>& v, std::size_t from, std::size_t to) {
@@ -29,7 +31,11 @@ inline PairedRatio paired_ratio(const std::vector<double>& numerator,
   const std::size_t rounds = std::min(numerator.size(), denominator.size());
   const std::size_t block = rounds / blocks;
   PairedRatio r;
-  r.ratio = sum_of(numerator, 0, rounds) / sum_of(denominator, 0, rounds);
+  r.rounds = rounds;
+  r.blocks = block > 0 ? blocks : 0;
+  r.mean_numerator = sum_of(numerator, 0, rounds) / double(rounds);
+  r.mean_denominator = sum_of(denominator, 0, rounds) / double(rounds);
+  r.ratio = r.mean_numerator / r.mean_denominator;
   r.least = std::numeric_limits<double>::infinity();
   for (std::size_t k = 0; block > 0 && k < blocks; ++k) {
     const std::size_t from = k * block, to = (k + 1) * block;
@@ -39,8 +45,11 @@ inline PairedRatio paired_ratio(const std::vector<double>& numerator,
   return r;
 }
 
-// the ratio as counters: `name`, `name`_least_block and `name`_largest_block
+// the ratio as counters: `name`, `name`_least_block and `name`_largest_block, with the rounds and
+// the number of blocks
 inline void report_paired(benchmark::State& state, const std::string& name, const PairedRatio& r) {
+  state.counters["rounds"] = double(r.rounds);
+  state.counters["blocks"] = double(r.blocks);
   state.counters[name] = r.ratio;
   state.counters[name + "_least_block"] = r.least;
   state.counters[name + "_largest_block"] = r.largest;

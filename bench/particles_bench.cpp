@@ -99,12 +99,10 @@ void ThreadsPaired(benchmark::State& state) {
     two_ms.push_back(std::chrono::duration<double, std::milli>(t2 - t1).count());
     state.SetIterationTime((one_ms.back() + two_ms.back()) * 1e-3);
   }
-  const std::size_t rounds = one_ms.size();
   const physbench_bench::PairedRatio r = physbench_bench::paired_ratio(one_ms, two_ms, kBlocks);
   state.counters["particles"] = double(count);
-  state.counters["rounds"] = double(rounds);
-  state.counters["one_thread_ms"] = physbench_bench::sum_of(one_ms, 0, rounds) / double(rounds);
-  state.counters["two_threads_ms"] = physbench_bench::sum_of(two_ms, 0, rounds) / double(rounds);
+  state.counters["one_thread_ms"] = r.mean_numerator;
+  state.counters["two_threads_ms"] = r.mean_denominator;
   physbench_bench::report_paired(state, "speedup", r);
 }
 

@@ -289,7 +289,7 @@ def particle_benchmark(folder: Path) -> dict | None:
             paired.append(dict(particles=int(run["particles"]), speedup=run["speedup"],
                                least=run["speedup_least_block"], largest=run["speedup_largest_block"],
                                one_ms=run["one_thread_ms"], two_ms=run["two_threads_ms"],
-                               rounds=int(run["rounds"])))
+                               rounds=int(run["rounds"]), blocks=int(run["blocks"])))
         elif name.startswith("ParticleUpdate/"):
             fields = dict(part.split(":") for part in name.split("/")[1:] if ":" in part)
             rows.append(dict(particles=int(fields["particles"]), threads=int(fields["threads"]),
@@ -334,7 +334,8 @@ def broadphase_benchmark(folder: Path) -> dict | None:
             # rtp's box pruning and this peer updated in turn, round by round (counters in µs)
             paired.append(dict(motion=motion, boxes=count, engine=engine, rounds=run.get("rounds"),
                                rtp_us=run.get("rtp_us"), peer_us=run.get("peer_us"), ratio=run.get("ratio"),
-                               least=run.get("ratio_least_block"), largest=run.get("ratio_largest_block")))
+                               least=run.get("ratio_least_block"), largest=run.get("ratio_largest_block"),
+                               blocks=run.get("blocks")))
         elif kind == "Build" and run.get("run_type") == "iteration":
             builds.append(dict(engine=engine, boxes=count, ms=run["real_time"] * scale / 1e3))
         elif kind == "Update":
@@ -392,7 +393,7 @@ def narrowphase_benchmark(folder: Path) -> dict | None:
             paired.append(dict(set=f"{parts[1]}/{parts[2]}", engine=f"{parts[3]}/{parts[4]}",
                                rounds=int(run["rounds"]), rtp_ns=run["rtp_ns"], peer_ns=run["peer_ns"],
                                ratio=run["ratio"], least=run["ratio_least_block"],
-                               largest=run["ratio_largest_block"]))
+                               largest=run["ratio_largest_block"], blocks=int(run["blocks"])))
             continue
         if len(parts) < 5 or parts[0] not in ("Pairs", "Query"):
             continue
@@ -534,9 +535,9 @@ on {{ h.threads }} thread(s){{ " (extrapolated from " ~ h.measured_up_to ~ ", th
 The seed ran 200,000 at 60 FPS.</p>
 {% if benchmark.paired %}<table><tr><th class="l" colspan="5">two threads against one, stepped in turn (each round a step of
 each, so both meet the machine in the same state)</th></tr>
-<tr><th>particles</th><th>rounds</th><th>1 thread (ms/step)</th><th>2 threads (ms/step)</th><th>speedup (least–largest of 5 blocks)</th></tr>
+<tr><th>particles</th><th>rounds</th><th>1 thread (ms/step)</th><th>2 threads (ms/step)</th><th>speedup (least–largest block)</th><th>blocks</th></tr>
 {% for r in benchmark.paired %}<tr><td>{{ r.particles }}</td><td>{{ r.rounds }}</td><td>{{ "%.2f" % r.one_ms }}</td><td>{{ "%.2f" % r.two_ms }}</td>
-<td>{{ "%.2f" % r.speedup }}× ({{ "%.2f" % r.least }}–{{ "%.2f" % r.largest }})</td></tr>{% endfor %}
+<td>{{ "%.2f" % r.speedup }}× ({{ "%.2f" % r.least }}–{{ "%.2f" % r.largest }})</td><td>{{ r.blocks }}</td></tr>{% endfor %}
 </table>{% endif %}{% endif %}
 </section>{% endfor %}
 
@@ -561,10 +562,10 @@ exact geometry settles for rtp, "unexplained" the rest. Tolerances: {{ narrowpha
 {% if narrowphase.paired %}<table><tr><th class="l" colspan="6">rtp/sat and a peer on the same set in turn (each round
 every pair by rtp, then by the peer, so both meet the machine in the same state)</th></tr>
 <tr><th class="l">pairs</th><th class="l">peer</th><th>rounds</th><th>rtp ns per pair</th><th>peer ns per pair</th>
-<th>peer ÷ rtp (least–largest of 8 blocks)</th></tr>
+<th>peer ÷ rtp (least–largest block)</th><th>blocks</th></tr>
 {% for r in narrowphase.paired %}<tr><td class="l">{{ r.set }}</td><td class="l">{{ r.engine }}</td><td>{{ r.rounds }}</td>
 <td>{{ "%.1f" % r.rtp_ns }}</td><td>{{ "%.1f" % r.peer_ns }}</td>
-<td>{{ "%.2f" % r.ratio }}× ({{ "%.2f" % r.least }}–{{ "%.2f" % r.largest }})</td></tr>{% endfor %}
+<td>{{ "%.2f" % r.ratio }}× ({{ "%.2f" % r.least }}–{{ "%.2f" % r.largest }})</td><td>{{ r.blocks }}</td></tr>{% endfor %}
 </table>{% endif %}
 <table><tr><th class="l">narrow phase</th><th class="l">version and settings (setting: value (why))</th></tr>
 {% for name, text in narrowphase.settings.items() %}<tr><td class="l">{{ name }}</td><td class="l">{{ text }}</td></tr>{% endfor %}
@@ -585,7 +586,8 @@ broad phase runs in every engine; each pair set is compared with the exact one o
 </table>
 {% if broadphase.paired %}<p class="note">Paired: rtp/box-pruning and one peer updated in turn on the same
 case, one update each per round, so both meet the same state of the machine; the ratio is of the times summed
-over all rounds, its spread the least and largest ratio over eight consecutive blocks of rounds.</p>
+over all rounds, its spread the least and largest ratio over consecutive blocks of rounds
+({{ broadphase.paired[0].blocks or "?" }} blocks).</p>
 <table><tr><th class="l">motion</th><th>boxes</th><th class="l">peer</th><th>rounds</th><th>peer µs per update</th>
 <th>rtp/box-pruning µs</th><th>peer ÷ rtp</th><th>least–largest block</th></tr>
 {% for r in broadphase.paired %}<tr><td class="l">{{ r.motion }}</td><td>{{ r.boxes }}</td><td class="l">{{ r.engine }}</td>

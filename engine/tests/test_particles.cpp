@@ -189,12 +189,12 @@ TEST(Particles, Avx512KernelsMatchThePortableOnes) {
                 rtp::ParticlePlane{Vec3::Zero(), Vec3(0.0, 1.0, -0.25).normalized()}};
   def.restitution = 0.6;
   def.friction = 0.1;
+  def.wind = Vec3(0.5, 0, 0);
+  def.wind_jitter = 0.3;
   if (std::string(ParticleSystem(def).kernels()) != "avx512")
     GTEST_SKIP() << "this core has no AVX-512: only the portable kernels run";
   for (const double drag : {0.1, 0.0}) {
     def.drag = drag;
-    def.wind = Vec3(0.5, 0, 0);
-    def.wind_jitter = 0.3;
     def.kernels = rtp::ParticleKernels::Best;
     ParticleSystem fast(def);
     def.kernels = rtp::ParticleKernels::Portable;

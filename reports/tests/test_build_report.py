@@ -142,14 +142,14 @@ def test_particle_benchmark_roofline_reaches_the_scaling_chart(tmp_path):
          "items_per_second": 5.0e7, "bytes_per_particle_step": 60, "roofline_fraction": 0.1},
         {"name": "ThreadsPaired/particles:4000000/iterations:40/manual_time", "run_type": "iteration",
          "particles": 4e6, "rounds": 40, "one_thread_ms": 20.0, "two_threads_ms": 11.0, "speedup": 1.818,
-         "speedup_least_block": 1.7, "speedup_largest_block": 1.9},
+         "speedup_least_block": 1.7, "speedup_largest_block": 1.9, "blocks": 5},
     ]}))
     page = build_report.build_report(out).read_text()
     assert "Scaling: particles-scaling" in page
     assert "roofline, 1 thread(s)" in page
     assert "<td>100000</td><td>1</td><td>5e+07</td>" in page
     assert "attractor mode, avx512 kernels)" in page
-    assert "<td>4000000</td><td>40</td><td>20.00</td><td>11.00</td>\n<td>1.82× (1.70–1.90)</td>" in page
+    assert "<td>4000000</td><td>40</td><td>20.00</td><td>11.00</td>\n<td>1.82× (1.70–1.90)</td><td>5</td>" in page
     # 5e7 particle-steps/s at 60 steps/s: 8.3e5 particles, more than the 1e5 measured
     assert "holds 8.3e+05 particles\non 1 thread(s) (extrapolated from 100000" in page
 
@@ -177,7 +177,7 @@ def test_broadphase_benchmark_reaches_the_report(tmp_path):
             {"name": "Paired/coherent/10000/bullet/dbvt/iterations:400/manual_time", "run_type": "iteration",
              "run_name": "Paired/coherent/10000/bullet/dbvt/iterations:400/manual_time", "real_time": 7000.0,
              "time_unit": "us", "rounds": 400, "rtp_us": 640.0, "peer_us": 6912.0, "ratio": 10.8,
-             "ratio_least_block": 10.25, "ratio_largest_block": 11.5},
+             "ratio_least_block": 10.25, "ratio_largest_block": 11.5, "blocks": 8},
             {"name": "Build/coherent/50000/rtp/box-pruning/real_time", "run_type": "iteration",
              "run_name": "Build/coherent/50000/rtp/box-pruning/min_time:0.100/real_time", "real_time": 12.5,
              "time_unit": "ms"},
@@ -193,6 +193,7 @@ def test_broadphase_benchmark_reaches_the_report(tmp_path):
     # the paired row: its ratio and the spread over blocks, not mixed into the update rows
     assert "<td>10.80×</td><td>10.25–11.50</td>" in page
     assert "<td>6912</td><td>640</td>" in page
+    assert "(8 blocks)" in page
 
 
 def test_narrowphase_benchmark_rows_carry_time_per_pair_and_agreement(tmp_path):
@@ -213,7 +214,7 @@ def test_narrowphase_benchmark_rows_carry_time_per_pair_and_agreement(tmp_path):
                   normal_agreement=0.99, peer_refuted=3, unexplained=0),
             dict(name="Paired/box-box/deep/bullet/box-box/iterations:200/manual_time", run_type="iteration",
                  run_name="Paired/box-box/deep/bullet/box-box/iterations:200/manual_time", rounds=200,
-                 rtp_ns=150.0, peer_ns=300.0, ratio=2.0, ratio_least_block=1.9, ratio_largest_block=2.1,
+                 rtp_ns=150.0, peer_ns=300.0, ratio=2.0, ratio_least_block=1.9, ratio_largest_block=2.1, blocks=8,
                  real_time=460.0, time_unit="us"),
         ]}))
     narrow = build_report.narrowphase_benchmark(tmp_path)
@@ -228,7 +229,7 @@ def test_narrowphase_benchmark_rows_carry_time_per_pair_and_agreement(tmp_path):
     # the paired rounds are their own table, not a row of the per-set one
     assert "box-box/deep" not in {r["set"] for r in narrow["rows"]}
     assert narrow["paired"] == [dict(set="box-box/deep", engine="bullet/box-box", rounds=200, rtp_ns=150.0,
-                                     peer_ns=300.0, ratio=2.0, least=1.9, largest=2.1)]
+                                     peer_ns=300.0, ratio=2.0, least=1.9, largest=2.1, blocks=8)]
 
 
 def test_particles_at_rate_takes_the_largest_count_per_thread_count():
