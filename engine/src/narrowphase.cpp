@@ -1,6 +1,7 @@
 // The narrow phase: the Voronoi-region triangle query, the separating axis tests, clipping.
 // The design and its sources are in rtp/collision.h.
 #include <algorithm>
+#include <bit>
 #include <cmath>
 #include <limits>
 
@@ -18,6 +19,26 @@ constexpr double kEdgeAbsoluteTolerance = 1e-4;  // m
 constexpr double kParallelSine = 1e-5;
 // the second shape's face is a duplicate of the first's when their normals are this close
 constexpr double kDuplicateCosine = 1.0 - 1e-9;
+
+// four doubles in one register (GCC's vector extension: one AVX register with -march=native,
+// two SSE2 halves in the portable build); comparisons give lanes of all ones or zero. The helpers
+// below have internal linkage and are inlined, so the portable build's note that passing such a
+// vector changes the ABI without AVX does not apply.
+#pragma GCC diagnostic ignored "-Wpsabi"
+using Double4 = double __attribute__((vector_size(4 * sizeof(double))));
+using Mask4 = std::int64_t __attribute__((vector_size(4 * sizeof(std::int64_t))));
+constexpr double kInfinity = std::numeric_limits<double>::infinity();
+constexpr Double4 kInfinity4 = {kInfinity, kInfinity, kInfinity, kInfinity};
+inline Double4 abs4(Double4 x) { return x < 0.0 ? -x : x; }
+inline Double4 min4(Double4 a, Double4 b) { return a < b ? a : b; }
+// lanes 0, 1, 2 ← 1, 2, 0; lane 3 stays
+inline Double4 rotate4(Double4 x) { return __builtin_shuffle(x, Mask4{1, 2, 0, 3}); }
+inline int lane_count(Mask4 m) { return int(-(m[0] + m[1] + m[2] + m[3])); }
+// bit k set where lane k is
+inline unsigned lane_bits(Mask4 m) {
+  return unsigned(m[0] & 1) | unsigned(m[1] & 2) | unsigned(m[2] & 4) | unsigned(m[3] & 8);
+}
+inline Double4 row_of(const Mat3& m, int i) { return Double4{m(i, 0), m(i, 1), m(i, 2), 0.0}; }
 
 bool edge_axis_wins(double edge_separation, double face_separation) {
   return edge_separation >
@@ -560,37 +581,43 @@ bool collide_boxes(const Shape& a, const Pose& pose_a, const Shape& b, const Pos
   // columns): L = (…, −c(i2, j), c(i1, j)) on A's axes i1, i2, and in B's frame it has c(i, j2)
   // and −c(i, j1) on B's axes j1, j2, so the radii and |L|² = 1 − c(i, j)² need no products of
   // matrices. An axis of parallel edges (|L| ≈ 0) or one parallel to a face normal (one of the two
-  // components ≈ 0) is skipped: the faces covered it. The separation (|t·L| − r)/|L| is kept
+  // components ≈ 0) is skipped: the faces covered it. The separation (|t·L| − r)/|L| is compared
   // squared, so only the winner takes a square root.
-  double best_gap_squared = std::numeric_limits<double>::infinity(), best_length_squared = 1.0;
-  int best_edge_i = 0, best_edge_j = 0;
+  // The nine axes are evaluated together, one row i of A's axes per 4-lane vector with B's axes j
+  // in its lanes (lane 3 is padding and never valid): on random pairs a branch per axis costs
+  // more than the arithmetic. Along a row, c(i1, ·) and c(i2, ·) are whole rows of c and
+  // c(i, j1), c(i, j2) the row rotated.
+  const Double4 row[3] = {row_of(c, 0), row_of(c, 1), row_of(c, 2)};
+  const Double4 abs_row[3] = {abs4(row[0]), abs4(row[1]), abs4(row[2])};
+  const Double4 hb_next = {hb[1], hb[2], hb[0], 0.0}, hb_after = {hb[2], hb[0], hb[1], 0.0};
   constexpr double kSine2 = kParallelSine * kParallelSine;
+  Double4 metric[3];  // gap² / |L|², +∞ where the axis is skipped
+  Mask4 any_apart = {0, 0, 0, 0};
   for (int i = 0; i < 3; ++i) {
     const int i1 = (i + 1) % 3, i2 = (i + 2) % 3;
-    for (int j = 0; j < 3; ++j) {
-      const int j1 = (j + 1) % 3, j2 = (j + 2) % 3;
-      const double length_squared = c(i1, j) * c(i1, j) + c(i2, j) * c(i2, j);
-      const double least_a = std::min(abs_c(i1, j), abs_c(i2, j));
-      const double least_b = std::min(abs_c(i, j1), abs_c(i, j2));
-      if (length_squared < kSine2 || least_a * least_a < kSine2 * length_squared ||
-          least_b * least_b < kSine2 * length_squared)
-        continue;
-      ++axes;
-      const double radius_a = ha[i1] * abs_c(i2, j) + ha[i2] * abs_c(i1, j);
-      const double radius_b = hb[j1] * abs_c(i, j2) + hb[j2] * abs_c(i, j1);
-      const double gap = std::abs(t[i2] * c(i1, j) - t[i1] * c(i2, j)) - (radius_a + radius_b);
-      if (gap > 0.0) {
-        out.axes_tested = axes;
-        return no_contact(out);
-      }
-      // gap²/|L|² < best: cross-multiplied, no division
-      if (gap * gap * best_length_squared < best_gap_squared * length_squared)
-        best_gap_squared = gap * gap, best_length_squared = length_squared, best_edge_i = i,
-        best_edge_j = j;
-    }
+    const Double4 length_squared = row[i1] * row[i1] + row[i2] * row[i2];
+    const Double4 least_a = min4(abs_row[i1], abs_row[i2]);
+    const Double4 c_next = rotate4(abs_row[i]), c_after = rotate4(c_next);  // |c(i, j1)|, |c(i, j2)|
+    const Double4 least_b = min4(c_next, c_after);
+    const Mask4 valid = (length_squared >= kSine2) & (least_a * least_a >= kSine2 * length_squared) &
+                        (least_b * least_b >= kSine2 * length_squared);
+    const Double4 radius_a = ha[i1] * abs_row[i2] + ha[i2] * abs_row[i1];
+    const Double4 radius_b = hb_next * c_after + hb_after * c_next;
+    const Double4 gap = abs4(t[i2] * row[i1] - t[i1] * row[i2]) - (radius_a + radius_b);
+    any_apart |= valid & (gap > 0.0);
+    axes += std::uint16_t(lane_count(valid));
+    metric[i] = valid ? gap * gap / (valid ? length_squared : 1.0) : kInfinity4;
   }
-  const double best_edge = -std::sqrt(best_gap_squared / best_length_squared);
   out.axes_tested = axes;
+  if (lane_count(any_apart) > 0) return no_contact(out);
+  // the least metric and the first (i-major) axis holding it, without a branch per axis
+  const Double4 least = min4(min4(metric[0], metric[1]), metric[2]);
+  const double best_metric = std::min({least[0], least[1], least[2]});
+  const unsigned holders = lane_bits(metric[0] == best_metric) |
+                           lane_bits(metric[1] == best_metric) << 4 |
+                           lane_bits(metric[2] == best_metric) << 8;
+  const int best_edge_i = std::countr_zero(holders) / 4, best_edge_j = std::countr_zero(holders) % 4;
+  const double best_edge = -std::sqrt(best_metric);
 
   // edge–edge: the edge of A parallel to a_i that is farthest along the normal, and the edge of B
   // parallel to b_j farthest against it
