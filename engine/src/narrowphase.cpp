@@ -33,6 +33,8 @@ inline Double4 abs4(Double4 x) { return x < 0.0 ? -x : x; }
 inline Double4 min4(Double4 a, Double4 b) { return a < b ? a : b; }
 // lanes 0, 1, 2 ← 1, 2, 0; lane 3 stays
 inline Double4 rotate4(Double4 x) { return __builtin_shuffle(x, Mask4{1, 2, 0, 3}); }
+// lanes 0, 1, 2, 3 ← 1, 2, 3, 0
+inline Double4 next4(Double4 x) { return __builtin_shuffle(x, Mask4{1, 2, 3, 0}); }
 inline int lane_count(Mask4 m) { return int(-(m[0] + m[1] + m[2] + m[3])); }
 // bit k set where lane k is
 inline unsigned lane_bits(Mask4 m) {
@@ -53,9 +55,8 @@ struct ClipVertex {
 };
 
 // the vertices of a clipped hull face: the incident face plus one per side plane (boxes clip in
-// their own frame, in kBoxClip)
+// their own frame, by candidates: collide_boxes)
 constexpr std::size_t kHullClip = 2 * kMaxFaceVertices + 2;
-constexpr std::size_t kBoxClip = 8;
 // the vertices of a hull below a plane (hull against plane)
 constexpr std::size_t kPlaneContacts = kMaxHullVertices;
 
@@ -676,67 +677,77 @@ bool collide_boxes(const Shape& a, const Pose& pose_a, const Shape& b, const Pos
   const auto incident_face = std::uint16_t(2 * incident_axis + (incident_sign > 0.0 ? 0 : 1));
   const auto reference_face = std::uint16_t(2 * axis + (sign > 0.0 ? 0 : 1));
 
-  struct FaceVertex {
-    double u, v, w;  // reference frame: along the face's two axes and along its normal (m)
-    std::uint8_t incident_vertex, reference_side;
-    bool clipped;
-  };
-  std::array<FaceVertex, kBoxClip> polygon[2];
-  std::size_t count = 4;
-  const double corner_u[4] = {1, -1, -1, 1}, corner_v[4] = {1, 1, -1, -1};
-  for (std::uint8_t k = 0; k < 4; ++k) {
-    const Vec3 p = face_centre + corner_u[k] * edge_u + corner_v[k] * edge_v;
-    polygon[0][k] = {p[ku], p[kv], p[axis], k, 0, false};
+  // The clipped polygon's corners are, in no order: the incident quad's vertices inside the
+  // rectangle, the points where the quad's edges cross the rectangle's sides within the other
+  // side pair, and the rectangle's corners strictly inside the quad (the intersection of two
+  // convex polygons has no others; Sutherland–Hodgman finds the same points one side at a time).
+  // All 24 candidates are computed in 4-lane vectors and only the survivors are visited: the
+  // branches of a clip loop, on random pairs, cost more than the arithmetic. Candidate k is lane
+  // k % 4 of group k / 4: group 0 the quad's vertices, groups 1–4 the crossings of the edge that
+  // starts at vertex k % 4 with the sides u = h_u, u = −h_u, v = h_v, v = −h_v, group 5 the
+  // rectangle's corners in the quad's vertex order.
+  const double hu = reference_half[ku], hv = reference_half[kv];
+  const Double4 corner_u = {1, -1, -1, 1}, corner_v = {1, 1, -1, -1};
+  const Double4 u = face_centre[ku] + corner_u * edge_u[ku] + corner_v * edge_v[ku];
+  const Double4 v = face_centre[kv] + corner_u * edge_u[kv] + corner_v * edge_v[kv];
+  const Double4 w = face_centre[axis] + corner_u * edge_u[axis] + corner_v * edge_v[axis];
+  const Double4 u_next = next4(u), v_next = next4(v), w_next = next4(w);
+  Double4 cu[6], cv[6], cw[6];
+  Mask4 inside[6];
+  cu[0] = u, cv[0] = v, cw[0] = w;
+  inside[0] = (abs4(u) <= hu) & (abs4(v) <= hv);
+  for (int side = 0; side < 4; ++side) {
+    const bool along_u = side < 2;  // the side is a line of constant u
+    const double side_sign = side % 2 == 0 ? 1.0 : -1.0, limit = along_u ? hu : hv;
+    const Double4 distance = side_sign * (along_u ? u : v) - limit;
+    const Double4 distance_next = next4(distance);
+    const Mask4 crosses = (distance <= 0.0) ^ (distance_next <= 0.0);
+    const Double4 f = distance / (crosses ? distance - distance_next : Double4{1, 1, 1, 1});
+    Double4& x = cu[1 + side];
+    Double4& y = cv[1 + side];
+    x = u + f * (u_next - u), y = v + f * (v_next - v), cw[1 + side] = w + f * (w_next - w);
+    inside[1 + side] = crosses & (along_u ? abs4(y) <= hv : abs4(x) <= hu);
   }
-  // Sutherland–Hodgman against u ≤ h_u, −u ≤ h_u, v ≤ h_v, −v ≤ h_v
-  int current = 0;
-  for (std::uint8_t side = 0; side < 4; ++side) {
-    const std::array<FaceVertex, kBoxClip>& in = polygon[current];
-    std::array<FaceVertex, kBoxClip>& out_polygon = polygon[1 - current];
-    const double limit = side < 2 ? reference_half[ku] : reference_half[kv];
-    const double side_sign = side % 2 == 0 ? 1.0 : -1.0;
-    auto distance = [&](const FaceVertex& x) { return side_sign * (side < 2 ? x.u : x.v) - limit; };
-    std::size_t kept = 0;
-    const FaceVertex* previous = &in[count - 1];
-    double previous_distance = distance(*previous);
-    for (std::size_t i = 0; i < count; ++i) {
-      const FaceVertex& vertex = in[i];
-      const double d = distance(vertex);
-      if ((previous_distance <= 0.0) != (d <= 0.0)) {
-        const double f = previous_distance / (previous_distance - d);
-        out_polygon[kept++] = {previous->u + f * (vertex.u - previous->u),
-                               previous->v + f * (vertex.v - previous->v),
-                               previous->w + f * (vertex.w - previous->w),
-                               previous->incident_vertex,
-                               side,
-                               true};
-      }
-      if (d <= 0.0) out_polygon[kept++] = vertex;
-      previous = &vertex;
-      previous_distance = d;
+  // a rectangle corner is inside the quad when it is strictly on the inner side of every edge
+  // (strictly, so that a quad vertex on the corner is not counted twice); the quad's winding in
+  // (u, v) is the sign of edge_u × edge_v there
+  {
+    const double winding = edge_u[ku] * edge_v[kv] - edge_u[kv] * edge_v[ku] >= 0.0 ? 1.0 : -1.0;
+    const Double4 qu = hu * corner_u, qv = hv * corner_v;
+    Double4 least = kInfinity4;
+    for (int k = 0; k < 4; ++k) {
+      const double eu = u_next[k] - u[k], ev = v_next[k] - v[k];
+      least = min4(least, winding * (eu * (qv - v[k]) - ev * (qu - u[k])));
     }
-    count = kept;
-    current = 1 - current;
-    if (count == 0) break;
+    // the corner's height on the incident face's plane (|n_w| ≥ 1/√3: it is the face most
+    // aligned with the reference normal)
+    const Vec3 n = incident_axes.col(incident_axis);
+    cu[5] = qu, cv[5] = qv;
+    cw[5] = face_centre[axis] -
+            (n[ku] * (qu - face_centre[ku]) + n[kv] * (qv - face_centre[kv])) / n[axis];
+    inside[5] = least > 0.0;
   }
-
-  // points on or below the reference face; at most four of them, chosen in the face's plane
-  std::array<FaceVertex, kBoxClip> kept;
-  std::array<double, kBoxClip> depths;
+  // on or below the reference face
+  std::uint32_t survivors = 0;
+  Double4 depth[6];
+  for (int g = 0; g < 6; ++g) {
+    depth[g] = reference_half[axis] - sign * cw[g];
+    survivors |= lane_bits(inside[g] & (depth[g] >= 0.0)) << (4 * g);
+  }
+  std::array<std::uint8_t, 24> kept;
   std::size_t below = 0;
-  for (std::size_t i = 0; i < count; ++i) {
-    const FaceVertex& x = polygon[current][i];
-    const double depth = reference_half[axis] - sign * x.w;
-    if (depth < 0.0) continue;
-    depths[below] = depth;
-    kept[below++] = x;
-  }
+  for (; survivors != 0; survivors &= survivors - 1)
+    kept[below++] = std::uint8_t(std::countr_zero(survivors));
+  auto u_of = [&](std::size_t k) { return cu[k / 4][k % 4]; };
+  auto v_of = [&](std::size_t k) { return cv[k / 4][k % 4]; };
+  auto depth_of = [&](std::size_t k) { return depth[k / 4][k % 4]; };
+
   std::array<std::size_t, 4> chosen{0, 1, 2, 3};
   if (below > 4) {
     using Vec2 = Eigen::Vector2d;
     chosen = choose_four(
-        below, [&](std::size_t i) { return depths[i]; },
-        [&](std::size_t i) { return Vec2(kept[i].u, kept[i].v); },
+        below, [&](std::size_t i) { return depth_of(kept[i]); },
+        [&](std::size_t i) { return Vec2(u_of(kept[i]), v_of(kept[i])); },
         [](const Vec2& p, const Vec2& q, const Vec2& r) {
           return (q.x() - p.x()) * (r.y() - p.y()) - (q.y() - p.y()) * (r.x() - p.x());
         });
@@ -745,19 +756,23 @@ bool collide_boxes(const Shape& a, const Pose& pose_a, const Shape& b, const Pos
   // midway between the surfaces, back in the world
   const Vec3 normal = sign * reference_pose.rotation.col(axis);
   for (std::size_t k = 0; k < below; ++k) {
-    const FaceVertex& x = kept[chosen[k]];
+    const std::size_t candidate = kept[chosen[k]];
+    const int group = int(candidate / 4);
+    const auto lane = std::uint8_t(candidate % 4);
     Vec3 local;
-    local[ku] = x.u;
-    local[kv] = x.v;
-    local[axis] = 0.5 * (x.w + sign * reference_half[axis]);
+    local[ku] = u_of(candidate);
+    local[kv] = v_of(candidate);
+    local[axis] = sign * (reference_half[axis] - 0.5 * depth_of(candidate));
     ContactPoint& p = out.points[k];
     p.point = reference_pose.position + reference_pose.rotation * local;
-    p.depth = depths[chosen[k]];
+    p.depth = depth_of(candidate);
     p.feature = {reference_face,
                  incident_face,
-                 x.reference_side,
-                 x.incident_vertex,
-                 x.clipped ? ContactType::FaceClip : ContactType::FaceVertex,
+                 std::uint8_t(group == 5 ? lane : group == 0 ? 0 : group - 1),
+                 std::uint8_t(group == 5 ? 0 : lane),
+                 group == 0   ? ContactType::FaceVertex
+                 : group == 5 ? ContactType::FaceCorner
+                              : ContactType::FaceClip,
                  std::uint8_t(flipped)};
   }
   if (below > 0) {

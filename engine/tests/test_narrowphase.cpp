@@ -100,8 +100,9 @@ TEST(ClosestPointOnTriangle, MatchesBruteForceMinimisationAndNamesTheFeature) {
         break;
     }
     // an interior edge point is not a vertex
-    if (answer.feature >= TriangleFeature::EdgeAB && answer.feature <= TriangleFeature::EdgeCA)
+    if (answer.feature >= TriangleFeature::EdgeAB && answer.feature <= TriangleFeature::EdgeCA) {
       EXPECT_GT(std::min({(q - a).norm(), (q - b).norm(), (q - c).norm()}), 1e-12);
+    }
     ++checked_features;
   }
   EXPECT_GT(checked_features, 2500);
