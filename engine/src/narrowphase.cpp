@@ -31,6 +31,10 @@ constexpr double kInfinity = std::numeric_limits<double>::infinity();
 constexpr Double4 kInfinity4 = {kInfinity, kInfinity, kInfinity, kInfinity};
 inline Double4 abs4(Double4 x) { return x < 0.0 ? -x : x; }
 inline Double4 min4(Double4 a, Double4 b) { return a < b ? a : b; }
+inline Double4 max4(Double4 a, Double4 b) { return a > b ? a : b; }
+inline double largest_lane(Double4 x) {
+  return std::max(std::max(x[0], x[1]), std::max(x[2], x[3]));
+}
 // lanes 0, 1, 2 ← 1, 2, 0; lane 3 stays
 inline Double4 rotate4(Double4 x) { return __builtin_shuffle(x, Mask4{1, 2, 0, 3}); }
 // lanes 0, 1, 2, 3 ← 1, 2, 3, 0
@@ -549,32 +553,46 @@ bool collide_boxes(const Shape& a, const Pose& pose_a, const Shape& b, const Pos
                    Manifold& out) {
   const Vec3& ha = a.half_extents;
   const Vec3& hb = b.half_extents;
-  // B's axes and centre in A's frame: c(i, j) = a_i · b_j
-  const Mat3 c = pose_a.rotation.transpose() * pose_b.rotation;
-  const Mat3 abs_c = c.cwiseAbs();
-  const Vec3 t = pose_a.rotation.transpose() * (pose_b.position - pose_a.position);
+  // B's axes and centre in A's frame, c(i, j) = a_i · b_j and t = Aᵀ(p_b − p_a), in 4-lane
+  // vectors (lane 3 is padding): rows of c over j, columns of c over i, t over i
+  const Mat3& ra = pose_a.rotation;
+  const Mat3& rb = pose_b.rotation;
+  const Double4 a_x = row_of(ra, 0), a_y = row_of(ra, 1), a_z = row_of(ra, 2);  // lanes i
+  const Double4 b_x = row_of(rb, 0), b_y = row_of(rb, 1), b_z = row_of(rb, 2);  // lanes j
+  Double4 row[3], column[3], abs_row[3], abs_column[3];
+  for (int k = 0; k < 3; ++k) {
+    row[k] = ra(0, k) * b_x + ra(1, k) * b_y + ra(2, k) * b_z;
+    column[k] = rb(0, k) * a_x + rb(1, k) * a_y + rb(2, k) * a_z;
+    abs_row[k] = abs4(row[k]), abs_column[k] = abs4(column[k]);
+  }
+  const Vec3 d = pose_b.position - pose_a.position;
+  const Double4 t4 = d.x() * a_x + d.y() * a_y + d.z() * a_z;
+  const Double4 ha4 = {ha.x(), ha.y(), ha.z(), 0.0}, hb4 = {hb.x(), hb.y(), hb.z(), 0.0};
 
   // face axes, three at a time and without a branch per axis (random pairs defeat the branch
   // predictor): along a_i the separation is |t_i| − (ha_i + Σ_j hb_j |c_ij|), along b_j it is
   // |(cᵀt)_j| − (hb_j + Σ_i ha_i |c_ij|); a b_j parallel to some a_i was tested as that a_i
-  const Vec3 separation_a = t.cwiseAbs() - (ha + abs_c * hb);
-  const Vec3 t_in_b = c.transpose() * t;
-  Vec3 separation_b = t_in_b.cwiseAbs() - (hb + abs_c.transpose() * ha);
-  std::uint16_t axes = 3;
-  for (int j = 0; j < 3; ++j) {
-    if (abs_c.col(j).maxCoeff() > kDuplicateCosine)
-      separation_b[j] = -std::numeric_limits<double>::infinity();
-    else
-      ++axes;
-  }
-  int best_a, best_b;
-  const double largest_a = separation_a.maxCoeff(&best_a);
-  const double largest_b = separation_b.maxCoeff(&best_b);
+  constexpr Mask4 kThreeLanes = {-1, -1, -1, 0};
+  const Double4 separation_a =
+      kThreeLanes ? abs4(t4) - (ha4 + hb.x() * abs_column[0] + hb.y() * abs_column[1] +
+                                hb.z() * abs_column[2])
+                  : -kInfinity4;
+  const Double4 t_in_b4 = t4[0] * row[0] + t4[1] * row[1] + t4[2] * row[2];
+  const Mask4 duplicate =
+      (max4(max4(abs_row[0], abs_row[1]), abs_row[2]) > kDuplicateCosine) & kThreeLanes;
+  const Double4 separation_b =
+      kThreeLanes & ~duplicate
+          ? abs4(t_in_b4) - (hb4 + ha.x() * abs_row[0] + ha.y() * abs_row[1] + ha.z() * abs_row[2])
+          : -kInfinity4;
+  std::uint16_t axes = std::uint16_t(6 - lane_count(duplicate));
+  const double largest_a = largest_lane(separation_a), largest_b = largest_lane(separation_b);
   if (largest_a > 0.0 || largest_b > 0.0) {
     out.axes_tested = axes;
     return no_contact(out);
   }
-  // A's face on a tie
+  // the first axis holding each largest; A's face on a tie
+  const int best_a = std::countr_zero(lane_bits(separation_a == largest_a));
+  const int best_b = std::countr_zero(lane_bits(separation_b == largest_b));
   const double best_face = std::max(largest_a, largest_b);
   const int best_face_axis = largest_b > largest_a ? 3 + best_b : best_a;  // 0–2: A's, 3–5: B's
 
@@ -588,8 +606,6 @@ bool collide_boxes(const Shape& a, const Pose& pose_a, const Shape& b, const Pos
   // in its lanes (lane 3 is padding and never valid): on random pairs a branch per axis costs
   // more than the arithmetic. Along a row, c(i1, ·) and c(i2, ·) are whole rows of c and
   // c(i, j1), c(i, j2) the row rotated.
-  const Double4 row[3] = {row_of(c, 0), row_of(c, 1), row_of(c, 2)};
-  const Double4 abs_row[3] = {abs4(row[0]), abs4(row[1]), abs4(row[2])};
   const Double4 hb_next = {hb[1], hb[2], hb[0], 0.0}, hb_after = {hb[2], hb[0], hb[1], 0.0};
   constexpr double kSine2 = kParallelSine * kParallelSine;
   Double4 metric[3];  // gap² / |L|², +∞ where the axis is skipped
@@ -598,13 +614,15 @@ bool collide_boxes(const Shape& a, const Pose& pose_a, const Shape& b, const Pos
     const int i1 = (i + 1) % 3, i2 = (i + 2) % 3;
     const Double4 length_squared = row[i1] * row[i1] + row[i2] * row[i2];
     const Double4 least_a = min4(abs_row[i1], abs_row[i2]);
-    const Double4 c_next = rotate4(abs_row[i]), c_after = rotate4(c_next);  // |c(i, j1)|, |c(i, j2)|
+    // |c(i, j1)| and |c(i, j2)|
+    const Double4 c_next = rotate4(abs_row[i]), c_after = rotate4(c_next);
     const Double4 least_b = min4(c_next, c_after);
-    const Mask4 valid = (length_squared >= kSine2) & (least_a * least_a >= kSine2 * length_squared) &
+    const Mask4 valid = (length_squared >= kSine2) &
+                        (least_a * least_a >= kSine2 * length_squared) &
                         (least_b * least_b >= kSine2 * length_squared);
     const Double4 radius_a = ha[i1] * abs_row[i2] + ha[i2] * abs_row[i1];
     const Double4 radius_b = hb_next * c_after + hb_after * c_next;
-    const Double4 gap = abs4(t[i2] * row[i1] - t[i1] * row[i2]) - (radius_a + radius_b);
+    const Double4 gap = abs4(t4[i2] * row[i1] - t4[i1] * row[i2]) - (radius_a + radius_b);
     any_apart |= valid & (gap > 0.0);
     axes += std::uint16_t(lane_count(valid));
     metric[i] = valid ? gap * gap / (valid ? length_squared : 1.0) : kInfinity4;
@@ -617,8 +635,13 @@ bool collide_boxes(const Shape& a, const Pose& pose_a, const Shape& b, const Pos
   const unsigned holders = lane_bits(metric[0] == best_metric) |
                            lane_bits(metric[1] == best_metric) << 4 |
                            lane_bits(metric[2] == best_metric) << 8;
-  const int best_edge_i = std::countr_zero(holders) / 4, best_edge_j = std::countr_zero(holders) % 4;
+  const int best_edge_i = std::countr_zero(holders) / 4;
+  const int best_edge_j = std::countr_zero(holders) % 4;
   const double best_edge = -std::sqrt(best_metric);
+  // the contact needs c and t as matrices
+  Mat3 c;
+  for (int i = 0; i < 3; ++i) c.row(i) << row[i][0], row[i][1], row[i][2];
+  const Vec3 t(t4[0], t4[1], t4[2]), t_in_b(t_in_b4[0], t_in_b4[1], t_in_b4[2]);
 
   // edge–edge: the edge of A parallel to a_i that is farthest along the normal, and the edge of B
   // parallel to b_j farthest against it
