@@ -29,9 +29,20 @@ using Double4 = double __attribute__((vector_size(4 * sizeof(double))));
 using Mask4 = std::int64_t __attribute__((vector_size(4 * sizeof(std::int64_t))));
 constexpr double kInfinity = std::numeric_limits<double>::infinity();
 constexpr Double4 kInfinity4 = {kInfinity, kInfinity, kInfinity, kInfinity};
-inline Double4 abs4(Double4 x) { return x < 0.0 ? -x : x; }
+// |x| by clearing the sign bits (one instruction, where a compare and a select take three)
+inline Double4 abs4(Double4 x) {
+  constexpr std::int64_t kMagnitude = std::numeric_limits<std::int64_t>::max();
+  return reinterpret_cast<Double4>(reinterpret_cast<Mask4>(x) & kMagnitude);
+}
+// the lane-wise least and largest (x < y ? x : y is what vminpd computes, but GCC keeps the
+// compare and the select)
+#ifdef __AVX__
+inline Double4 min4(Double4 a, Double4 b) { return __builtin_ia32_minpd256(a, b); }
+inline Double4 max4(Double4 a, Double4 b) { return __builtin_ia32_maxpd256(a, b); }
+#else
 inline Double4 min4(Double4 a, Double4 b) { return a < b ? a : b; }
 inline Double4 max4(Double4 a, Double4 b) { return a > b ? a : b; }
+#endif
 inline double largest_lane(Double4 x) {
   return std::max(std::max(x[0], x[1]), std::max(x[2], x[3]));
 }
