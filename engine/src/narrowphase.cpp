@@ -50,11 +50,15 @@ inline double largest_lane(Double4 x) {
 inline Double4 rotate4(Double4 x) { return __builtin_shuffle(x, Mask4{1, 2, 0, 3}); }
 // lanes 0, 1, 2, 3 ← 1, 2, 3, 0
 inline Double4 next4(Double4 x) { return __builtin_shuffle(x, Mask4{1, 2, 3, 0}); }
-inline int lane_count(Mask4 m) { return int(-(m[0] + m[1] + m[2] + m[3])); }
-// bit k set where lane k is
+// bit k set where lane k is (one vmovmskpd where AVX is on, not four extractions)
 inline unsigned lane_bits(Mask4 m) {
+#ifdef __AVX__
+  return unsigned(__builtin_ia32_movmskpd256(reinterpret_cast<Double4>(m)));
+#else
   return unsigned(m[0] & 1) | unsigned(m[1] & 2) | unsigned(m[2] & 4) | unsigned(m[3] & 8);
+#endif
 }
+inline int lane_count(Mask4 m) { return std::popcount(lane_bits(m)); }
 inline Double4 row_of(const Mat3& m, int i) { return Double4{m(i, 0), m(i, 1), m(i, 2), 0.0}; }
 
 bool edge_axis_wins(double edge_separation, double face_separation) {
