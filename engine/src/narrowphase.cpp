@@ -734,16 +734,24 @@ bool collide_boxes(const Shape& a, const Pose& pose_a, const Shape& b, const Pos
   Mask4 inside[6];
   cu[0] = u, cv[0] = v, cw[0] = w;
   inside[0] = (abs4(u) <= hu) & (abs4(v) <= hv);
+  // an edge crosses u = ±h_u at the fraction (u ∓ h_u) / (u − u_next) of its length, v = ±h_v
+  // likewise: two divisions serve the four sides (an edge parallel to a side does not cross it)
+  const Double4 du = u - u_next, dv = v - v_next;
+  const Double4 one = {1, 1, 1, 1};
+  const Double4 inverse_du = one / (du != 0.0 ? du : one);
+  const Double4 inverse_dv = one / (dv != 0.0 ? dv : one);
   for (int side = 0; side < 4; ++side) {
     const bool along_u = side < 2;  // the side is a line of constant u
-    const double side_sign = side % 2 == 0 ? 1.0 : -1.0, limit = along_u ? hu : hv;
-    const Double4 distance = side_sign * (along_u ? u : v) - limit;
-    const Double4 distance_next = next4(distance);
-    const Mask4 crosses = (distance <= 0.0) ^ (distance_next <= 0.0);
-    const Double4 f = distance / (crosses ? distance - distance_next : Double4{1, 1, 1, 1});
+    const double side_sign = side % 2 == 0 ? 1.0 : -1.0, limit = side_sign * (along_u ? hu : hv);
+    const Double4& across = along_u ? u : v;  // the coordinate the side limits
+    const Mask4 crosses = (side_sign * across <= side_sign * limit) ^
+                          (side_sign * next4(across) <= side_sign * limit);
+    const Double4 f = (across - limit) * (along_u ? inverse_du : inverse_dv);
     Double4& x = cu[1 + side];
     Double4& y = cv[1 + side];
-    x = u + f * (u_next - u), y = v + f * (v_next - v), cw[1 + side] = w + f * (w_next - w);
+    x = along_u ? Double4{limit, limit, limit, limit} : u - f * du;
+    y = along_u ? v - f * dv : Double4{limit, limit, limit, limit};
+    cw[1 + side] = w + f * (w_next - w);
     inside[1 + side] = crosses & (along_u ? abs4(y) <= hv : abs4(x) <= hu);
   }
   // a rectangle corner is inside the quad when it is strictly on the inner side of every edge
