@@ -661,9 +661,10 @@ bool collide_boxes(const Shape& a, const Pose& pose_a, const Shape& b, const Pos
   // edge–edge: the edge of A parallel to a_i that is farthest along the normal, and the edge of B
   // parallel to b_j farthest against it
   auto edge_manifold = [&] {
-    Vec3 normal_in_a = Vec3::Unit(best_edge_i).cross(c.col(best_edge_j)).normalized();
+    // a_i × b_j, from A towards B; its length is needed only for the normal, so the edges'
+    // search does not wait for the square root
+    Vec3 normal_in_a = Vec3::Unit(best_edge_i).cross(c.col(best_edge_j));
     if (normal_in_a.dot(t) < 0.0) normal_in_a = -normal_in_a;
-    const Vec3 normal = pose_a.rotation * normal_in_a;
     Vec3 tail_a = pose_a.position;
     std::uint16_t feature_a = std::uint16_t(best_edge_i * 4),
                   feature_b = std::uint16_t(best_edge_j * 4);
@@ -683,6 +684,7 @@ bool collide_boxes(const Shape& a, const Pose& pose_a, const Shape& b, const Pos
       feature_b |= std::uint16_t((s > 0.0) << bit++);
     }
     tail_b -= hb[best_edge_j] * pose_b.rotation.col(best_edge_j);
+    const Vec3 normal = pose_a.rotation * normal_in_a / std::sqrt(normal_in_a.squaredNorm());
     edge_contact(tail_a, 2.0 * ha[best_edge_i] * pose_a.rotation.col(best_edge_i), tail_b,
                  2.0 * hb[best_edge_j] * pose_b.rotation.col(best_edge_j), normal, -best_edge,
                  feature_a, feature_b, out);
