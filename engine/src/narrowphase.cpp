@@ -653,14 +653,13 @@ bool collide_boxes(const Shape& a, const Pose& pose_a, const Shape& b, const Pos
   const int best_edge_i = std::countr_zero(holders) / 4;
   const int best_edge_j = std::countr_zero(holders) % 4;
   const double best_edge = -std::sqrt(best_metric);
-  // the contact needs c and t as matrices
-  Mat3 c;
-  for (int i = 0; i < 3; ++i) c.row(i) << row[i][0], row[i][1], row[i][2];
-  const Vec3 t(t4[0], t4[1], t4[2]), t_in_b(t_in_b4[0], t_in_b4[1], t_in_b4[2]);
 
   // edge–edge: the edge of A parallel to a_i that is farthest along the normal, and the edge of B
   // parallel to b_j farthest against it
   auto edge_manifold = [&] {
+    Mat3 c;
+    for (int i = 0; i < 3; ++i) c.row(i) << row[i][0], row[i][1], row[i][2];
+    const Vec3 t(t4[0], t4[1], t4[2]);
     // a_i × b_j, from A towards B; its length is needed only for the normal, so the edges'
     // search does not wait for the square root
     Vec3 normal_in_a = Vec3::Unit(best_edge_i).cross(c.col(best_edge_j));
@@ -695,25 +694,35 @@ bool collide_boxes(const Shape& a, const Pose& pose_a, const Shape& b, const Pos
   // face contact, clipped in the reference box's frame (as ODE's dBoxBox does): the incident
   // face's quad is cut to the reference face's rectangle in the face's two coordinates, the third
   // giving the depth. In that frame the side planes are |u| ≤ h_u and |v| ≤ h_v.
+  // Which box holds the reference face is as good as random, and so are the signs and the
+  // incident axis below: they are selected, not branched on.
   const bool flipped = best_face_axis >= 3;
   const Pose& reference_pose = flipped ? pose_b : pose_a;
-  const Vec3& reference_half = flipped ? hb : ha;
-  const Vec3& incident_half = flipped ? ha : hb;
-  // the incident box's axes (columns) and centre in the reference frame
-  const Mat3 incident_axes = flipped ? Mat3(c.transpose()) : c;
-  const Vec3 incident_centre = flipped ? Vec3(-t_in_b) : t;
-  const int axis = best_face_axis % 3, ku = (axis + 1) % 3, kv = (axis + 2) % 3;
+  const Mask4 flip = -Mask4{flipped, flipped, flipped, flipped};
+  const Double4 reference_half4 = flip ? hb4 : ha4, incident_half4 = flip ? ha4 : hb4;
+  // the incident box's axes and centre in the reference frame: c's columns and t when A holds
+  // the reference face, c's rows and −cᵀt when B does
+  const Double4 incident_axes[3] = {flip ? row[0] : column[0], flip ? row[1] : column[1],
+                                    flip ? row[2] : column[2]};
+  const Double4 incident_centre = flip ? -t_in_b4 : t4;
+  const int axis = best_face_axis - 3 * flipped, ku = (axis + 1) % 3, kv = (axis + 2) % 3;
   const double sign = incident_centre[axis] >= 0.0 ? 1.0 : -1.0;
+  const Vec3 reference_half(reference_half4[0], reference_half4[1], reference_half4[2]);
 
-  // the incident face: the other box's axis most (anti-)parallel to the reference normal
-  int incident_axis;
-  incident_axes.row(axis).cwiseAbs().maxCoeff(&incident_axis);
-  const double incident_sign = sign * incident_axes(axis, incident_axis) > 0.0 ? -1.0 : 1.0;
+  // the incident face: the other box's axis most (anti-)parallel to the reference normal (the
+  // first on a tie)
+  const double alignment[3] = {incident_axes[0][axis], incident_axes[1][axis],
+                               incident_axes[2][axis]};
+  int incident_axis = std::abs(alignment[1]) > std::abs(alignment[0]) ? 1 : 0;
+  incident_axis = std::abs(alignment[2]) > std::abs(alignment[incident_axis]) ? 2 : incident_axis;
+  const double incident_sign = sign * alignment[incident_axis] > 0.0 ? -1.0 : 1.0;
   const int iu = (incident_axis + 1) % 3, iv = (incident_axis + 2) % 3;
-  const Vec3 face_centre = incident_centre + incident_sign * incident_half[incident_axis] *
-                                                 incident_axes.col(incident_axis);
-  const Vec3 edge_u = incident_half[iu] * incident_axes.col(iu);
-  const Vec3 edge_v = incident_half[iv] * incident_axes.col(iv);
+  const Double4 face_centre4 =
+      incident_centre +
+      incident_sign * incident_half4[incident_axis] * incident_axes[incident_axis];
+  const Double4 edge_u = incident_half4[iu] * incident_axes[iu];
+  const Double4 edge_v = incident_half4[iv] * incident_axes[iv];
+  const Vec3 face_centre(face_centre4[0], face_centre4[1], face_centre4[2]);
   const auto incident_face = std::uint16_t(2 * incident_axis + (incident_sign > 0.0 ? 0 : 1));
   const auto reference_face = std::uint16_t(2 * axis + (sign > 0.0 ? 0 : 1));
 
@@ -769,7 +778,7 @@ bool collide_boxes(const Shape& a, const Pose& pose_a, const Shape& b, const Pos
     }
     // the corner's height on the incident face's plane (|n_w| ≥ 1/√3: it is the face most
     // aligned with the reference normal)
-    const Vec3 n = incident_axes.col(incident_axis);
+    const Double4& n = incident_axes[incident_axis];
     cu[5] = qu, cv[5] = qv;
     cw[5] = face_centre[axis] -
             (n[ku] * (qu - face_centre[ku]) + n[kv] * (qv - face_centre[kv])) / n[axis];
