@@ -60,6 +60,14 @@ inline unsigned lane_bits(Mask4 m) {
 }
 inline int lane_count(Mask4 m) { return std::popcount(lane_bits(m)); }
 inline Double4 row_of(const Mat3& m, int i) { return Double4{m(i, 0), m(i, 1), m(i, 2), 0.0}; }
+// the columns of a 3×3 matrix held as rows in lanes 0–2 (lane 3 zero), by shuffles
+inline void transpose3(const Double4 rows[3], Double4 columns[3]) {
+  const Double4 low = __builtin_shuffle(rows[0], rows[1], Mask4{0, 4, 1, 5});   // r00 r10 r01 r11
+  const Double4 high = __builtin_shuffle(rows[0], rows[1], Mask4{2, 6, 3, 7});  // r02 r12 0 0
+  columns[0] = __builtin_shuffle(low, rows[2], Mask4{0, 1, 4, 7});
+  columns[1] = __builtin_shuffle(low, rows[2], Mask4{2, 3, 5, 7});
+  columns[2] = __builtin_shuffle(high, rows[2], Mask4{0, 1, 6, 3});
+}
 
 bool edge_axis_wins(double edge_separation, double face_separation) {
   return edge_separation >
@@ -575,11 +583,9 @@ bool collide_boxes(const Shape& a, const Pose& pose_a, const Shape& b, const Pos
   const Double4 a_x = row_of(ra, 0), a_y = row_of(ra, 1), a_z = row_of(ra, 2);  // lanes i
   const Double4 b_x = row_of(rb, 0), b_y = row_of(rb, 1), b_z = row_of(rb, 2);  // lanes j
   Double4 row[3], column[3], abs_row[3], abs_column[3];
-  for (int k = 0; k < 3; ++k) {
-    row[k] = ra(0, k) * b_x + ra(1, k) * b_y + ra(2, k) * b_z;
-    column[k] = rb(0, k) * a_x + rb(1, k) * a_y + rb(2, k) * a_z;
-    abs_row[k] = abs4(row[k]), abs_column[k] = abs4(column[k]);
-  }
+  for (int k = 0; k < 3; ++k) row[k] = ra(0, k) * b_x + ra(1, k) * b_y + ra(2, k) * b_z;
+  transpose3(row, column);
+  for (int k = 0; k < 3; ++k) abs_row[k] = abs4(row[k]), abs_column[k] = abs4(column[k]);
   const Vec3 d = pose_b.position - pose_a.position;
   const Double4 t4 = d.x() * a_x + d.y() * a_y + d.z() * a_z;
   const Double4 ha4 = {ha.x(), ha.y(), ha.z(), 0.0}, hb4 = {hb.x(), hb.y(), hb.z(), 0.0};
@@ -600,11 +606,11 @@ bool collide_boxes(const Shape& a, const Pose& pose_a, const Shape& b, const Pos
           ? abs4(t_in_b4) - (hb4 + ha.x() * abs_row[0] + ha.y() * abs_row[1] + ha.z() * abs_row[2])
           : -kInfinity4;
   std::uint16_t axes = std::uint16_t(6 - lane_count(duplicate));
-  const double largest_a = largest_lane(separation_a), largest_b = largest_lane(separation_b);
-  if (largest_a > 0.0 || largest_b > 0.0) {
+  if (lane_bits((separation_a > 0.0) | (separation_b > 0.0)) != 0) {
     out.axes_tested = axes;
     return no_contact(out);
   }
+  const double largest_a = largest_lane(separation_a), largest_b = largest_lane(separation_b);
   // the first axis holding each largest; A's face on a tie
   const int best_a = std::countr_zero(lane_bits(separation_a == largest_a));
   const int best_b = std::countr_zero(lane_bits(separation_b == largest_b));
