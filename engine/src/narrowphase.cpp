@@ -777,10 +777,10 @@ bool collide_boxes(const Shape& a, const Pose& pose_a, const Shape& b, const Pos
   {
     const double winding = edge_u[ku] * edge_v[kv] - edge_u[kv] * edge_v[ku] >= 0.0 ? 1.0 : -1.0;
     const Double4 qu = hu * corner_u, qv = hv * corner_v;
-    Double4 least = kInfinity4;
+    Double4 innermost = kInfinity4;  // the least signed distance, scaled, to the quad's edges
     for (int k = 0; k < 4; ++k) {
       const double eu = u_next[k] - u[k], ev = v_next[k] - v[k];
-      least = min4(least, winding * (eu * (qv - v[k]) - ev * (qu - u[k])));
+      innermost = min4(innermost, winding * (eu * (qv - v[k]) - ev * (qu - u[k])));
     }
     // the corner's height on the incident face's plane (|n_w| ≥ 1/√3: it is the face most
     // aligned with the reference normal)
@@ -788,7 +788,7 @@ bool collide_boxes(const Shape& a, const Pose& pose_a, const Shape& b, const Pos
     cu[5] = qu, cv[5] = qv;
     cw[5] = face_centre[axis] -
             (n[ku] * (qu - face_centre[ku]) + n[kv] * (qv - face_centre[kv])) / n[axis];
-    inside[5] = least > 0.0;
+    inside[5] = innermost > 0.0;
   }
   // on or below the reference face
   std::uint32_t survivors = 0;

@@ -11,16 +11,21 @@
 // "The Separating Axis Test between Convex Polyhedra", GDC 2013) — which prunes the parallel and
 // duplicate axes the seed prunes by hand and most others besides. Boxes take a path of their own:
 // the same axes in closed form (Gottschalk's OBB test, Ericson §4.4.1), 15 for two rotated boxes,
-// fewer when edges are parallel. The first separating axis ends the test; otherwise the axis of
-// least penetration is the contact normal, with faces preferred over edges unless an edge axis is
-// clearly shallower (kEdgePreference), which keeps manifolds from flickering between the two.
+// fewer when edges are parallel, evaluated in 4-lane vectors rather than one branch per axis
+// (random pairs defeat the branch predictor). A separating axis ends the test; otherwise the axis
+// of least penetration is the contact normal, with faces preferred over edges unless an edge axis
+// is clearly shallower (by 2 % of the depth plus 0.1 mm), which keeps manifolds from flickering
+// between the two.
 //
 // The manifold comes from clipping (the seed's choice): the reference face is the face most
 // aligned with the normal, the incident face the other shape's face most opposed to it; the
 // incident face is clipped against the reference face's side planes (Sutherland–Hodgman), points
 // above the reference face are dropped and at most four are kept — the deepest, then those that
-// span the largest area. An edge–edge contact is one point, from the closest points of the two
-// edges. Each point carries the features that made it, so a solver can match it next step.
+// span the largest area. Two boxes clip by candidates instead: every point the clip can yield
+// (incident vertices, edge crossings, reference corners) is computed at once and the survivors
+// kept, the same points without a branch per vertex. An edge–edge contact is one point, from the
+// closest points of the two edges. Each point carries the features that made it, so a solver can
+// match it next step.
 //
 // Every collision function is stateless and writes a Manifold; collide() picks one from a table
 // indexed by the two shape kinds (as MuJoCo's mjCOLLISIONFUNC does).
