@@ -649,7 +649,7 @@ bool collide_boxes(const Shape& a, const Pose& pose_a, const Shape& b, const Pos
     metric[i] = valid ? gap * gap / (valid ? length_squared : 1.0) : kInfinity4;
   }
   out.axes_tested = axes;
-  if (lane_count(any_apart) > 0) return no_contact(out);
+  if (lane_bits(any_apart) != 0) return no_contact(out);
   // the least metric and the first (i-major) axis holding it, without a branch per axis
   const Double4 least = min4(min4(metric[0], metric[1]), metric[2]);
   const double best_metric = std::min({least[0], least[1], least[2]});
@@ -740,7 +740,7 @@ bool collide_boxes(const Shape& a, const Pose& pose_a, const Shape& b, const Pos
   // branches of a clip loop, on random pairs, cost more than the arithmetic. Candidate k is lane
   // k % 4 of group k / 4: group 0 the quad's vertices, groups 1–4 the crossings of the edge that
   // starts at vertex k % 4 with the sides u = h_u, u = −h_u, v = h_v, v = −h_v, group 5 the
-  // rectangle's corners in the quad's vertex order.
+  // rectangle's corners (+u, +v), (−u, +v), (−u, −v), (+u, −v) (the quad's vertices' sign order).
   const double hu = reference_half[ku], hv = reference_half[kv];
   const Double4 corner_u = {1, -1, -1, 1}, corner_v = {1, 1, -1, -1};
   const Double4 u = face_centre[ku] + corner_u * edge_u[ku] + corner_v * edge_v[ku];

@@ -143,8 +143,8 @@ enum class ContactType : std::uint8_t {
   FaceVertex,  // an incident-face vertex below the reference face
   FaceClip,    // where an incident-face edge crosses a side plane of the reference face
   FaceCorner,  // a corner of a box's reference face inside the incident face (reference_side:
-               // the corner, in the order of the incident vertices' signs on the face's axes;
-               // the general hull clip finds such a point as a FaceClip)
+               // 0–3 for the corner at (+u, +v), (−u, +v), (−u, −v), (+u, −v) on the face's two
+               // axes; the general hull clip finds such a point as a FaceClip)
   EdgeEdge,    // the closest points of two edges
   Single,      // the one point of a sphere or plane contact
 };
