@@ -350,10 +350,12 @@ class RtpNarrowphase final : public NarrowphasePeer {
 class RtpTriangleBatch final : public TriangleBatch {
  public:
   explicit RtpTriangleBatch(const std::vector<TriangleQuery>& queries) : queries_(queries) {}
-  double run() override {
+  double run(std::span<const std::uint32_t> order) override {
     double sum = 0.0;
-    for (const TriangleQuery& q : queries_)
+    for (const std::uint32_t i : order) {
+      const TriangleQuery& q = queries_[i];
       sum += (q.point - rtp::closest_point_on_triangle(q.point, q.a, q.b, q.c).point).norm();
+    }
     return sum;
   }
   rtp::Vec3 closest(std::size_t i) override {

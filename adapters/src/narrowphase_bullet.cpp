@@ -120,10 +120,11 @@ class BulletTriangleBatch final : public TriangleBatch {
     for (const TriangleQuery& q : queries)
       queries_.push_back({to_bullet(q.point), to_bullet(q.a), to_bullet(q.b), to_bullet(q.c)});
   }
-  double run() override {
+  double run(std::span<const std::uint32_t> order) override {
     double sum = 0.0;
     btSubSimplexClosestResult result;
-    for (const Query& q : queries_) {
+    for (const std::uint32_t i : order) {
+      const Query& q = queries_[i];
       solver_.closestPtPointTriangle(q.point, q.a, q.b, q.c, result);
       sum += double((q.point - result.m_closestPointOnSimplex).length());
     }

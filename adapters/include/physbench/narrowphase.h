@@ -16,6 +16,7 @@
 #include <functional>
 #include <memory>
 #include <optional>
+#include <span>
 #include <string>
 #include <vector>
 
@@ -101,8 +102,9 @@ std::vector<TriangleQuery> make_triangle_queries(std::size_t count, std::uint64_
 class TriangleBatch {
  public:
   virtual ~TriangleBatch() = default;
-  // answers every query once; returns the sum of the distances (so the work cannot be elided)
-  virtual double run() = 0;
+  // answers every query once, in the given order (a permutation of the queries' indices);
+  // returns the sum of the distances (so the work cannot be elided)
+  virtual double run(std::span<const std::uint32_t> order) = 0;
   // the closest point of one query (untimed: for checking)
   virtual rtp::Vec3 closest(std::size_t query) = 0;
 };
