@@ -611,9 +611,10 @@ bool collide_boxes(const Shape& a, const Pose& pose_a, const Shape& b, const Pos
     return no_contact(out);
   }
   const double largest_a = largest_lane(separation_a), largest_b = largest_lane(separation_b);
-  // the first axis holding each largest; A's face on a tie
-  const int best_a = std::countr_zero(lane_bits(separation_a == largest_a));
-  const int best_b = std::countr_zero(lane_bits(separation_b == largest_b));
+  // the first axis holding each largest; A's face on a tie. A non-finite pose leaves no lane
+  // equal to its largest: the bit of axis 2, set always, keeps the index in range then.
+  const int best_a = std::countr_zero(lane_bits(separation_a == largest_a) | 0b100u);
+  const int best_b = std::countr_zero(lane_bits(separation_b == largest_b) | 0b100u);
   const double best_face = std::max(largest_a, largest_b);
   const int best_face_axis = largest_b > largest_a ? 3 + best_b : best_a;  // 0–2: A's, 3–5: B's
 
@@ -653,9 +654,10 @@ bool collide_boxes(const Shape& a, const Pose& pose_a, const Shape& b, const Pos
   // the least metric and the first (i-major) axis holding it, without a branch per axis
   const Double4 least = min4(min4(metric[0], metric[1]), metric[2]);
   const double best_metric = std::min({least[0], least[1], least[2]});
+  // (axis (2, 2)'s bit, set always, keeps the index in range for a non-finite pose)
   const unsigned holders = lane_bits(metric[0] == best_metric) |
                            lane_bits(metric[1] == best_metric) << 4 |
-                           lane_bits(metric[2] == best_metric) << 8;
+                           lane_bits(metric[2] == best_metric) << 8 | 1u << 10;
   const int best_edge_i = std::countr_zero(holders) / 4;
   const int best_edge_j = std::countr_zero(holders) % 4;
   const double best_edge = -std::sqrt(best_metric);

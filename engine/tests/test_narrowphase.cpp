@@ -4,6 +4,7 @@
 #include <gtest/gtest.h>
 
 #include <cmath>
+#include <limits>
 #include <random>
 #include <stdexcept>
 
@@ -353,6 +354,23 @@ TEST(SeparatingAxes, DepthIsTheLeastOverlapOverSampledDirections) {
       EXPECT_GE(overlap_along(hull_a, pose.a, hull_b, pose.b, n), m.depth * 0.98 - 1e-4 - 1e-9);
     }
     expect_points_on_both(m, hull_a, pose.a, hull_b, pose.b, 1e-9);
+  }
+}
+
+// a non-finite pose has no meaningful answer, but the box test must still pick its axes, faces
+// and edges in range (the debug build's bounds checks and sanitizers catch a stray index)
+TEST(SeparatingAxes, NonFinitePosesKeepTheBoxTestInBounds) {
+  const ConvexHull hull = make_box_hull({0.5, 0.5, 0.5});
+  const Shape box = Shape::box(hull, {0.5, 0.5, 0.5});
+  const Pose a({0, 0, 0}, Quat(Eigen::AngleAxisd(0.3, Vec3(1, 2, 3).normalized())));
+  const double nan = std::numeric_limits<double>::quiet_NaN();
+  for (const Vec3& position : {Vec3(nan, 0, 0), Vec3(0.2, nan, 0.1), Vec3(nan, nan, nan)}) {
+    const Pose b(position, Quat(Eigen::AngleAxisd(0.7, Vec3(3, 1, 2).normalized())));
+    Manifold m;
+    collide(box, a, box, b, m);
+    EXPECT_LE(m.count, 4);
+    EXPECT_LE(m.axes_tested, 15);
+    for (int i = 0; i < m.count; ++i) EXPECT_LT(m.points[i].feature.reference, 12);
   }
 }
 
