@@ -36,18 +36,18 @@ constexpr std::size_t kTriangleQueries = 4096;
 // it do. Measured that way, rtp's box–box touching pairs took 62 ns and Bullet's separated pairs
 // 40 ns; in a fresh order, 113 and 68 ns (docs/narrowphase.md).
 constexpr std::size_t kOrders = 16;
-const std::vector<std::vector<std::uint32_t>>& orders_of(std::size_t pairs) {
+const std::vector<std::vector<std::uint32_t>>& orders_of(std::size_t count) {
   static std::map<std::size_t, std::vector<std::vector<std::uint32_t>>> orders;
-  auto it = orders.find(pairs);
+  auto it = orders.find(count);
   if (it == orders.end()) {
     std::mt19937_64 random(2027);
     std::vector<std::vector<std::uint32_t>> permutations(kOrders,
-                                                         std::vector<std::uint32_t>(pairs));
+                                                         std::vector<std::uint32_t>(count));
     for (auto& order : permutations) {
       std::iota(order.begin(), order.end(), 0u);
       std::shuffle(order.begin(), order.end(), random);
     }
-    it = orders.emplace(pairs, std::move(permutations)).first;
+    it = orders.emplace(count, std::move(permutations)).first;
   }
   return it->second;
 }

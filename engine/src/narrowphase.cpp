@@ -24,7 +24,7 @@ constexpr double kDuplicateCosine = 1.0 - 1e-9;
 // two SSE2 halves in the portable build); comparisons give lanes of all ones or zero. The helpers
 // below have internal linkage and are inlined, so the portable build's note that passing such a
 // vector changes the ABI without AVX does not apply.
-#pragma GCC diagnostic ignored "-Wpsabi"
+#pragma GCC diagnostic ignored "-Wpsabi"  // for the rest of this file: GCC notes it at each call
 using Double4 = double __attribute__((vector_size(4 * sizeof(double))));
 using Mask4 = std::int64_t __attribute__((vector_size(4 * sizeof(std::int64_t))));
 constexpr double kInfinity = std::numeric_limits<double>::infinity();
@@ -691,7 +691,7 @@ bool collide_boxes(const Shape& a, const Pose& pose_a, const Shape& b, const Pos
       feature_b |= std::uint16_t((s > 0.0) << bit++);
     }
     tail_b -= hb[best_edge_j] * pose_b.rotation.col(best_edge_j);
-    const Vec3 normal = pose_a.rotation * normal_in_a / std::sqrt(normal_in_a.squaredNorm());
+    const Vec3 normal = pose_a.rotation * normal_in_a / normal_in_a.norm();
     edge_contact(tail_a, 2.0 * ha[best_edge_i] * pose_a.rotation.col(best_edge_i), tail_b,
                  2.0 * hb[best_edge_j] * pose_b.rotation.col(best_edge_j), normal, -best_edge,
                  feature_a, feature_b, out);
