@@ -662,39 +662,49 @@ bool collide_boxes(const Shape& a, const Pose& pose_a, const Shape& b, const Pos
   const int best_edge_j = std::countr_zero(holders) % 4;
   const double best_edge = -std::sqrt(best_metric);
 
-  // edge–edge: the edge of A parallel to a_i that is farthest along the normal, and the edge of B
-  // parallel to b_j farthest against it
+  // edge–edge: the edge of A parallel to a_i that is farthest along the normal and the edge of B
+  // parallel to b_j farthest against it, in A's frame and in the lanes, without a branch: which
+  // edges these are is as good as random on random pairs
   auto edge_manifold = [&] {
-    Mat3 c;
-    for (int i = 0; i < 3; ++i) c.row(i) << row[i][0], row[i][1], row[i][2];
-    const Vec3 t(t4[0], t4[1], t4[2]);
-    // a_i × b_j, from A towards B; its length is needed only for the normal, so the edges'
-    // search does not wait for the square root
-    Vec3 normal_in_a = Vec3::Unit(best_edge_i).cross(c.col(best_edge_j));
-    if (normal_in_a.dot(t) < 0.0) normal_in_a = -normal_in_a;
-    Vec3 tail_a = pose_a.position;
-    std::uint16_t feature_a = std::uint16_t(best_edge_i * 4),
-                  feature_b = std::uint16_t(best_edge_j * 4);
-    for (int k = 0, bit = 0; k < 3; ++k) {
-      if (k == best_edge_i) continue;
-      const double s = normal_in_a[k] >= 0.0 ? 1.0 : -1.0;
-      tail_a += s * ha[k] * pose_a.rotation.col(k);
-      feature_a |= std::uint16_t((s > 0.0) << bit++);
-    }
-    tail_a -= ha[best_edge_i] * pose_a.rotation.col(best_edge_i);
-    const Vec3 normal_in_b = c.transpose() * normal_in_a;
-    Vec3 tail_b = pose_b.position;
-    for (int k = 0, bit = 0; k < 3; ++k) {
-      if (k == best_edge_j) continue;
-      const double s = normal_in_b[k] >= 0.0 ? -1.0 : 1.0;
-      tail_b += s * hb[k] * pose_b.rotation.col(k);
-      feature_b |= std::uint16_t((s > 0.0) << bit++);
-    }
-    tail_b -= hb[best_edge_j] * pose_b.rotation.col(best_edge_j);
-    const Vec3 normal = pose_a.rotation * normal_in_a / normal_in_a.norm();
-    edge_contact(tail_a, 2.0 * ha[best_edge_i] * pose_a.rotation.col(best_edge_i), tail_b,
-                 2.0 * hb[best_edge_j] * pose_b.rotation.col(best_edge_j), normal, -best_edge,
-                 feature_a, feature_b, out);
+    const int i = best_edge_i, j = best_edge_j;
+    constexpr Mask4 kLane[3] = {{-1, 0, 0, 0}, {0, -1, 0, 0}, {0, 0, -1, 0}};
+    const Double4 a_i = kLane[i] ? Double4{1, 1, 1, 1} : Double4{}, b_j = column[j];
+    // a_i × b_j, turned to run from A towards B
+    Double4 normal = rotate4(a_i) * rotate4(rotate4(b_j)) - rotate4(rotate4(a_i)) * rotate4(b_j);
+    const Double4 normal_t = normal * t4;
+    normal = normal_t[0] + normal_t[1] + normal_t[2] < 0.0 ? -normal : normal;
+    // the edges' midpoints: A's at ±ha_k on its two other axes by the normal's signs there, B's at
+    // ∓hb_k by the signs of the normal in B's frame
+    const Mask4 up_a = normal >= 0.0;
+    const Double4 mid_a = kThreeLanes & ~kLane[i] ? (up_a ? ha4 : -ha4) : Double4{};
+    const Double4 normal_in_b = normal[0] * row[0] + normal[1] * row[1] + normal[2] * row[2];
+    const Mask4 up_b = normal_in_b < 0.0;
+    const Double4 mid_b_in_b = kThreeLanes & ~kLane[j] ? (up_b ? hb4 : -hb4) : Double4{};
+    const Double4 mid_b =
+        t4 + mid_b_in_b[0] * column[0] + mid_b_in_b[1] * column[1] + mid_b_in_b[2] * column[2];
+    // the closest points of the edges mid_a + α a_i, |α| ≤ ha_i, and mid_b + β b_j, |β| ≤ hb_j:
+    // Ericson §5.1.9 with unit directions, one division by 1 − (a_i · b_j)², which is at least
+    // the square of the parallel threshold on a tested axis
+    const Double4 r = mid_a - mid_b, r_along_b = b_j * r;
+    const double cosine = b_j[i], r_a = r[i], r_b = r_along_b[0] + r_along_b[1] + r_along_b[2];
+    double alpha = std::clamp((cosine * r_b - r_a) / (1.0 - cosine * cosine), -ha[i], ha[i]);
+    const double beta_free = cosine * alpha + r_b;
+    const double beta = std::clamp(beta_free, -hb[j], hb[j]);
+    if (beta != beta_free) alpha = std::clamp(cosine * beta - r_a, -ha[i], ha[i]);
+    const Double4 midway = 0.5 * (mid_a + alpha * a_i + mid_b + beta * b_j);
+    // an edge's id: its axis, then the sign bits of the two other axes in order
+    auto edge_id = [](Mask4 up, int axis) {
+      const unsigned bits = lane_bits(up) & 7u;
+      const unsigned others = (bits & ((1u << axis) - 1u)) | (bits >> (axis + 1) & 3u) << axis;
+      return std::uint16_t(4 * axis + others);
+    };
+    const Vec3 n(normal[0], normal[1], normal[2]), p(midway[0], midway[1], midway[2]);
+    out.normal = pose_a.rotation * n / n.norm();
+    out.depth = -best_edge;
+    out.count = 1;
+    out.points[0].point = pose_a.position + pose_a.rotation * p;
+    out.points[0].depth = -best_edge;
+    out.points[0].feature = {edge_id(up_a, i), edge_id(up_b, j), 0, 0, ContactType::EdgeEdge, 0};
     return true;
   };
   if (edge_axis_wins(best_edge, best_face)) return edge_manifold();
