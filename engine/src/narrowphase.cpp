@@ -3,6 +3,7 @@
 #include <algorithm>
 #include <bit>
 #include <cmath>
+#include <cstring>
 #include <limits>
 
 #include "rtp/collision.h"
@@ -59,7 +60,25 @@ inline unsigned lane_bits(Mask4 m) {
 #endif
 }
 inline int lane_count(Mask4 m) { return std::popcount(lane_bits(m)); }
+// −x where the mask is set, by the sign bit (GCC branches on a scalar condition's ?:)
+inline Double4 flip_where(Double4 x, Mask4 m) {
+  constexpr std::int64_t kSign = std::numeric_limits<std::int64_t>::min();
+  return reinterpret_cast<Double4>(reinterpret_cast<Mask4>(x) ^ (m & kSign));
+}
 inline Double4 row_of(const Mat3& m, int i) { return Double4{m(i, 0), m(i, 1), m(i, 2), 0.0}; }
+// the three rows of a column-major 3×3 matrix (lane 3 zero) from two unaligned loads and shuffles,
+// where element-wise loads take three loads and two inserts a row
+inline void rows_of(const Mat3& m, Double4 rows[3]) {
+  static_assert(sizeof(Mat3) == 9 * sizeof(double));
+  Double4 low, high;  // m00 m10 m20 m01 and m11 m21 m02 m12
+  std::memcpy(&low, m.data(), sizeof low);
+  std::memcpy(&high, m.data() + 4, sizeof high);
+  constexpr Mask4 kThree = {-1, -1, -1, 0};
+  rows[0] = kThree ? __builtin_shuffle(low, high, Mask4{0, 3, 6, 0}) : Double4{};
+  rows[1] = kThree ? __builtin_shuffle(low, high, Mask4{1, 4, 7, 0}) : Double4{};
+  rows[2] = __builtin_shuffle(low, high, Mask4{2, 5, 0, 0});
+  rows[2][2] = m(2, 2), rows[2][3] = 0.0;
+}
 // the columns of a 3×3 matrix held as rows in lanes 0–2 (lane 3 zero), by shuffles
 inline void transpose3(const Double4 rows[3], Double4 columns[3]) {
   const Double4 low = __builtin_shuffle(rows[0], rows[1], Mask4{0, 4, 1, 5});   // r00 r10 r01 r11
@@ -580,8 +599,10 @@ bool collide_boxes(const Shape& a, const Pose& pose_a, const Shape& b, const Pos
   // vectors (lane 3 is padding): rows of c over j, columns of c over i, t over i
   const Mat3& ra = pose_a.rotation;
   const Mat3& rb = pose_b.rotation;
-  const Double4 a_x = row_of(ra, 0), a_y = row_of(ra, 1), a_z = row_of(ra, 2);  // lanes i
-  const Double4 b_x = row_of(rb, 0), b_y = row_of(rb, 1), b_z = row_of(rb, 2);  // lanes j
+  Double4 rows_a[3], rows_b[3];
+  rows_of(ra, rows_a), rows_of(rb, rows_b);
+  const Double4 a_x = rows_a[0], a_y = rows_a[1], a_z = rows_a[2];  // lanes i
+  const Double4 b_x = rows_b[0], b_y = rows_b[1], b_z = rows_b[2];  // lanes j
   Double4 row[3], column[3], abs_row[3], abs_column[3];
   for (int k = 0; k < 3; ++k) row[k] = ra(0, k) * b_x + ra(1, k) * b_y + ra(2, k) * b_z;
   transpose3(row, column);
@@ -672,7 +693,7 @@ bool collide_boxes(const Shape& a, const Pose& pose_a, const Shape& b, const Pos
     // a_i × b_j, turned to run from A towards B
     Double4 normal = rotate4(a_i) * rotate4(rotate4(b_j)) - rotate4(rotate4(a_i)) * rotate4(b_j);
     const Double4 normal_t = normal * t4;
-    normal = normal_t[0] + normal_t[1] + normal_t[2] < 0.0 ? -normal : normal;
+    normal = flip_where(normal, Double4{} + (normal_t[0] + normal_t[1] + normal_t[2]) < 0.0);
     // the edges' midpoints: A's at ±ha_k on its two other axes by the normal's signs there, B's at
     // ∓hb_k by the signs of the normal in B's frame
     const Mask4 up_a = normal >= 0.0;
@@ -687,10 +708,13 @@ bool collide_boxes(const Shape& a, const Pose& pose_a, const Shape& b, const Pos
     // the square of the parallel threshold on a tested axis
     const Double4 r = mid_a - mid_b, r_along_b = b_j * r;
     const double cosine = b_j[i], r_a = r[i], r_b = r_along_b[0] + r_along_b[1] + r_along_b[2];
-    double alpha = std::clamp((cosine * r_b - r_a) / (1.0 - cosine * cosine), -ha[i], ha[i]);
-    const double beta_free = cosine * alpha + r_b;
-    const double beta = std::clamp(beta_free, -hb[j], hb[j]);
-    if (beta != beta_free) alpha = std::clamp(cosine * beta - r_a, -ha[i], ha[i]);
+    // (the clamps by min and max and the last step selected: std::clamp and an if branch)
+    const double alpha_free =
+        std::min(std::max((cosine * r_b - r_a) / (1.0 - cosine * cosine), -ha[i]), ha[i]);
+    const double beta_free = cosine * alpha_free + r_b;
+    const double beta = std::min(std::max(beta_free, -hb[j]), hb[j]);
+    const double alpha_held = std::min(std::max(cosine * beta - r_a, -ha[i]), ha[i]);
+    const double alpha = beta != beta_free ? alpha_held : alpha_free;
     const Double4 midway = 0.5 * (mid_a + alpha * a_i + mid_b + beta * b_j);
     // an edge's id: its axis, then the sign bits of the two other axes in order
     auto edge_id = [](Mask4 up, int axis) {
@@ -715,7 +739,8 @@ bool collide_boxes(const Shape& a, const Pose& pose_a, const Shape& b, const Pos
   // Which box holds the reference face is as good as random, and so are the signs and the
   // incident axis below: they are selected, not branched on.
   const bool flipped = best_face_axis >= 3;
-  const Pose& reference_pose = flipped ? pose_b : pose_a;
+  const Pose* const poses[2] = {&pose_a, &pose_b};
+  const Pose& reference_pose = *poses[flipped];  // (by index: GCC branches on a ?: of references)
   const Mask4 flip = -Mask4{flipped, flipped, flipped, flipped};
   const Double4 reference_half4 = flip ? hb4 : ha4, incident_half4 = flip ? ha4 : hb4;
   // the incident box's axes and centre in the reference frame: c's columns and t when A holds
@@ -724,16 +749,21 @@ bool collide_boxes(const Shape& a, const Pose& pose_a, const Shape& b, const Pos
                                     flip ? row[2] : column[2]};
   const Double4 incident_centre = flip ? -t_in_b4 : t4;
   const int axis = best_face_axis - 3 * flipped, ku = (axis + 1) % 3, kv = (axis + 2) % 3;
-  const double sign = incident_centre[axis] >= 0.0 ? 1.0 : -1.0;
+  // +1 where the centre is at or above 0 (x + 0 turns −0 into +0), by the sign bit
+  const double sign = std::copysign(1.0, incident_centre[axis] + 0.0);
   const Vec3 reference_half(reference_half4[0], reference_half4[1], reference_half4[2]);
 
   // the incident face: the other box's axis most (anti-)parallel to the reference normal (the
   // first on a tie)
-  const double alignment[3] = {incident_axes[0][axis], incident_axes[1][axis],
-                               incident_axes[2][axis]};
-  int incident_axis = std::abs(alignment[1]) > std::abs(alignment[0]) ? 1 : 0;
-  incident_axis = std::abs(alignment[2]) > std::abs(alignment[incident_axis]) ? 2 : incident_axis;
-  const double incident_sign = sign * alignment[incident_axis] > 0.0 ? -1.0 : 1.0;
+  // (the incident axes' components along the reference axis: row `axis` of c, or its column when
+  // B holds the reference face; lane 3 is 0 and loses to a unit vector's largest component)
+  const Double4 alignment = flip ? column[axis] : row[axis];
+  const Double4 abs_alignment = abs4(alignment);
+  const int incident_axis = std::countr_zero(
+      lane_bits(abs_alignment == largest_lane(abs_alignment)) | 0b100u);
+  // −1 where the face's outward axis points along the reference normal (the product is never 0:
+  // the largest component of a unit vector is at least 1/√3)
+  const double incident_sign = std::copysign(1.0, -sign * alignment[incident_axis]);
   const int iu = (incident_axis + 1) % 3, iv = (incident_axis + 2) % 3;
   const Double4 face_centre4 =
       incident_centre +
@@ -841,13 +871,17 @@ bool collide_boxes(const Shape& a, const Pose& pose_a, const Shape& b, const Pos
     ContactPoint& p = out.points[k];
     p.point = reference_pose.position + reference_pose.rotation * local;
     p.depth = depth_of(candidate);
+    // by tables, not ?: chains (GCC branches on those, and the group is as good as random)
+    constexpr std::uint8_t kSide[6] = {0, 0, 1, 2, 3, 0};
+    constexpr ContactType kType[6] = {ContactType::FaceVertex, ContactType::FaceClip,
+                                      ContactType::FaceClip,   ContactType::FaceClip,
+                                      ContactType::FaceClip,   ContactType::FaceCorner};
+    const bool corner = group == 5;
     p.feature = {reference_face,
                  incident_face,
-                 std::uint8_t(group == 5 ? lane : group == 0 ? 0 : group - 1),
-                 std::uint8_t(group == 5 ? 0 : lane),
-                 group == 0   ? ContactType::FaceVertex
-                 : group == 5 ? ContactType::FaceCorner
-                              : ContactType::FaceClip,
+                 std::uint8_t(kSide[group] + corner * lane),
+                 std::uint8_t(!corner * lane),
+                 kType[group],
                  std::uint8_t(flipped)};
   }
   if (below > 0) {
