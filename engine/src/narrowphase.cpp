@@ -656,6 +656,8 @@ bool collide_boxes(const Shape& a, const Pose& pose_a, const Shape& b, const Pos
   for (int i = 0; i < 3; ++i) {
     const int i1 = (i + 1) % 3, i2 = (i + 2) % 3;
     const Double4 length_squared = row[i1] * row[i1] + row[i2] * row[i2];
+    // (the division starts here, not after the gap)
+    const Double4 inverse_length_squared = 1.0 / (length_squared >= kSine2 ? length_squared : 1.0);
     const Double4 least_a = min4(abs_row[i1], abs_row[i2]);
     // |c(i, j1)| and |c(i, j2)|
     const Double4 c_next = rotate4(abs_row[i]), c_after = rotate4(c_next);
@@ -668,7 +670,7 @@ bool collide_boxes(const Shape& a, const Pose& pose_a, const Shape& b, const Pos
     const Double4 gap = abs4(t4[i2] * row[i1] - t4[i1] * row[i2]) - (radius_a + radius_b);
     any_apart |= valid & (gap > 0.0);
     axes += std::uint16_t(lane_count(valid));
-    metric[i] = valid ? gap * gap / (valid ? length_squared : 1.0) : kInfinity4;
+    metric[i] = valid ? gap * gap * inverse_length_squared : kInfinity4;
   }
   out.axes_tested = axes;
   if (lane_bits(any_apart) != 0) return no_contact(out);
@@ -731,7 +733,12 @@ bool collide_boxes(const Shape& a, const Pose& pose_a, const Shape& b, const Pos
     out.points[0].feature = {edge_id(up_a, i), edge_id(up_b, j), 0, 0, ContactType::EdgeEdge, 0};
     return true;
   };
-  if (edge_axis_wins(best_edge, best_face)) return edge_manifold();
+  // edge_axis_wins(best_edge, best_face) without waiting for the square root: the face's threshold
+  // is negative where an edge can beat it, and then the edge is above it when its square is below
+  const double edge_threshold =
+      best_face * (1.0 - kEdgeRelativeTolerance) + kEdgeAbsoluteTolerance;
+  if (edge_threshold < 0.0 && best_metric < edge_threshold * edge_threshold)
+    return edge_manifold();
 
   // face contact, clipped in the reference box's frame (as ODE's dBoxBox does): the incident
   // face's quad is cut to the reference face's rectangle in the face's two coordinates, the third
