@@ -4,6 +4,7 @@
 #include <bit>
 #include <cmath>
 #include <cstring>
+#include <cstring>
 #include <limits>
 
 #include "rtp/collision.h"
@@ -353,15 +354,65 @@ void hull_face_manifold(const ConvexHull& reference_hull, const Pose& reference_
 struct Extent {
   double min, max;
 };
-Extent extent_along(const ConvexHull& hull, const Vec3& direction) {
-  Extent e{std::numeric_limits<double>::infinity(), -std::numeric_limits<double>::infinity()};
-  for (const Vec3& v : hull.vertices) {
-    const double d = v.dot(direction);
-    e.min = std::min(e.min, d);
-    e.max = std::max(e.max, d);
-  }
-  return e;
+// eight doubles: one AVX-512 register in the native build, for the hull test's longest loop
+using Double8 = double __attribute__((vector_size(8 * sizeof(double))));
+using Mask8 = std::int64_t __attribute__((vector_size(8 * sizeof(std::int64_t))));
+inline unsigned lane_bits(Mask8 m) {
+  Mask4 half[2];
+  std::memcpy(half, &m, sizeof half);
+  return lane_bits(half[0]) | lane_bits(half[1]) << 4;
 }
+inline Double8 load8(const double* p) {
+  Double8 x;
+  std::memcpy(&x, p, sizeof x);
+  return x;
+}
+inline Double4 load4(const double* p) {
+  Double4 x;
+  std::memcpy(&x, p, sizeof x);
+  return x;
+}
+
+// a convex polyhedron has at most 2V − 4 faces
+constexpr std::size_t kMaxHullFaces = 2 * kMaxHullVertices - 4;
+
+// up to Capacity points (or directions) as structure of arrays, four to a vector, the count
+// rounded up to a multiple of four with copies of the first (which change no least or largest
+// projection)
+template <std::size_t Capacity>
+struct PointLanes {
+  static constexpr std::size_t kLanes = (Capacity + 7) / 8 * 8;
+  std::array<double, kLanes> x, y, z;
+  std::size_t count = 0, padded = 0;
+  template <typename Point>
+  void fill(std::size_t n, Point point) {  // point(i) → Vec3
+    count = n, padded = (n + 7) / 8 * 8;
+    for (std::size_t i = 0; i < padded; ++i) {
+      const Vec3 p = point(i < n ? i : 0);
+      x[i] = p.x(), y[i] = p.y(), z[i] = p.z();
+    }
+  }
+  Double4 dot(std::size_t i, const Vec3& d) const {  // lanes i … i + 3
+    return load4(&x[i]) * d.x() + load4(&y[i]) * d.y() + load4(&z[i]) * d.z();
+  }
+  Double8 dot8(std::size_t i, const Vec3& d) const {  // lanes i … i + 7
+    return load8(&x[i]) * d.x() + load8(&y[i]) * d.y() + load8(&z[i]) * d.z();
+  }
+  unsigned lanes_in_count8(std::size_t i) const {  // bits of lanes i … i + 7 below the count
+    return count - i >= 8 ? 0xffu : (1u << (count - i)) - 1u;
+  }
+  unsigned lanes_in_count(std::size_t i) const {  // bits of lanes i … i + 3 below the count
+    return count - i >= 4 ? 0b1111u : (1u << (count - i)) - 1u;
+  }
+  Extent extent_along(const Vec3& direction) const {
+    Double4 least = kInfinity4, largest = -kInfinity4;
+    for (std::size_t i = 0; i < padded; i += 4) {
+      const Double4 d = dot(i, direction);
+      least = min4(least, d), largest = max4(largest, d);
+    }
+    return {-largest_lane(-least), largest_lane(largest)};
+  }
+};
 
 }  // namespace
 
@@ -925,6 +976,10 @@ bool collide_hulls(const Shape& a, const Pose& pose_a, const Shape& b, const Pos
   double best_face = -std::numeric_limits<double>::infinity();
   std::uint32_t best_face_index = 0;
   bool best_face_on_b = false;
+  // the projections run over the vertices four at a time
+  PointLanes<kMaxHullVertices> body_a, body_b;
+  body_a.fill(hull_a.vertices.size(), [&](std::size_t i) { return hull_a.vertices[i]; });
+  body_b.fill(hull_b.vertices.size(), [&](std::size_t i) { return hull_b.vertices[i]; });
   auto consider = [&](double separation, std::uint32_t face, bool on_b) {
     if (separation > best_face)
       best_face = separation, best_face_index = face, best_face_on_b = on_b;
@@ -935,7 +990,7 @@ bool collide_hulls(const Shape& a, const Pose& pose_a, const Shape& b, const Pos
     const auto [plus, minus] = hull_a.unique_normal_faces[k];
     ++axes;
     const double shift = translation.dot(u);
-    const Extent b_along = extent_along(hull_b, rotation.transpose() * u);
+    const Extent b_along = body_b.extent_along(rotation.transpose() * u);
     const bool apart =
         (plus != kNoFace &&
          !consider(b_along.min + shift - hull_a.faces[plus].offset, plus, false)) ||
@@ -946,16 +1001,25 @@ bool collide_hulls(const Shape& a, const Pose& pose_a, const Shape& b, const Pos
       return no_contact(out);
     }
   }
+  PointLanes<kMaxHullFaces> normals_a;
+  normals_a.fill(hull_a.unique_face_normals.size(),
+                 [&](std::size_t i) { return hull_a.unique_face_normals[i]; });
   for (std::size_t k = 0; k < hull_b.unique_face_normals.size(); ++k) {
     const Vec3 u = rotation * hull_b.unique_face_normals[k];  // A's frame
     auto [plus, minus] = hull_b.unique_normal_faces[k];
-    // A's faces with normals +u and −u, if any
+    // A's faces with normals +u and −u, if any (the last unique normal of A within the duplicate
+    // cosine, four normals at a time; the lanes past the count are not read)
     std::uint32_t a_plus = kNoFace, a_minus = kNoFace;
-    for (std::size_t m = 0; m < hull_a.unique_face_normals.size(); ++m) {
-      const double cosine = hull_a.unique_face_normals[m].dot(u);
-      if (std::abs(cosine) <= kDuplicateCosine) continue;
-      a_plus = hull_a.unique_normal_faces[m][cosine > 0.0 ? 0 : 1];
-      a_minus = hull_a.unique_normal_faces[m][cosine > 0.0 ? 1 : 0];
+    std::size_t parallel = normals_a.count;  // none
+    for (std::size_t m = 0; m < normals_a.padded; m += 4) {
+      const unsigned bits = lane_bits(abs4(normals_a.dot(m, u)) > kDuplicateCosine) &
+                            normals_a.lanes_in_count(m);
+      if (bits != 0) parallel = m + std::size_t(31 - std::countl_zero(bits));
+    }
+    if (parallel != normals_a.count) {
+      const double cosine = hull_a.unique_face_normals[parallel].dot(u);
+      a_plus = hull_a.unique_normal_faces[parallel][cosine > 0.0 ? 0 : 1];
+      a_minus = hull_a.unique_normal_faces[parallel][cosine > 0.0 ? 1 : 0];
     }
     if (a_minus != kNoFace) plus = kNoFace;  // B's +u face tests the gap A's −u face tested
     if (a_plus != kNoFace) minus = kNoFace;
@@ -963,7 +1027,7 @@ bool collide_hulls(const Shape& a, const Pose& pose_a, const Shape& b, const Pos
     ++axes;
     // B's face planes in A's frame: u · x = offset + u · translation
     const double shift = translation.dot(u);
-    const Extent a_along = extent_along(hull_a, u);
+    const Extent a_along = body_a.extent_along(u);
     const bool apart =
         (plus != kNoFace &&
          !consider(a_along.min - (hull_b.faces[plus].offset + shift), plus, true)) ||
@@ -977,30 +1041,24 @@ bool collide_hulls(const Shape& a, const Pose& pose_a, const Shape& b, const Pos
 
   // edge pairs that make a face of the Minkowski difference. B's vertices come into A's frame
   // once, and B's edges are laid out as arrays of the Gauss-map arc ends −c, −d (its faces'
-  // normals, negated) so that the first half of the arc test runs over all of them at once: the
-  // test is most of the work (EA × EB pairs), and it rejects most pairs at its first line.
+  // normals, negated) so that the arc test runs over them in vectors: the test is most of the
+  // work (EA × EB pairs), and it rejects most pairs.
   std::array<Vec3, kMaxHullVertices> vertices_b;
   for (std::size_t i = 0; i < hull_b.vertices.size(); ++i)
     vertices_b[i] = rotation * hull_b.vertices[i] + translation;
   const std::size_t edge_count_b = hull_b.edges.size();
-  struct Vec3Array {  // structure of arrays, so the arc test vectorises over B's edges
-    std::array<double, kMaxHullEdges> x, y, z;
-    void set(std::size_t j, const Vec3& v) { x[j] = v.x(), y[j] = v.y(), z[j] = v.z(); }
-    double dot(std::size_t j, const Vec3& v) const {
-      return x[j] * v.x() + y[j] * v.y() + z[j] * v.z();
-    }
-  };
   // per B edge: the arc ends −c, −d (its faces' normals negated, A's frame) and d × c
-  Vec3Array c_b, d_b, d_cross_c;
-  for (std::size_t j = 0; j < edge_count_b; ++j) {
+  auto arc_end = [&](std::size_t j, bool left) {
     const HullEdge& eb = hull_b.edges[j];
-    const Vec3 c = -(rotation * hull_b.faces[eb.left].normal);
-    const Vec3 d = -(rotation * hull_b.faces[eb.right].normal);
-    c_b.set(j, c);
-    d_b.set(j, d);
-    d_cross_c.set(j, d.cross(c));
-  }
-  std::array<std::uint8_t, kMaxHullEdges> crossing;
+    return Vec3(-(rotation * hull_b.faces[left ? eb.left : eb.right].normal));
+  };
+  PointLanes<kMaxHullEdges> c_b, d_b, d_cross_c;
+  c_b.fill(edge_count_b, [&](std::size_t j) { return arc_end(j, true); });
+  d_b.fill(edge_count_b, [&](std::size_t j) { return arc_end(j, false); });
+  d_cross_c.fill(edge_count_b,
+                 [&](std::size_t j) { return arc_end(j, false).cross(arc_end(j, true)); });
+  // the B edges whose arcs cross the A edge's, one bit each
+  std::array<std::uint64_t, (kMaxHullEdges + 63) / 64> crossing;
 
   double best_gap_squared = std::numeric_limits<double>::infinity(), best_length_squared = 1.0;
   Vec3 best_edge_axis = Vec3::Zero();  // unnormalised
@@ -1011,36 +1069,42 @@ bool collide_hulls(const Shape& a, const Pose& pose_a, const Shape& b, const Pos
     const Vec3& b = hull_a.faces[ea.right].normal;
     const Vec3 b_x_a = b.cross(a);
     // arcs a→b and c→d cross when c, d lie either side of a, b's plane, a, b either side of c,
-    // d's plane, and on the same hemisphere (Gregorius, GDC 2013); for all of B's edges at once,
-    // with no branch: few pairs cross, and the loop that follows skips the rest cheaply
-    for (std::size_t j = 0; j < edge_count_b; ++j) {
-      const double cba = c_b.dot(j, b_x_a), dba = d_b.dot(j, b_x_a);
-      const double adc = d_cross_c.dot(j, a), bdc = d_cross_c.dot(j, b);
-      crossing[j] = (cba * dba < 0.0) & (adc * bdc < 0.0) & (cba * bdc > 0.0);
+    // d's plane, and on the same hemisphere (Gregorius, GDC 2013); for B's edges eight at a time,
+    // with no branch: few pairs cross, and the loop that follows visits those by their bits
+    crossing.fill(0);
+    for (std::size_t j = 0; j < c_b.padded; j += 8) {
+      const Double8 cba = c_b.dot8(j, b_x_a), dba = d_b.dot8(j, b_x_a);
+      const Double8 adc = d_cross_c.dot8(j, a), bdc = d_cross_c.dot8(j, b);
+      const unsigned bits =
+          lane_bits((cba * dba < 0.0) & (adc * bdc < 0.0) & (cba * bdc > 0.0)) &
+          c_b.lanes_in_count8(j);
+      crossing[j / 64] |= std::uint64_t(bits) << (j % 64);
     }
     const Vec3& tail_a = hull_a.vertices[ea.tail];
     const Vec3 direction_a = hull_a.vertices[ea.head] - tail_a;
     const Vec3 outward_a = tail_a - hull_a.centre;
-    for (std::uint32_t j = 0; j < edge_count_b; ++j) {
-      if (!crossing[j]) continue;
-      const HullEdge& eb = hull_b.edges[j];
-      const Vec3 direction_b = vertices_b[eb.head] - vertices_b[eb.tail];
-      Vec3 axis = direction_a.cross(direction_b);
-      const double length_squared = axis.squaredNorm();
-      if (length_squared <
-          kParallelSine * kParallelSine * direction_a.squaredNorm() * direction_b.squaredNorm())
-        continue;
-      ++axes;
-      // outward from A; the separation is gap / |axis|, compared squared (no root, no division)
-      if (axis.dot(outward_a) < 0.0) axis = -axis;
-      const double gap = axis.dot(vertices_b[eb.tail] - tail_a);
-      if (gap > 0.0) {
-        out.axes_tested = axes;
-        return no_contact(out);
+    for (std::size_t word = 0; word * 64 < edge_count_b; ++word) {
+      for (std::uint64_t bits = crossing[word]; bits != 0; bits &= bits - 1) {
+        const auto j = std::uint32_t(word * 64 + std::size_t(std::countr_zero(bits)));
+        const HullEdge& eb = hull_b.edges[j];
+        const Vec3 direction_b = vertices_b[eb.head] - vertices_b[eb.tail];
+        Vec3 axis = direction_a.cross(direction_b);
+        const double length_squared = axis.squaredNorm();
+        if (length_squared <
+            kParallelSine * kParallelSine * direction_a.squaredNorm() * direction_b.squaredNorm())
+          continue;
+        ++axes;
+        // outward from A; the separation is gap / |axis|, compared squared (no root, no division)
+        if (axis.dot(outward_a) < 0.0) axis = -axis;
+        const double gap = axis.dot(vertices_b[eb.tail] - tail_a);
+        if (gap > 0.0) {
+          out.axes_tested = axes;
+          return no_contact(out);
+        }
+        if (gap * gap * best_length_squared < best_gap_squared * length_squared)
+          best_gap_squared = gap * gap, best_length_squared = length_squared, best_edge_axis = axis,
+          best_edge_a = i, best_edge_b = j;
       }
-      if (gap * gap * best_length_squared < best_gap_squared * length_squared)
-        best_gap_squared = gap * gap, best_length_squared = length_squared, best_edge_axis = axis,
-        best_edge_a = i, best_edge_b = j;
     }
   }
   const double best_edge = -std::sqrt(best_gap_squared / best_length_squared);
