@@ -398,11 +398,10 @@ struct PointLanes {
   Double8 dot8(std::size_t i, const Vec3& d) const {  // lanes i … i + 7
     return load8(&x[i]) * d.x() + load8(&y[i]) * d.y() + load8(&z[i]) * d.z();
   }
-  unsigned lanes_in_count8(std::size_t i) const {  // bits of lanes i … i + 7 below the count
-    return count - i >= 8 ? 0xffu : (1u << (count - i)) - 1u;
-  }
-  unsigned lanes_in_count(std::size_t i) const {  // bits of lanes i … i + 3 below the count
-    return count - i >= 4 ? 0b1111u : (1u << (count - i)) - 1u;
+  // the bits of lanes i … i + width − 1 that are below the count (none past it: the padding runs
+  // to a multiple of eight, so a loop by four meets lanes wholly past the count)
+  unsigned lanes_in_count(std::size_t i, std::size_t width = 4) const {
+    return i >= count ? 0u : count - i >= width ? (1u << width) - 1u : (1u << (count - i)) - 1u;
   }
   Extent extent_along(const Vec3& direction) const {
     Double4 least = kInfinity4, largest = -kInfinity4;
@@ -1011,7 +1010,7 @@ bool collide_hulls(const Shape& a, const Pose& pose_a, const Shape& b, const Pos
     // cosine, four normals at a time; the lanes past the count are not read)
     std::uint32_t a_plus = kNoFace, a_minus = kNoFace;
     std::size_t parallel = normals_a.count;  // none
-    for (std::size_t m = 0; m < normals_a.padded; m += 4) {
+    for (std::size_t m = 0; m < normals_a.count; m += 4) {
       const unsigned bits = lane_bits(abs4(normals_a.dot(m, u)) > kDuplicateCosine) &
                             normals_a.lanes_in_count(m);
       if (bits != 0) parallel = m + std::size_t(31 - std::countl_zero(bits));
@@ -1077,7 +1076,7 @@ bool collide_hulls(const Shape& a, const Pose& pose_a, const Shape& b, const Pos
       const Double8 adc = d_cross_c.dot8(j, a), bdc = d_cross_c.dot8(j, b);
       const unsigned bits =
           lane_bits((cba * dba < 0.0) & (adc * bdc < 0.0) & (cba * bdc > 0.0)) &
-          c_b.lanes_in_count8(j);
+          c_b.lanes_in_count(j, 8);
       crossing[j / 64] |= std::uint64_t(bits) << (j % 64);
     }
     const Vec3& tail_a = hull_a.vertices[ea.tail];
