@@ -9,7 +9,9 @@
 // normals of both and the cross products of edge pairs; an edge pair is tried only when its two
 // edges make a face of the Minkowski difference — their arcs on the Gauss map cross (Gregorius,
 // "The Separating Axis Test between Convex Polyhedra", GDC 2013) — which prunes the parallel and
-// duplicate axes the seed prunes by hand and most others besides. Boxes take a path of their own:
+// duplicate axes the seed prunes by hand and most others besides; the projections and the arc
+// test run over structure-of-arrays copies of the hulls, several lanes at a time. Boxes take a
+// path of their own:
 // the same axes in closed form (Gottschalk's OBB test, Ericson §4.4.1), 15 for two rotated boxes,
 // fewer when edges are parallel, evaluated in 4-lane vectors rather than one branch per axis
 // (random pairs defeat the branch predictor). A separating axis ends the test; otherwise the axis
