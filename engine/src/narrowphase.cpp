@@ -4,7 +4,6 @@
 #include <bit>
 #include <cmath>
 #include <cstring>
-#include <cstring>
 #include <limits>
 
 #include "rtp/collision.h"
@@ -66,7 +65,6 @@ inline Double4 flip_where(Double4 x, Mask4 m) {
   constexpr std::int64_t kSign = std::numeric_limits<std::int64_t>::min();
   return reinterpret_cast<Double4>(reinterpret_cast<Mask4>(x) ^ (m & kSign));
 }
-inline Double4 row_of(const Mat3& m, int i) { return Double4{m(i, 0), m(i, 1), m(i, 2), 0.0}; }
 // the three rows of a column-major 3×3 matrix (lane 3 zero) from two unaligned loads and shuffles,
 // where element-wise loads take three loads and two inserts a row
 inline void rows_of(const Mat3& m, Double4 rows[3]) {
@@ -376,9 +374,9 @@ inline Double4 load4(const double* p) {
 // a convex polyhedron has at most 2V − 4 faces
 constexpr std::size_t kMaxHullFaces = 2 * kMaxHullVertices - 4;
 
-// up to Capacity points (or directions) as structure of arrays, four to a vector, the count
-// rounded up to a multiple of four with copies of the first (which change no least or largest
-// projection)
+// up to Capacity points (or directions) as structure of arrays, read four or eight to a vector;
+// the count is rounded up to a multiple of eight with copies of the first (which change no least
+// or largest projection)
 template <std::size_t Capacity>
 struct PointLanes {
   static constexpr std::size_t kLanes = (Capacity + 7) / 8 * 8;
@@ -392,14 +390,14 @@ struct PointLanes {
       x[i] = p.x(), y[i] = p.y(), z[i] = p.z();
     }
   }
+  Vec3 at(std::size_t i) const { return {x[i], y[i], z[i]}; }
   Double4 dot(std::size_t i, const Vec3& d) const {  // lanes i … i + 3
     return load4(&x[i]) * d.x() + load4(&y[i]) * d.y() + load4(&z[i]) * d.z();
   }
   Double8 dot8(std::size_t i, const Vec3& d) const {  // lanes i … i + 7
     return load8(&x[i]) * d.x() + load8(&y[i]) * d.y() + load8(&z[i]) * d.z();
   }
-  // the bits of lanes i … i + width − 1 that are below the count (none past it: the padding runs
-  // to a multiple of eight, so a loop by four meets lanes wholly past the count)
+  // the bits of lanes i … i + width − 1 that are below the count (none for lanes wholly past it)
   unsigned lanes_in_count(std::size_t i, std::size_t width = 4) const {
     return i >= count ? 0u : count - i >= width ? (1u << width) - 1u : (1u << (count - i)) - 1u;
   }
@@ -1054,8 +1052,7 @@ bool collide_hulls(const Shape& a, const Pose& pose_a, const Shape& b, const Pos
   PointLanes<kMaxHullEdges> c_b, d_b, d_cross_c;
   c_b.fill(edge_count_b, [&](std::size_t j) { return arc_end(j, true); });
   d_b.fill(edge_count_b, [&](std::size_t j) { return arc_end(j, false); });
-  d_cross_c.fill(edge_count_b,
-                 [&](std::size_t j) { return arc_end(j, false).cross(arc_end(j, true)); });
+  d_cross_c.fill(edge_count_b, [&](std::size_t j) { return d_b.at(j).cross(c_b.at(j)); });
   // the B edges whose arcs cross the A edge's, one bit each
   std::array<std::uint64_t, (kMaxHullEdges + 63) / 64> crossing;
 
