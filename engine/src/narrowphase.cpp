@@ -87,9 +87,12 @@ inline void transpose3(const Double4 rows[3], Double4 columns[3]) {
   columns[2] = __builtin_shuffle(high, rows[2], Mask4{0, 1, 6, 3});
 }
 
+// the separation an edge axis must exceed to replace the best face axis
+double edge_threshold(double face_separation) {
+  return face_separation * (1.0 - kEdgeRelativeTolerance) + kEdgeAbsoluteTolerance;
+}
 bool edge_axis_wins(double edge_separation, double face_separation) {
-  return edge_separation >
-         face_separation * (1.0 - kEdgeRelativeTolerance) + kEdgeAbsoluteTolerance;
+  return edge_separation > edge_threshold(face_separation);
 }
 
 // ---- clipping ----
@@ -783,9 +786,8 @@ bool collide_boxes(const Shape& a, const Pose& pose_a, const Shape& b, const Pos
   };
   // edge_axis_wins(best_edge, best_face) without waiting for the square root: the face's threshold
   // is negative where an edge can beat it, and then the edge is above it when its square is below
-  const double edge_threshold =
-      best_face * (1.0 - kEdgeRelativeTolerance) + kEdgeAbsoluteTolerance;
-  if (edge_threshold < 0.0 && best_metric < edge_threshold * edge_threshold)
+  const double threshold = edge_threshold(best_face);
+  if (threshold < 0.0 && best_metric < threshold * threshold)
     return edge_manifold();
 
   // face contact, clipped in the reference box's frame (as ODE's dBoxBox does): the incident
@@ -973,9 +975,9 @@ bool collide_hulls(const Shape& a, const Pose& pose_a, const Shape& b, const Pos
   double best_face = -std::numeric_limits<double>::infinity();
   std::uint32_t best_face_index = 0;
   bool best_face_on_b = false;
-  // the projections run over the vertices four at a time
-  PointLanes<kMaxHullVertices> body_a, body_b;
-  body_a.fill(hull_a.vertices.size(), [&](std::size_t i) { return hull_a.vertices[i]; });
+  // the projections run over the vertices four at a time (A's copy is made only if A's faces
+  // find no separating axis: most separated pairs end there)
+  PointLanes<kMaxHullVertices> body_b;
   body_b.fill(hull_b.vertices.size(), [&](std::size_t i) { return hull_b.vertices[i]; });
   auto consider = [&](double separation, std::uint32_t face, bool on_b) {
     if (separation > best_face)
@@ -998,6 +1000,8 @@ bool collide_hulls(const Shape& a, const Pose& pose_a, const Shape& b, const Pos
       return no_contact(out);
     }
   }
+  PointLanes<kMaxHullVertices> body_a;
+  body_a.fill(hull_a.vertices.size(), [&](std::size_t i) { return hull_a.vertices[i]; });
   PointLanes<kMaxHullFaces> normals_a;
   normals_a.fill(hull_a.unique_face_normals.size(),
                  [&](std::size_t i) { return hull_a.unique_face_normals[i]; });
