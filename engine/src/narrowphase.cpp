@@ -15,6 +15,13 @@ namespace {
 // depth plus this length: faces give the steadier manifold (Gregorius, GDC 2013, uses 5 %)
 constexpr double kEdgeRelativeTolerance = 0.02;
 constexpr double kEdgeAbsoluteTolerance = 1e-4;  // m
+// a face of the second shape replaces the first shape's best face only when it is shallower by
+// this much: two stacked boxes have two near-equal face axes, and a reference face that flips
+// between them from step to step changes every feature id and loses the contact's warm start
+// (Box2D keeps the first polygon's face within a tenth of its linear slop the same way)
+constexpr double kFaceTolerance = 1e-5;  // m (tilts of a resting stack differ by less)
+// contact points this much less deep than the deepest count as deep as it when four are kept (m)
+constexpr double kDepthTie = 1e-3;
 // two edges whose unit directions' cross product is shorter than this are parallel: their axis
 // is numerically meaningless and the face axes cover them (Ericson §4.4.1)
 constexpr double kParallelSine = 1e-5;
@@ -157,8 +164,19 @@ template <typename Depth, typename Position, typename Area>
 std::array<std::size_t, 4> choose_four(std::size_t count, Depth depth, Position position,
                                        Area area) {
   std::array<std::size_t, 4> chosen{};
-  for (std::size_t i = 1; i < count; ++i)
-    if (depth(i) > depth(chosen[0])) chosen[0] = i;
+  // the deepest point; among points within a tie of it, the one farthest from their mean. Faces
+  // resting flat have depths equal but for rounding and tilt, and a first point picked by those
+  // wanders the overlap from step to step (the three after it follow it): the farthest is a
+  // corner, and stays one
+  double deepest = depth(0);
+  for (std::size_t i = 1; i < count; ++i) deepest = std::max(deepest, depth(i));
+  auto mean = position(0);
+  for (std::size_t i = 1; i < count; ++i) mean += position(i);
+  mean /= double(count);
+  double farthest = -1.0;
+  for (std::size_t i = 0; i < count; ++i)
+    if (depth(i) >= deepest - kDepthTie)
+      if (double d = (position(i) - mean).squaredNorm(); d > farthest) farthest = d, chosen[0] = i;
   const auto p0 = position(chosen[0]);
   double best = -1.0;
   for (std::size_t i = 0; i < count; ++i)
@@ -174,9 +192,10 @@ std::array<std::size_t, 4> choose_four(std::size_t count, Depth depth, Position 
   for (std::size_t i = 0; i < count; ++i) {
     if (i == chosen[0] || i == chosen[1] || i == chosen[2]) continue;
     const auto q = position(i);
-    // the area q adds: the largest triangle it makes outside one of the three edges
-    const double added =
-        -orientation * std::min({area(p0, p1, q), area(p1, p2, q), area(p2, p0, q)});
+    // the area q adds: the largest triangle it makes outside one of the three edges (outside
+    // is the side opposite the triangle's own orientation, whichever way round it runs)
+    const double added = std::max({-orientation * area(p0, p1, q), -orientation * area(p1, p2, q),
+                                   -orientation * area(p2, p0, q)});
     if (added > best) best = added, chosen[3] = i;
   }
   return chosen;
@@ -687,8 +706,9 @@ bool collide_boxes(const Shape& a, const Pose& pose_a, const Shape& b, const Pos
   // equal to its largest: the bit of axis 2, set always, keeps the index in range then.
   const int best_a = std::countr_zero(lane_bits(separation_a == largest_a) | 0b100u);
   const int best_b = std::countr_zero(lane_bits(separation_b == largest_b) | 0b100u);
-  const double best_face = std::max(largest_a, largest_b);
-  const int best_face_axis = largest_b > largest_a ? 3 + best_b : best_a;  // 0–2: A's, 3–5: B's
+  const bool b_face = largest_b > largest_a + kFaceTolerance;
+  const int best_face_axis = b_face ? 3 + best_b : best_a;  // 0–2: A's, 3–5: B's
+  const double best_face = b_face ? largest_b : largest_a;
 
   // edge axes L = a_i × b_j in closed form (Ericson §4.4.1; B's axes in A's frame are c's
   // columns): L = (…, −c(i2, j), c(i1, j)) on A's axes i1, i2, and in B's frame it has c(i, j2)
@@ -980,7 +1000,7 @@ bool collide_hulls(const Shape& a, const Pose& pose_a, const Shape& b, const Pos
   PointLanes<kMaxHullVertices> body_b;
   body_b.fill(hull_b.vertices.size(), [&](std::size_t i) { return hull_b.vertices[i]; });
   auto consider = [&](double separation, std::uint32_t face, bool on_b) {
-    if (separation > best_face)
+    if (separation > best_face + (on_b && !best_face_on_b ? kFaceTolerance : 0.0))
       best_face = separation, best_face_index = face, best_face_on_b = on_b;
     return separation <= 0.0;
   };

@@ -446,5 +446,40 @@ TEST(Planes, BoxOnATiltedPlaneTouchesWithItsLowestVertices) {
   EXPECT_FALSE(collide(plane, plane_pose, plane, plane_pose, m));
 }
 
+
+// Two equal boxes stacked face to face, each nudged by a tenth of a millimetre and turned by a
+// tenth of a milliradian, overlap in an octagon whose corners crowd the square's: the four kept
+// points must be one near each corner (a stack's manifold that loses a corner tips the box above,
+// and one whose points wander loses its warm start). The reduction once took a second point at a
+// corner already held whenever its first three ran clockwise: half of these manifolds.
+TEST(BoxClip, EqualStackedBoxesKeepOnePointAtEachCorner) {
+  const Vec3 half(0.5, 0.5, 0.5);
+  const ConvexHull hull = make_box_hull(half);
+  const Shape box = Shape::box(hull, half);
+  std::mt19937 rng(7);
+  std::normal_distribution<double> normal(0.0, 1.0);
+  auto nudged = [&](double height) {
+    const Vec3 axis = Vec3(normal(rng), normal(rng), normal(rng)).normalized();
+    return Pose(Vec3(1e-4 * normal(rng), height, 1e-4 * normal(rng)),
+                Quat(Eigen::AngleAxisd(1e-4 * normal(rng), axis)));
+  };
+  int missing = 0;
+  for (int trial = 0; trial < 2000; ++trial) {
+    const Pose lower = nudged(0.5), upper = nudged(1.498);  // 2 mm deep: all four corners below
+    Manifold m;
+    ASSERT_TRUE(collide(box, lower, box, upper, m));
+    ASSERT_EQ(m.count, 4);
+    for (int corner = 0; corner < 4; ++corner) {
+      const double x = corner & 1 ? 0.5 : -0.5, z = corner & 2 ? 0.5 : -0.5;
+      bool found = false;
+      for (int i = 0; i < 4; ++i)
+        found |= std::abs(m.points[i].point.x() - x) < 0.01 &&
+                 std::abs(m.points[i].point.z() - z) < 0.01;
+      missing += !found;
+    }
+  }
+  EXPECT_EQ(missing, 0);
+}
+
 }  // namespace
 }  // namespace rtp
