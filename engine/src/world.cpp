@@ -4,6 +4,8 @@
 #include <chrono>
 #include <stdexcept>
 
+#include "contacts.h"
+
 namespace rtp {
 
 namespace {
@@ -31,7 +33,20 @@ Vec3 world_point(const BodyState& s, const Vec3& local_point) {
 
 }  // namespace
 
-World::World(Vec3 gravity, Integrator integrator) : gravity_(gravity), integrator_(integrator) {}
+World::World(Vec3 gravity, Integrator integrator, ContactSettings contacts)
+    : gravity_(gravity), integrator_(integrator), contact_settings_(contacts) {
+  if (contacts.substeps < 1 || contacts.velocity_iterations < 0 || contacts.relax_iterations < 0 ||
+      contacts.restitution_iterations < 0)
+    throw std::invalid_argument("rtp: contact substeps must be >= 1 and iterations >= 0");
+  if (!(contacts.speculative_distance >= 0.0) || !(contacts.linear_slop >= 0.0) ||
+      !(contacts.contact_hertz >= 0.0) || !(contacts.damping_ratio >= 0.0) ||
+      !(contacts.max_push_speed > 0.0))
+    throw std::invalid_argument("rtp: contact distances, stiffness and speeds must be >= 0");
+}
+
+World::~World() = default;
+World::World(World&&) noexcept = default;
+World& World::operator=(World&&) noexcept = default;
 
 BodyId World::add_body(const BodyDef& def) {
   if (!(def.mass >= 0.0)) throw std::invalid_argument("rtp: body mass must be >= 0");
@@ -53,6 +68,18 @@ BodyId World::add_body(const BodyDef& def) {
     state.linear_momentum.setZero();
     state.angular_momentum.setZero();
   }
+  if (def.shape.kind == BodyShape::Plane && def.mass > 0.0)
+    throw std::invalid_argument("rtp: a plane must be static (mass 0)");
+  // the first body with a shape makes the contact pipeline, and every body before it joins
+  if (def.shape.kind != BodyShape::None && !pipeline_) {
+    pipeline_ = std::make_unique<ContactPipeline>(contact_settings_);
+    for (std::size_t i = 0; i < states_.size(); ++i)
+      pipeline_->add_body(BodyId(i), ShapeDef{}, 0.0, 0.0, masses_[i].inverse_mass == 0.0,
+                          states_[i]);
+  }
+  if (pipeline_)
+    pipeline_->add_body(BodyId(states_.size()), def.shape, def.friction, def.restitution,
+                        def.mass == 0.0, state);
   states_.push_back(state);
   masses_.push_back(mass);
   // scratch grows with the world, never inside a step
@@ -247,6 +274,10 @@ void World::integrate_runge_kutta4(double dt) {
 }
 
 void World::step(double dt) {
+  if (pipeline_) {
+    step_with_contacts(dt);
+    return;
+  }
   const auto start = Clock::now();
   // apply forces and integrate: forces are evaluated inside the integrator, once per stage
   switch (integrator_) {
@@ -265,6 +296,144 @@ void World::step(double dt) {
   }
   profile_.integrate = seconds_since(start);
   profile_.total = profile_.integrate;
+}
+
+namespace {
+
+// runs one stage and adds its wall time to a profile entry
+template <class Stage>
+void timed(double& seconds, Stage&& stage) {
+  const auto start = Clock::now();
+  stage();
+  seconds += seconds_since(start);
+}
+
+}  // namespace
+
+void World::integrate_velocities(double h) {
+  // gravity and springs on the velocities (semi-implicit Euler's kick); springs read the poses
+  // of this substep and the solver's velocities
+  std::vector<SolverBody>& bodies = pipeline_->bodies();
+  const std::vector<SolverMass>& masses = pipeline_->masses();
+  for (std::size_t i = 0; i < states_.size(); ++i)
+    if (masses[i].inverse_mass > 0.0) bodies[i].linear_velocity += h * gravity_;
+  for (const SpringDef& spring : springs_) {
+    const BodyState& a = states_[spring.body_a];
+    const Vec3 point_a = world_point(a, spring.local_point_a);
+    const Vec3 velocity_a = bodies[spring.body_a].linear_velocity +
+                            bodies[spring.body_a].angular_velocity.cross(point_a - a.position);
+    Vec3 point_b = spring.point_b, velocity_b = Vec3::Zero();
+    if (spring.body_b != kWorldAnchor) {
+      const BodyState& b = states_[spring.body_b];
+      point_b = world_point(b, spring.point_b);
+      velocity_b = bodies[spring.body_b].linear_velocity +
+                   bodies[spring.body_b].angular_velocity.cross(point_b - b.position);
+    }
+    const Vec3 delta = point_a - point_b;
+    const double length = delta.norm();
+    if (length <= 1e-12) continue;
+    const Vec3 direction = delta / length;
+    const Vec3 impulse_on_a = -h *
+                              (spring.stiffness * (length - spring.rest_length) +
+                               spring.damping * direction.dot(velocity_a - velocity_b)) *
+                              direction;
+    auto push = [&](BodyId body, const Vec3& point, const Vec3& impulse) {
+      bodies[body].linear_velocity += masses[body].inverse_mass * impulse;
+      bodies[body].angular_velocity +=
+          masses[body].inverse_inertia * (point - states_[body].position).cross(impulse);
+    };
+    push(spring.body_a, point_a, impulse_on_a);
+    if (spring.body_b != kWorldAnchor) push(spring.body_b, point_b, -impulse_on_a);
+  }
+}
+
+void World::integrate_positions(double h) {
+  // positions by the new velocities, orientations by the exponential map; the motion since the
+  // step's start is kept too, for the contacts' separations
+  std::vector<SolverBody>& bodies = pipeline_->bodies();
+  const std::vector<SolverMass>& masses = pipeline_->masses();
+  for (std::size_t i = 0; i < states_.size(); ++i) {
+    if (masses[i].inverse_mass == 0.0) continue;
+    SolverBody& body = bodies[i];
+    BodyState& s = states_[i];
+    const Vec3 moved = h * body.linear_velocity;
+    s.position += moved;
+    body.delta_position += moved;
+    const double angle = body.angular_velocity.norm() * h;
+    if (angle > 0.0) {
+      const Quat turn(Eigen::AngleAxisd(angle, body.angular_velocity.normalized()));
+      s.orientation = (turn * s.orientation).normalized();
+      body.delta_rotation = turn.toRotationMatrix() * body.delta_rotation;
+    }
+  }
+}
+
+void World::store_momenta() {
+  // back to the momentum form: P = m v, L = I(q) ω with the step's final orientation
+  const std::vector<SolverBody>& bodies = pipeline_->bodies();
+  for (std::size_t i = 0; i < states_.size(); ++i) {
+    const BodyMass& m = masses_[i];
+    if (m.inverse_mass == 0.0) continue;
+    BodyState& s = states_[i];
+    s.linear_momentum = bodies[i].linear_velocity / m.inverse_mass;
+    const Mat3 rotation = s.orientation.toRotationMatrix();
+    s.angular_momentum = rotation * m.inverse_inertia_body.cwiseInverse().asDiagonal() *
+                         rotation.transpose() * bodies[i].angular_velocity;
+  }
+}
+
+void World::step_with_contacts(double dt) {
+  // the seed's labs in order (docs/solver.md): contacts found at the step's start, then the
+  // solver's scheme. Soft step: per substep kick, warm start, biased solve, drift, relax; one
+  // restitution pass at the end. Sequential impulse and seed: one kick, the iterations, one drift.
+  const auto start = Clock::now();
+  profile_ = StepProfile{};
+  ContactPipeline& contacts = *pipeline_;
+  const ContactSettings& settings = contact_settings_;
+  timed(profile_.prepare, [&] { contacts.load_bodies(states_, masses_); });
+  timed(profile_.bounds, [&] { contacts.update_bounds(states_, dt); });
+  timed(profile_.broad_phase, [&] { contacts.find_pairs(); });
+  timed(profile_.narrow_phase, [&] { contacts.collide_pairs(states_); });
+  timed(profile_.prepare, [&] { contacts.prepare(dt, gravity_); });
+  switch (settings.solver) {
+    case ContactSolver::SoftStep: {
+      const double h = dt / settings.substeps;
+      for (int substep = 0; substep < settings.substeps; ++substep) {
+        timed(profile_.integrate, [&] { integrate_velocities(h); });
+        timed(profile_.warm_start, [&] { contacts.warm_start(); });
+        timed(profile_.solve, [&] { contacts.solve(h, true); });
+        timed(profile_.integrate_positions, [&] { integrate_positions(h); });
+        timed(profile_.relax, [&] {
+          for (int i = 0; i < settings.relax_iterations; ++i) contacts.solve(h, false);
+        });
+      }
+      timed(profile_.restitution, [&] { contacts.restitution(); });
+      break;
+    }
+    case ContactSolver::SequentialImpulse:
+      timed(profile_.integrate, [&] { integrate_velocities(dt); });
+      timed(profile_.warm_start, [&] { contacts.warm_start(); });
+      timed(profile_.solve, [&] {
+        for (int i = 0; i < settings.velocity_iterations; ++i) contacts.solve(dt, true);
+      });
+      timed(profile_.restitution, [&] { contacts.restitution(); });
+      timed(profile_.integrate_positions, [&] { integrate_positions(dt); });
+      break;
+    case ContactSolver::Seed:
+      timed(profile_.integrate, [&] { integrate_velocities(dt); });
+      timed(profile_.solve, [&] { contacts.solve_seed(dt); });
+      timed(profile_.integrate_positions, [&] { integrate_positions(dt); });
+      break;
+  }
+  store_momenta();
+  profile_.contact_pairs = contacts.contacts().size();
+  profile_.contact_points = contacts.point_count();
+  profile_.matched_points = contacts.matched_points();
+  profile_.total = seconds_since(start);
+}
+
+double World::deepest_penetration() const {
+  return pipeline_ ? pipeline_->deepest_penetration() : 0.0;
 }
 
 double World::mechanical_energy() const {

@@ -9,8 +9,10 @@
 #pragma once
 
 #include <cstdint>
+#include <memory>
 #include <vector>
 
+#include "rtp/collision.h"
 #include "rtp/math.h"
 
 namespace rtp {
@@ -24,6 +26,17 @@ enum class Integrator : std::uint8_t {
                       // energy error bounded, angular momentum exact, one force evaluation
 };
 
+// a body's collision shape in its body frame; a body without one passes through everything
+enum class BodyShape : std::uint8_t { None, Sphere, Box, Hull, Plane };
+
+struct ShapeDef {
+  BodyShape kind = BodyShape::None;
+  Vec3 half_extents = Vec3::Constant(0.5);  // box (m)
+  double radius = 0.5;                      // sphere (m)
+  std::vector<Vec3> hull_points;            // hull: the convex hull of these points (m)
+  // plane: the body's local y = 0 surface, solid below; only a static body can be a plane
+};
+
 // a body to create; principal axes of inertia are the body's axes
 struct BodyDef {
   Vec3 position = Vec3::Zero();           // centre of mass, world (m)
@@ -32,6 +45,9 @@ struct BodyDef {
   Vec3 angular_velocity = Vec3::Zero();   // world (rad/s)
   double mass = 1.0;                      // kg; 0 makes the body static
   Vec3 principal_inertia = Vec3::Ones();  // body frame diagonal (kg m²)
+  ShapeDef shape;
+  double friction = 0.5;     // Coulomb coefficient; a pair uses √(μa μb)
+  double restitution = 0.0;  // a pair uses max(ea, eb)
 };
 
 // the primary state the integrators advance (104 bytes: 13 doubles)
@@ -70,16 +86,80 @@ struct SpringDef {
   double rest_length = 0.0;           // m
 };
 
+// How a world with contacts steps (docs/solver.md). RK4 and midpoint re-evaluate forces at
+// stages, which a velocity-level contact solver cannot follow: a world whose bodies have shapes
+// steps by semi-implicit Euler inside the solver's own scheme, and World::integrator applies
+// only to a world without them.
+enum class ContactSolver : std::uint8_t {
+  SoftStep,           // substeps, each a soft biased solve and a relax solve without bias, then
+                      // one restitution pass (Catto, Solver2D 2024; Box2D v3's solver)
+  SequentialImpulse,  // one step of accumulated, clamped impulses with warm starting and a
+                      // Baumgarte bias past a slop (Catto, GDC 2006)
+  Seed,               // the seed's lab 5: impulse magnitudes with restitution and a penalty
+                      // term past a slop, iterated over every contact at once, no warm start,
+                      // each pair dropped once its impulses converge
+};
+
+// The defaults are the soft step at the stiffness a 20-box tower needs to sink under 1 cm
+// (docs/solver.md: contact stiffness is capped at a quarter of the substep rate, and a column
+// of n unit boxes on 30 Hz contacts sinks several centimetres); Box2D v3's own defaults are 4
+// substeps, 30 Hz, damping ratio 10 and one relax pass (the adapter's soft-step-4 variant).
+struct ContactSettings {
+  ContactSolver solver = ContactSolver::SoftStep;
+  int substeps = 8;                // soft step: substeps per step
+  int velocity_iterations = 10;    // sequential impulse and seed: iterations per step
+  int relax_iterations = 2;        // soft step: relax solves per substep (one lets stiff
+                                   // contacts jitter: a 210-box pyramid drifts 5 cm)
+  int restitution_iterations = 2;  // passes of the restitution solve
+  int local_iterations = 4;        // a new or hitting manifold's points solved this many times
+                                   // in a row (sequential impulses on a face's four points
+                                   // otherwise spin a box that lands flat)
+  double contact_hertz = 120.0;    // soft step: contact stiffness, capped at a quarter of the
+                                   // substep rate, twice as stiff against static bodies
+  double damping_ratio = 3.0;      // soft step: over-damped, so pushes out do not ring
+  double max_push_speed = 3.0;     // m/s: the fastest a soft contact pushes bodies apart
+  double baumgarte = 0.2;          // sequential impulse and seed: fraction of the
+                                   // penetration past the slop removed per step
+  double linear_slop = 0.005;      // m: sequential impulse and seed leave this much
+                                   // penetration alone, so resting contacts persist
+  double speculative_distance = 0.02;  // m: contacts are made this far apart, so a body
+                                       // arrives at a surface instead of sinking into it
+  double max_motion_margin = 1.0;      // m: the most a body's bounds and contacts grow by its
+                                       // motion in one step
+  double restitution_threshold = 1.0;  // m/s: slower approaches do not bounce
+  bool warm_start = true;              // soft step and sequential impulse
+  double match_distance = 0.02;  // m: a point with no feature match takes the impulses of last
+                                 // step's nearest point within this distance
+};
+
 // wall time of each stage of the last step (s)
 struct StepProfile {
-  double integrate = 0.0;
+  double integrate = 0.0;  // forces and velocities (all of it in a world without contacts)
+  double bounds = 0.0;
+  double broad_phase = 0.0;
+  double narrow_phase = 0.0;  // collide every pair, match last step's contacts
+  double prepare = 0.0;       // effective masses, anchors, softness, tangent basis
+  double warm_start = 0.0;
+  double solve = 0.0;         // velocity iterations (with bias)
+  double integrate_positions = 0.0;
+  double relax = 0.0;         // velocity iterations without bias
+  double restitution = 0.0;
   double total = 0.0;
+  std::size_t contact_pairs = 0;   // touching manifolds this step
+  std::size_t contact_points = 0;
+  std::size_t matched_points = 0;  // points that carried last step's impulses
 };
+
+class ContactPipeline;
 
 class World {
  public:
   explicit World(Vec3 gravity = Vec3(0.0, -9.81, 0.0),
-                 Integrator integrator = Integrator::RungeKutta4);
+                 Integrator integrator = Integrator::RungeKutta4,
+                 ContactSettings contacts = ContactSettings{});
+  ~World();
+  World(World&&) noexcept;
+  World& operator=(World&&) noexcept;
 
   BodyId add_body(const BodyDef& def);
   void add_spring(const SpringDef& def);
@@ -100,6 +180,12 @@ class World {
   Integrator integrator() const { return integrator_; }
   void set_integrator(Integrator integrator) { integrator_ = integrator; }
   const StepProfile& profile() const { return profile_; }
+  const ContactSettings& contact_settings() const { return contact_settings_; }
+  // true when some body has a shape: the world steps by its contact solver
+  bool has_contacts() const { return pipeline_ != nullptr; }
+  // the deepest penetration among this step's contacts (m, 0 when none): from the narrow phase
+  // at the start of the last step
+  double deepest_penetration() const;
 
   // total mechanical energy: kinetic + gravitational potential + spring potential (J)
   double mechanical_energy() const;
@@ -118,6 +204,11 @@ class World {
   void advance(const std::vector<BodyState>& base, const std::vector<BodyRate>& rates, double h,
                std::vector<BodyState>& out) const;
   void normalise_orientations();
+  // the stages of a step with contacts that belong to the world's forces and state
+  void step_with_contacts(double dt);
+  void integrate_velocities(double h);
+  void integrate_positions(double h);
+  void store_momenta();
 
   Vec3 gravity_;
   Integrator integrator_;
@@ -128,6 +219,8 @@ class World {
   // integrator scratch, sized once per body count: no allocation inside a step
   std::vector<BodyState> stage_state_;
   std::vector<BodyRate> k1_, k2_, k3_, k4_;
+  ContactSettings contact_settings_;
+  std::unique_ptr<ContactPipeline> pipeline_;  // made by the first body with a shape
 };
 
 }  // namespace rtp

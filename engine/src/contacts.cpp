@@ -1,0 +1,297 @@
+// The contact pipeline's collision half: shapes, bounds, candidate pairs, manifolds, and the
+// match with last step's contacts (contacts.h says what each stage does).
+#include "contacts.h"
+
+#include <algorithm>
+#include <boost/sort/spreadsort/integer_sort.hpp>
+#include <cmath>
+#include <stdexcept>
+
+namespace rtp {
+
+struct ContactPipeline::BodyShapeData {
+  BodyShape kind = BodyShape::None;
+  Shape shape;  // grown by half the speculative distance
+  double reach = 0.0;   // the farthest its surface is from its centre of mass (m)
+  double growth = 0.0;  // this step: half the speculative distance and the motion bound (m)
+  bool is_static = false;
+  double friction = 0.0, restitution = 0.0;
+  ProxyId proxy = 0;
+};
+
+namespace {
+
+// the two bodies of a pair in one number, lower id first: sorting by it orders pairs by body
+std::uint64_t pair_key(BodyId a, BodyId b) {
+  return a < b ? std::uint64_t(a) << 32 | b : std::uint64_t(b) << 32 | a;
+}
+
+Pose pose_of(const BodyState& s) { return Pose(s.position, s.orientation); }
+
+// two unit tangents that make a right-handed frame with n, a function of n alone (Catto,
+// "Computing a basis", 2014): the same normal gets the same basis every step
+void tangent_basis(const Vec3& n, Vec3 tangent[2]) {
+  tangent[0] = std::abs(n.x()) >= 0.57735026919
+                   ? Vec3(n.y(), -n.x(), 0.0).normalized()
+                   : Vec3(0.0, n.z(), -n.y()).normalized();
+  tangent[1] = n.cross(tangent[0]);
+}
+
+// a point of a hull pushed out from the centre by d: the hull of such points holds the hull
+// grown by at least d·(its inradius over circumradius) and at most d (exact for a sphere-like
+// hull; boxes take the exact path)
+std::vector<Vec3> grown_points(const std::vector<Vec3>& points, double d) {
+  Vec3 centre = Vec3::Zero();
+  for (const Vec3& p : points) centre += p;
+  centre /= double(points.size());
+  std::vector<Vec3> grown;
+  grown.reserve(points.size());
+  for (const Vec3& p : points) {
+    const Vec3 out = p - centre;
+    const double length = out.norm();
+    grown.push_back(length > 0.0 ? p + d * out / length : p);
+  }
+  return grown;
+}
+
+}  // namespace
+
+ContactPipeline::ContactPipeline(const ContactSettings& settings)
+    : settings_(settings), broad_phase_(make_broad_phase(BroadPhaseKind::BoxPruning)) {}
+
+ContactPipeline::~ContactPipeline() = default;
+
+void ContactPipeline::add_body(BodyId id, const ShapeDef& def, double friction,
+                               double restitution, bool is_static, const BodyState& state) {
+  if (id != shapes_.size()) throw std::logic_error("rtp: bodies reach the pipeline in order");
+  if (!(friction >= 0.0) || !std::isfinite(friction))
+    throw std::invalid_argument("rtp: friction must be finite and >= 0");
+  if (!(restitution >= 0.0 && restitution <= 1.0))
+    throw std::invalid_argument("rtp: restitution must be in [0, 1]");
+  // every shape grows by half the speculative distance: two grown shapes touch when the real
+  // ones are that distance apart
+  const double grow = 0.5 * settings_.speculative_distance;
+  BodyShapeData data;
+  data.kind = def.kind;
+  data.is_static = is_static;
+  data.friction = friction;
+  data.restitution = restitution;
+  switch (def.kind) {
+    case BodyShape::None:
+      break;
+    case BodyShape::Sphere:
+      if (!(def.radius > 0.0)) throw std::invalid_argument("rtp: sphere radius must be > 0");
+      data.shape = Shape::sphere(def.radius + grow);
+      data.reach = def.radius;
+      break;
+    case BodyShape::Box: {
+      const Vec3 half = def.half_extents.array() + grow;
+      // boxes of one size share one hull
+      const ConvexHull* hull = nullptr;
+      for (const BodyShapeData& other : shapes_)
+        if (other.kind == BodyShape::Box && other.shape.half_extents == half)
+          hull = other.shape.hull;
+      if (!hull) {
+        hulls_.push_back(std::make_unique<ConvexHull>(make_box_hull(half)));
+        hull = hulls_.back().get();
+      }
+      data.shape = Shape::box(*hull, half);
+      data.reach = def.half_extents.norm();
+      break;
+    }
+    case BodyShape::Hull:
+      hulls_.push_back(
+          std::make_unique<ConvexHull>(make_convex_hull(grown_points(def.hull_points, grow))));
+      data.shape = Shape::convex(*hulls_.back());
+      break;
+    case BodyShape::Plane:
+      if (!is_static) throw std::invalid_argument("rtp: a plane must be static");
+      data.shape = Shape::plane(Vec3::UnitY(), grow);
+      break;
+  }
+  if (def.kind == BodyShape::Plane) {
+    planes_.push_back(id);
+  } else if (def.kind != BodyShape::None) {
+    data.proxy = broad_phase_->add(Aabb{});
+    if (data.proxy >= proxy_body_.size()) proxy_body_.resize(data.proxy + 1);
+    proxy_body_[data.proxy] = id;
+    if (!is_static) dynamic_shaped_.push_back(id);
+  }
+  shapes_.push_back(data);
+  bodies_.emplace_back();
+  masses_.emplace_back();
+  (void)state;
+}
+
+void ContactPipeline::update_bounds(std::span<const BodyState> states, double dt) {
+  // A body grows by half the speculative distance and by how far its surface can move this step
+  // (|v| + |ω| reach) dt, up to the cap: a box falling 7 cm a step is met by the ground in the
+  // step it arrives, not found 5 cm deep in the next. Hulls keep the fixed growth (their hull is
+  // grown once, at creation).
+  const double fixed = 0.5 * settings_.speculative_distance;
+  for (std::size_t i = 0; i < shapes_.size(); ++i) {
+    BodyShapeData& data = shapes_[i];
+    const BodyState& s = states[i];
+    const SolverBody& body = bodies_[i];
+    data.growth = fixed;
+    if (!data.is_static && (data.kind == BodyShape::Box || data.kind == BodyShape::Sphere)) {
+      const double motion =
+          (body.linear_velocity.norm() + body.angular_velocity.norm() * data.reach) * dt;
+      data.growth += std::min(motion, settings_.max_motion_margin);
+    }
+    const double extra = data.growth - fixed;
+    Aabb box;
+    switch (data.kind) {
+      case BodyShape::None:
+      case BodyShape::Plane:
+        continue;
+      case BodyShape::Sphere:
+        box = bounds_of_sphere(s.position, data.shape.radius + extra);
+        break;
+      case BodyShape::Box:
+        box = bounds_of_box(data.shape.half_extents.array() + extra, s.position, s.orientation);
+        break;
+      case BodyShape::Hull:
+        box = bounds_of_points(data.shape.hull->vertices, s.position, s.orientation);
+        break;
+    }
+    broad_phase_->move(data.proxy, box);
+  }
+}
+
+void ContactPipeline::find_pairs() {
+  broad_phase_->update();
+  candidates_.clear();
+  for (const ProxyPair& pair : broad_phase_->pairs()) {
+    const BodyId a = proxy_body_[pair.a], b = proxy_body_[pair.b];
+    if (shapes_[a].is_static && shapes_[b].is_static) continue;
+    candidates_.push_back(pair_key(a, b));
+  }
+  // every dynamic body against every plane; the narrow phase rejects the far ones in a few
+  // operations
+  for (BodyId plane : planes_)
+    for (BodyId body : dynamic_shaped_) candidates_.push_back(pair_key(plane, body));
+  // by pair: the order the contacts are solved in, whatever order the broad phase found them
+  // in, and the order the match with last step's contacts walks
+  boost::sort::spreadsort::integer_sort(candidates_.begin(), candidates_.end());
+}
+
+void ContactPipeline::collide_pairs(std::span<const BodyState> states) {
+  std::swap(contacts_, previous_);
+  contacts_.clear();
+  std::size_t previous_index = 0;
+  Manifold manifold;
+  deepest_ = 0.0;
+  matched_ = 0;
+  for (const std::uint64_t key : candidates_) {
+    const BodyId a = BodyId(key >> 32), b = BodyId(key & 0xffffffffu);
+    const BodyShapeData& shape_a = shapes_[a];
+    const BodyShapeData& shape_b = shapes_[b];
+    Shape grown_a = shape_a.shape, grown_b = shape_b.shape;
+    const double growth = grow_pair(shape_a, shape_b, grown_a, grown_b);
+    if (!collide(grown_a, pose_of(states[a]), grown_b, pose_of(states[b]), manifold)) continue;
+    ContactConstraint& c = contacts_.emplace_back();
+    c.points.fill(ContactPointConstraint{});
+    c.body_a = a;
+    c.body_b = b;
+    c.normal = manifold.normal;
+    tangent_basis(c.normal, c.tangent);
+    // the pair's coefficients (docs/scene-format.md): √(μa μb), max(ea, eb)
+    c.friction = std::sqrt(shape_a.friction * shape_b.friction);
+    c.restitution = std::max(shape_a.restitution, shape_b.restitution);
+    c.count = manifold.count;
+    for (std::uint8_t i = 0; i < manifold.count; ++i) {
+      ContactPointConstraint& p = c.points[i];
+      p.anchor_a = manifold.points[i].point - states[a].position;
+      p.anchor_b = manifold.points[i].point - states[b].position;
+      // depth of the grown shapes less the growth: the real separation (< 0: penetrating)
+      p.base_separation = growth - manifold.points[i].depth;
+      p.feature = manifold.points[i].feature;
+      deepest_ = std::max(deepest_, -p.base_separation);
+    }
+    // the same pair last step: carry each point's impulses by feature id (warm starting)
+    while (previous_index < previous_.size() && previous_[previous_index].key() < c.key())
+      ++previous_index;
+    if (!settings_.warm_start || previous_index == previous_.size() ||
+        previous_[previous_index].key() != c.key())
+      continue;
+    carry_impulses(previous_[previous_index], c);
+  }
+}
+
+void ContactPipeline::carry_impulses(const ContactConstraint& old, ContactConstraint& c) {
+  // each point takes the impulses of last step's point with the same features; failing that, of
+  // the nearest unclaimed one within the match distance. Two equal boxes stacked face to face
+  // have incident corners on the reference face's corners, and which candidate of the clip
+  // (incident vertex, crossing, reference corner) keeps a point flips with the smallest tilt:
+  // the place survives where the id does not (as Bullet's and Jolt's contact caches match by
+  // position)
+  std::array<bool, 4> claimed{};
+  std::array<int, 4> source{-1, -1, -1, -1};
+  for (std::uint8_t i = 0; i < c.count; ++i)
+    for (std::uint8_t j = 0; j < old.count; ++j)
+      if (!claimed[j] && old.points[j].feature == c.points[i].feature) {
+        source[i] = j;
+        claimed[j] = true;
+        break;
+      }
+  const double match_squared = settings_.match_distance * settings_.match_distance;
+  for (std::uint8_t i = 0; i < c.count; ++i) {
+    if (source[i] >= 0) continue;
+    double nearest = match_squared;
+    for (std::uint8_t j = 0; j < old.count; ++j) {
+      if (claimed[j]) continue;
+      const double d = (old.points[j].anchor_a - c.points[i].anchor_a).squaredNorm();
+      if (d < nearest) nearest = d, source[i] = j;
+    }
+    if (source[i] >= 0) claimed[source[i]] = true;
+  }
+  for (std::uint8_t i = 0; i < c.count; ++i) {
+    if (source[i] < 0) continue;
+    ++matched_;
+    const ContactPointConstraint& from = old.points[source[i]];
+    ContactPointConstraint& to = c.points[i];
+    to.normal.impulse = from.normal.impulse;
+    // the friction impulse as a world vector, onto this step's basis (the normal turns a little
+    // between steps, and the basis with it)
+    const Vec3 friction =
+        from.tangent[0].impulse * old.tangent[0] + from.tangent[1].impulse * old.tangent[1];
+    to.tangent[0].impulse = friction.dot(c.tangent[0]);
+    to.tangent[1].impulse = friction.dot(c.tangent[1]);
+  }
+}
+
+double ContactPipeline::grow_pair(const BodyShapeData& a, const BodyShapeData& b, Shape& grown_a,
+                                  Shape& grown_b) const {
+  // Both shapes hold the fixed growth already. The growth beyond it goes where the collision
+  // function reads a size: to a sphere's radius or a plane's offset (the other shape's share
+  // too), or to each of two boxes' half extents (the box path reads those, the hull paths the
+  // fixed hulls). A pair with a hull keeps the fixed growth.
+  const double fixed = 0.5 * settings_.speculative_distance;
+  const double extra_a = a.growth - fixed, extra_b = b.growth - fixed;
+  auto widen = [](BodyShape kind, Shape& shape, double extra) {
+    if (kind == BodyShape::Sphere) shape.radius += extra;
+    else if (kind == BodyShape::Plane) shape.plane_offset += extra;
+    else shape.half_extents.array() += extra;
+  };
+  if (a.kind == BodyShape::Hull || b.kind == BodyShape::Hull) return 2.0 * fixed;
+  if (a.kind == BodyShape::Box && b.kind == BodyShape::Box) {
+    widen(a.kind, grown_a, extra_a);
+    widen(b.kind, grown_b, extra_b);
+  } else if (a.kind != BodyShape::Box) {
+    widen(a.kind, grown_a, extra_a + extra_b);
+  } else {
+    widen(b.kind, grown_b, extra_a + extra_b);
+  }
+  return a.growth + b.growth;
+}
+
+std::size_t ContactPipeline::point_count() const {
+  std::size_t n = 0;
+  for (const ContactConstraint& c : contacts_) n += c.count;
+  return n;
+}
+
+double ContactPipeline::deepest_penetration() const { return deepest_; }
+
+}  // namespace rtp

@@ -1,0 +1,135 @@
+// rtp's contact pipeline (the seed's lab 5): from the bodies' poses to solved contact impulses.
+//
+// A step with contacts runs, in World::step_with_contacts:
+//   bounds        each shaped body's AABB, from its transformed vertices (the seed's lab 3),
+//                 grown by half the speculative distance and by how far it can move this step
+//   broad phase   box pruning over the bounded shapes; static planes are not in it (they are
+//                 unbounded) and meet every dynamic body whose bounds reach them
+//   narrow phase  the collision table (lab 4.2) on each candidate pair, every shape grown by
+//                 half the speculative distance, so a manifold holds points up to that far
+//                 apart; then this step's manifolds are matched to last step's by body pair
+//                 (both lists sorted by pair) and by feature id, and the accumulated impulses of
+//                 matched points carried over for warm starting
+//   prepare       the per-step constants once: anchors, effective masses, tangent basis,
+//                 softness, the separation at the step's start
+//   then the solver's own scheme (contact_solver.cpp): warm start, velocity iterations,
+//   position integration, relax, restitution.
+//
+// Contacts are solved in velocity form (v, ω) with the world inverse inertia fixed at the
+// step's start, as Box2D, Jolt and Bullet do; the world converts back to momenta at the end.
+#pragma once
+
+#include <cstdint>
+#include <memory>
+#include <span>
+#include <vector>
+
+#include "rtp/broadphase.h"
+#include "rtp/collision.h"
+#include "rtp/world.h"
+
+namespace rtp {
+
+// the velocity state the solver reads and writes, per body (144 bytes: 18 doubles)
+struct SolverBody {
+  Vec3 linear_velocity = Vec3::Zero();   // world (m/s)
+  Vec3 angular_velocity = Vec3::Zero();  // world (rad/s)
+  Vec3 delta_position = Vec3::Zero();    // moved since the step's start (m)
+  Mat3 delta_rotation = Mat3::Identity();  // turned since the step's start
+};
+
+// a body's mass as the solver sees it this step: zero for a static body
+struct SolverMass {
+  double inverse_mass = 0.0;                 // 1/kg
+  Mat3 inverse_inertia = Mat3::Zero();       // world, at the step's start (1/(kg m²))
+};
+
+// one row of a contact point's Jacobian, along the normal or a tangent d: its angular parts
+// on each body and their response through the inverse inertia, computed once a step so the
+// iterations do no matrix products
+struct ContactRow {
+  Vec3 angular_a = Vec3::Zero(), angular_b = Vec3::Zero();    // r_a × d, r_b × d (m)
+  Vec3 response_a = Vec3::Zero(), response_b = Vec3::Zero();  // I_a⁻¹ (r_a × d), I_b⁻¹ (r_b × d)
+  double mass = 0.0;     // 1 / (the change of velocity along d per unit impulse) (kg)
+  double impulse = 0.0;  // accumulated this step, carried to the next (N s)
+};
+
+struct ContactPointConstraint {
+  Vec3 anchor_a = Vec3::Zero(), anchor_b = Vec3::Zero();  // the point from each centre of mass,
+                                                          // world (m)
+  ContactRow normal, tangent[2];
+  double base_separation = 0.0;     // separation at the step's start − n·(anchor_b − anchor_a) (m)
+  double max_normal_impulse = 0.0;  // the largest normal impulse of this step (N s)
+  double approach_velocity = 0.0;   // relative normal velocity at impact (m/s), < 0 closing
+  bool starts_apart = false;        // the point was a speculative one at the step's start
+  ContactFeature feature;
+};
+
+// one touching pair: a manifold of up to four points, normal from a to b
+struct ContactConstraint {
+  BodyId body_a = 0, body_b = 0;
+  Vec3 normal = Vec3::Zero();
+  Vec3 tangent[2] = {Vec3::Zero(), Vec3::Zero()};
+  double friction = 0.0;
+  double restitution = 0.0;
+  // soft step: the contact's stiffness as three numbers (Catto, Solver2D: b2MakeSoft)
+  double bias_rate = 0.0, mass_scale = 1.0, impulse_scale = 0.0;
+  std::uint8_t count = 0;
+  bool converged = false;  // seed: the pair's impulses stopped changing this step
+  bool fresh = false;      // a point without a warm start, or hitting: solved locally
+  std::array<ContactPointConstraint, 4> points;
+  std::uint64_t key() const { return std::uint64_t(body_a) << 32 | body_b; }
+};
+
+class ContactPipeline {
+ public:
+  explicit ContactPipeline(const ContactSettings& settings);
+  ~ContactPipeline();
+
+  // called for every body in order, shaped or not
+  void add_body(BodyId id, const ShapeDef& shape, double friction, double restitution,
+                bool is_static, const BodyState& state);
+
+  // ---- the stages, in order ----
+  void update_bounds(std::span<const BodyState> states, double dt);
+  void find_pairs();
+  void collide_pairs(std::span<const BodyState> states);
+  // masses and velocities at the step's start
+  void load_bodies(std::span<const BodyState> states, std::span<const BodyMass> masses);
+  void prepare(double dt, const Vec3& gravity);
+  void warm_start();
+  // one pass of the velocity solve; bias: push out penetration (soft step, sequential impulse)
+  void solve(double h, bool bias);
+  void solve_seed(double dt);
+  void restitution();
+  void store_impulses();
+
+  std::vector<SolverBody>& bodies() { return bodies_; }
+  const std::vector<SolverMass>& masses() const { return masses_; }
+  const std::vector<ContactConstraint>& contacts() const { return contacts_; }
+  std::size_t point_count() const;
+  double deepest_penetration() const;
+  std::size_t matched_points() const { return matched_; }
+
+ private:
+  struct BodyShapeData;
+  void carry_impulses(const ContactConstraint& old, ContactConstraint& c);
+  // the two shapes of a pair grown by the bodies' growth this step; returns the total (m)
+  double grow_pair(const BodyShapeData& a, const BodyShapeData& b, Shape& grown_a,
+                   Shape& grown_b) const;
+  const ContactSettings settings_;
+  std::vector<BodyShapeData> shapes_;  // per body
+  std::vector<std::unique_ptr<ConvexHull>> hulls_;  // the grown hulls shapes point at
+  std::unique_ptr<BroadPhase> broad_phase_;
+  std::vector<BodyId> proxy_body_;     // proxy id → body
+  std::vector<BodyId> planes_;
+  std::vector<BodyId> dynamic_shaped_;  // bodies that meet the planes
+  std::vector<std::uint64_t> candidates_;  // pair keys, sorted
+  std::vector<ContactConstraint> contacts_, previous_;
+  std::vector<SolverBody> bodies_;
+  std::vector<SolverMass> masses_;
+  double deepest_ = 0.0;
+  std::size_t matched_ = 0;
+};
+
+}  // namespace rtp
