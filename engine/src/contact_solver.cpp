@@ -110,10 +110,13 @@ void ContactPipeline::prepare(double dt, const Vec3& gravity) {
                        ? dt / std::max(1, settings_.substeps)
                        : dt;
   // stiffer than a quarter of the solve's rate a soft contact is no longer stable (Box2D's cap);
-  // a contact with a static body is twice as stiff, since only one body moves
-  const double hertz = std::min(settings_.contact_hertz, 0.25 / h);
-  const Softness dynamic_soft = make_soft(hertz, settings_.damping_ratio, h);
-  const Softness static_soft = make_soft(2.0 * hertz, settings_.damping_ratio, h);
+  // a contact with a static body is twice as stiff, since only one body moves, within the same
+  // cap (past it, a 10:1 stack on the ground jitters and walks 2 cm in 10 s)
+  const double cap = 0.25 / h;
+  const Softness dynamic_soft =
+      make_soft(std::min(settings_.contact_hertz, cap), settings_.damping_ratio, h);
+  const Softness static_soft =
+      make_soft(std::min(2.0 * settings_.contact_hertz, cap), settings_.damping_ratio, h);
   for (ContactConstraint& c : contacts_) {
     const SolverMass& mass_a = masses_[c.body_a];
     const SolverMass& mass_b = masses_[c.body_b];

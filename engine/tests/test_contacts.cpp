@@ -1,0 +1,257 @@
+// rtp contact tests on small worlds: each against a closed form or an invariant. The stacking
+// gates (towers, pyramids) run the scenarios' scenes through the harness (validation/tests).
+#include <gtest/gtest.h>
+
+#include <atomic>
+#include <cmath>
+#include <cstdlib>
+#include <new>
+#include <numbers>
+
+#include "rtp/world.h"
+
+// every heap allocation of this test program, counted (the step must make none once settled)
+namespace {
+std::atomic<long> g_allocations{0};
+}  // namespace
+
+void* operator new(std::size_t size) {
+  ++g_allocations;
+  if (void* p = std::malloc(size ? size : 1)) return p;
+  throw std::bad_alloc();
+}
+void* operator new(std::size_t size, std::align_val_t alignment) {
+  ++g_allocations;
+  const std::size_t a = static_cast<std::size_t>(alignment);
+  if (void* p = std::aligned_alloc(a, (size + a - 1) / a * a)) return p;
+  throw std::bad_alloc();
+}
+void operator delete(void* p) noexcept { std::free(p); }
+void operator delete(void* p, std::size_t) noexcept { std::free(p); }
+void operator delete(void* p, std::align_val_t) noexcept { std::free(p); }
+void operator delete(void* p, std::size_t, std::align_val_t) noexcept { std::free(p); }
+
+namespace rtp {
+namespace {
+
+constexpr double kDt = 1.0 / 60.0;
+const Vec3 kGravity(0.0, -9.81, 0.0);
+
+BodyId add_ground(World& world, double friction, double restitution = 0.0,
+                  const Quat& orientation = Quat::Identity()) {
+  BodyDef ground;
+  ground.mass = 0.0;
+  ground.orientation = orientation;
+  ground.shape.kind = BodyShape::Plane;
+  ground.friction = friction;
+  ground.restitution = restitution;
+  return world.add_body(ground);
+}
+
+BodyId add_box(World& world, const Vec3& position, double mass, double friction,
+               double restitution = 0.0, const Quat& orientation = Quat::Identity(),
+               const Vec3& half = Vec3::Constant(0.5)) {
+  BodyDef box;
+  box.position = position;
+  box.orientation = orientation;
+  box.mass = mass;
+  box.principal_inertia = mass / 3.0 *
+                          Vec3(half.y() * half.y() + half.z() * half.z(),
+                               half.x() * half.x() + half.z() * half.z(),
+                               half.x() * half.x() + half.y() * half.y());
+  box.shape.kind = BodyShape::Box;
+  box.shape.half_extents = half;
+  box.friction = friction;
+  box.restitution = restitution;
+  return world.add_body(box);
+}
+
+World world_with(ContactSolver solver, const Vec3& gravity = kGravity) {
+  ContactSettings settings;
+  settings.solver = solver;
+  return World(gravity, Integrator::SemiImplicitEuler, settings);
+}
+
+// two equal boxes head-on, e = 1, no gravity, no friction: they exchange velocities (Newton's
+// law of restitution with equal masses) and keep the momentum
+TEST(Contacts, HeadOnElasticBoxesExchangeVelocities) {
+  for (ContactSolver solver : {ContactSolver::SoftStep, ContactSolver::SequentialImpulse}) {
+    World world = world_with(solver, Vec3::Zero());
+    const BodyId left = add_box(world, {-1.0, 0.0, 0.0}, 1.0, 0.0, 1.0);
+    const BodyId right = add_box(world, {1.0, 0.0, 0.0}, 1.0, 0.0, 1.0);
+    world.apply_impulse(left, {2.0, 0.0, 0.0}, world.state(left).position);
+    world.apply_impulse(right, {-1.0, 0.0, 0.0}, world.state(right).position);
+    for (int i = 0; i < 120; ++i) world.step(kDt);
+    EXPECT_NEAR(world.velocity(left).x(), -1.0, 0.01);
+    EXPECT_NEAR(world.velocity(right).x(), 2.0, 0.02);
+    const Vec3 momentum = world.state(left).linear_momentum + world.state(right).linear_momentum;
+    EXPECT_NEAR((momentum - Vec3(1.0, 0.0, 0.0)).norm(), 0.0, 1e-12);
+  }
+}
+
+// a box resting on the ground neither bounces nor jitters: RMS speed over the last second
+TEST(Contacts, RestingBoxDoesNotJitter) {
+  World world = world_with(ContactSolver::SoftStep);
+  add_ground(world, 0.6);
+  const BodyId box = add_box(world, {0.0, 0.5, 0.0}, 1.0, 0.6);
+  double sum_squared = 0.0;
+  int samples = 0;
+  for (int i = 0; i < 300; ++i) {
+    world.step(kDt);
+    if (i >= 240) {
+      sum_squared += world.velocity(box).squaredNorm();
+      ++samples;
+    }
+  }
+  EXPECT_LT(std::sqrt(sum_squared / samples), 1e-3);  // m/s
+  EXPECT_NEAR(world.state(box).position.y(), 0.5, 1e-3);
+}
+
+// a closed stack (no work done on it) never gains mechanical energy
+TEST(Contacts, ClosedStackNeverGainsEnergy) {
+  for (ContactSolver solver : {ContactSolver::SoftStep, ContactSolver::SequentialImpulse}) {
+    World world = world_with(solver);
+    add_ground(world, 0.6);
+    for (int i = 0; i < 5; ++i) add_box(world, {0.0, 0.5 + i, 0.0}, 1.0, 0.6);
+    const double initial = world.mechanical_energy();
+    double largest = initial;
+    for (int i = 0; i < 600; ++i) {
+      world.step(kDt);
+      largest = std::max(largest, world.mechanical_energy());
+    }
+    EXPECT_LE(largest - initial, 1e-9 * std::abs(initial)) << "solver " << int(solver);
+  }
+}
+
+// a box dropped flat: each apex is e² of the one before (Newton's restitution on a flat face)
+TEST(Contacts, DroppedBoxApexesFollowTheRestitution) {
+  for (double e : {0.5, 0.8}) {
+    World world = world_with(ContactSolver::SoftStep);
+    add_ground(world, 0.6, e);
+    const BodyId box = add_box(world, {0.0, 1.5, 0.0}, 1.0, 0.6, e);  // bottom 1 m up
+    std::vector<double> apexes;
+    double previous_velocity = 0.0;
+    for (int i = 0; i < 300; ++i) {
+      world.step(kDt);
+      const double v = world.velocity(box).y();
+      const double bottom = world.state(box).position.y() - 0.5;
+      // apexes above 5 cm: sampled at 60 Hz the apex of a lower hop is off by more than 1 %
+      if (previous_velocity > 0.0 && v <= 0.0 && bottom > 0.05) apexes.push_back(bottom);
+      previous_velocity = v;
+    }
+    ASSERT_GE(apexes.size(), 2u) << "e = " << e;
+    for (std::size_t n = 0; n < std::min<std::size_t>(apexes.size(), 3); ++n) {
+      const double expected = std::pow(e, 2.0 * double(n + 1));
+      EXPECT_NEAR(apexes[n] / expected, 1.0, 0.05) << "e = " << e << ", apex " << n + 1;
+    }
+  }
+}
+
+// a block on a slope, μ = 0.5: at 25° (tan θ < μ) static friction holds it; at 30° it slides
+// with a = g (sin θ − μ cos θ)
+TEST(Contacts, BlockOnASlopeHoldsOrSlidesByCoulomb) {
+  const double mu = 0.5;
+  for (double degrees : {25.0, 30.0}) {
+    const double theta = degrees * std::numbers::pi / 180.0;
+    const Quat tilt(Eigen::AngleAxisd(theta, Vec3::UnitZ()));
+    World world = world_with(ContactSolver::SoftStep);
+    add_ground(world, mu, 0.0, tilt);
+    const BodyId block = add_box(world, tilt * Vec3(0.0, 0.5, 0.0), 1.0, mu, 0.0, tilt);
+    const Vec3 down_slope = tilt * Vec3(-1.0, 0.0, 0.0);  // the slope falls towards −x
+    // let the contact settle for a second, then measure over the next 4
+    for (int i = 0; i < 60; ++i) world.step(kDt);
+    const Vec3 start = world.state(block).position;
+    const double start_speed = world.velocity(block).dot(down_slope);
+    const double duration = 4.0;
+    for (int i = 0; i < int(duration / kDt); ++i) world.step(kDt);
+    const double travelled = (world.state(block).position - start).dot(down_slope);
+    if (std::tan(theta) <= mu) {
+      EXPECT_LT(std::abs(travelled), 1e-3) << degrees << "°";
+    } else {
+      const double expected = 9.81 * (std::sin(theta) - mu * std::cos(theta));
+      const double measured = 2.0 * (travelled - start_speed * duration) / (duration * duration);
+      EXPECT_NEAR(measured / expected, 1.0, 0.03) << degrees << "°";
+    }
+  }
+}
+
+// heavy on light, 10:1: the stack holds
+TEST(Contacts, HeavyBoxOnALightOneHolds) {
+  World world = world_with(ContactSolver::SoftStep);
+  add_ground(world, 0.6);
+  const BodyId light = add_box(world, {0.0, 0.5, 0.0}, 1.0, 0.6);
+  const BodyId heavy = add_box(world, {0.0, 1.5, 0.0}, 10.0, 0.6);
+  for (int i = 0; i < 600; ++i) world.step(kDt);
+  EXPECT_LT(std::abs(world.state(light).position.y() - 0.5), 0.01);
+  EXPECT_LT(std::abs(world.state(heavy).position.y() - 1.5), 0.01);
+  EXPECT_LT(std::hypot(world.state(heavy).position.x(), world.state(heavy).position.z()), 0.01);
+}
+
+// a resting stack keeps every contact point from step to step (warm starting), and a settled
+// step allocates nothing
+TEST(Contacts, SettledStackKeepsItsContactsAndAllocatesNothing) {
+  World world = world_with(ContactSolver::SoftStep);
+  add_ground(world, 0.6);
+  for (int i = 0; i < 4; ++i) add_box(world, {0.0, 0.5 + i, 0.0}, 1.0, 0.6);
+  for (int i = 0; i < 60; ++i) world.step(kDt);
+  const long before = g_allocations.load();
+  for (int i = 0; i < 60; ++i) {
+    world.step(kDt);
+    EXPECT_EQ(world.profile().matched_points, world.profile().contact_points);
+  }
+  EXPECT_EQ(g_allocations.load() - before, 0);
+  EXPECT_EQ(world.profile().contact_points, 16u);
+}
+
+// the same scene run twice gives bit-identical states
+TEST(Contacts, SameSceneTwiceIsBitIdentical) {
+  auto run = [] {
+    World world = world_with(ContactSolver::SoftStep);
+    add_ground(world, 0.6);
+    for (int i = 0; i < 6; ++i)
+      add_box(world, {0.05 * i, 0.5 + 1.02 * i, 0.0}, 1.0, 0.6, 0.0,
+              Quat(Eigen::AngleAxisd(0.1 * i, Vec3::UnitY())));
+    for (int i = 0; i < 300; ++i) world.step(kDt);
+    std::vector<double> state;
+    for (BodyId b = 0; b < world.body_count(); ++b) {
+      const BodyState& s = world.state(b);
+      state.insert(state.end(), s.position.data(), s.position.data() + 3);
+      state.insert(state.end(), s.orientation.coeffs().data(), s.orientation.coeffs().data() + 4);
+      state.insert(state.end(), s.linear_momentum.data(), s.linear_momentum.data() + 3);
+      state.insert(state.end(), s.angular_momentum.data(), s.angular_momentum.data() + 3);
+    }
+    return state;
+  };
+  const std::vector<double> first = run(), second = run();
+  ASSERT_EQ(first.size(), second.size());
+  for (std::size_t i = 0; i < first.size(); ++i) EXPECT_EQ(first[i], second[i]) << i;
+}
+
+// a world without shapes keeps its integrator: RK4's free flight is exact
+TEST(Contacts, ShapelessWorldKeepsItsIntegrator) {
+  World world(kGravity, Integrator::RungeKutta4);
+  BodyDef def;
+  def.linear_velocity = Vec3(1.0, 5.0, 0.0);
+  const BodyId body = world.add_body(def);
+  for (int i = 0; i < 60; ++i) world.step(kDt);
+  EXPECT_FALSE(world.has_contacts());
+  EXPECT_NEAR(world.state(body).position.y(), 5.0 - 0.5 * 9.81, 1e-12);
+}
+
+TEST(Contacts, BadShapesAndMaterialsAreRefused) {
+  World world = world_with(ContactSolver::SoftStep);
+  BodyDef plane;
+  plane.shape.kind = BodyShape::Plane;
+  plane.mass = 1.0;  // a dynamic plane
+  EXPECT_THROW(world.add_body(plane), std::invalid_argument);
+  BodyDef box;
+  box.shape.kind = BodyShape::Box;
+  box.restitution = 1.5;
+  EXPECT_THROW(world.add_body(box), std::invalid_argument);
+  ContactSettings settings;
+  settings.substeps = 0;
+  EXPECT_THROW(World(kGravity, Integrator::SemiImplicitEuler, settings), std::invalid_argument);
+}
+
+}  // namespace
+}  // namespace rtp
