@@ -7,6 +7,8 @@
 // The anchors are fixed for the step; the separation of a point is tracked through the substeps
 // from the bodies' motion since the step's start (Catto, Solver2D, 2024: "relative position").
 #include <algorithm>
+#include <array>
+#include <bit>
 #include <cmath>
 #include <numbers>
 
@@ -29,11 +31,17 @@ struct PairState {
            a.angular_velocity.dot(row.angular_a);
   }
   // an impulse λ along d on b at its anchor, and its opposite on a
+  // (a static body is never written: colours share static bodies, and their threads may not
+  // write the same memory)
   void apply(const ContactRow& row, const Vec3& d, double impulse) {
-    a.linear_velocity -= (inverse_mass_a * impulse) * d;
-    a.angular_velocity -= impulse * row.response_a;
-    b.linear_velocity += (inverse_mass_b * impulse) * d;
-    b.angular_velocity += impulse * row.response_b;
+    if (inverse_mass_a > 0.0) {
+      a.linear_velocity -= (inverse_mass_a * impulse) * d;
+      a.angular_velocity -= impulse * row.response_a;
+    }
+    if (inverse_mass_b > 0.0) {
+      b.linear_velocity += (inverse_mass_b * impulse) * d;
+      b.angular_velocity += impulse * row.response_b;
+    }
   }
   // the point's separation now: at the step's start plus the bodies' motion since (m)
   double separation(const ContactPointConstraint& p, const Vec3& normal) const {
@@ -84,6 +92,67 @@ Softness make_soft(double hertz, double damping_ratio, double h) {
 
 }  // namespace
 
+// a colour's contacts go to threads only past this many: below it the barrier costs more
+constexpr std::size_t kParallelColour = 256;
+// colours beyond the 63rd are one last group, solved on one thread
+constexpr int kColours = 64;
+
+void ContactPipeline::colour_contacts() {
+  // greedy, in pair order: each contact takes the first colour neither dynamic body holds
+  body_colours_.assign(bodies_.size(), 0);
+  std::array<std::uint32_t, kColours + 1> counts{};
+  std::vector<std::uint8_t>& colour_of = colour_scratch_;
+  colour_of.resize(contacts_.size());
+  for (std::size_t i = 0; i < contacts_.size(); ++i) {
+    const ContactConstraint& c = contacts_[i];
+    const bool dynamic_a = masses_[c.body_a].inverse_mass > 0.0;
+    const bool dynamic_b = masses_[c.body_b].inverse_mass > 0.0;
+    const std::uint64_t taken = (dynamic_a ? body_colours_[c.body_a] : 0) |
+                                (dynamic_b ? body_colours_[c.body_b] : 0);
+    // the last colour is the overflow group and takes anything
+    const int colour = std::min(std::countr_one(taken), kColours - 1);
+    if (colour < kColours - 1) {
+      if (dynamic_a) body_colours_[c.body_a] |= std::uint64_t{1} << colour;
+      if (dynamic_b) body_colours_[c.body_b] |= std::uint64_t{1} << colour;
+    }
+    colour_of[i] = std::uint8_t(colour);
+    ++counts[colour + 1];
+  }
+  colour_start_.assign(counts.begin(), counts.end());
+  for (int k = 0; k < kColours; ++k) colour_start_[k + 1] += colour_start_[k];
+  colour_order_.resize(contacts_.size());
+  std::array<std::uint32_t, kColours> next{};
+  for (int k = 0; k < kColours; ++k) next[k] = colour_start_[k];
+  for (std::size_t i = 0; i < contacts_.size(); ++i)
+    colour_order_[next[colour_of[i]]++] = std::uint32_t(i);
+}
+
+template <class Solve>
+void ContactPipeline::for_each_contact(Solve&& solve) {
+  const int threads = settings_.threads;
+  const std::size_t overflow = colour_start_[kColours - 1];
+  if (threads <= 1 || contacts_.size() < kParallelColour) {
+    for (std::uint32_t index : colour_order_) solve(contacts_[index]);
+    return;
+  }
+#pragma omp parallel num_threads(threads)
+  {
+    for (int k = 0; k + 1 < kColours; ++k) {
+      const std::size_t begin = colour_start_[k], end = colour_start_[k + 1];
+      if (end - begin < kParallelColour) {
+#pragma omp single
+        for (std::size_t i = begin; i < end; ++i) solve(contacts_[colour_order_[i]]);
+      } else {
+#pragma omp for schedule(static)
+        for (std::size_t i = begin; i < end; ++i) solve(contacts_[colour_order_[i]]);
+      }
+    }
+#pragma omp single
+    for (std::size_t i = overflow; i < colour_order_.size(); ++i)
+      solve(contacts_[colour_order_[i]]);
+  }
+}
+
 void ContactPipeline::load_bodies(std::span<const BodyState> states,
                                   std::span<const BodyMass> masses) {
   for (std::size_t i = 0; i < states.size(); ++i) {
@@ -117,7 +186,8 @@ void ContactPipeline::prepare(double dt, const Vec3& gravity) {
       make_soft(std::min(settings_.contact_hertz, cap), settings_.damping_ratio, h);
   const Softness static_soft =
       make_soft(std::min(2.0 * settings_.contact_hertz, cap), settings_.damping_ratio, h);
-  for (ContactConstraint& c : contacts_) {
+  colour_contacts();
+  for_each_contact([&](ContactConstraint& c) {
     const SolverMass& mass_a = masses_[c.body_a];
     const SolverMass& mass_b = masses_[c.body_b];
     const PairState pair = pair_of(bodies_, masses_, c);
@@ -154,11 +224,11 @@ void ContactPipeline::prepare(double dt, const Vec3& gravity) {
       if (p.normal.impulse == 0.0 || p.approach_velocity < -settings_.restitution_threshold)
         c.fresh = true;
     }
-  }
+  });
 }
 
 void ContactPipeline::warm_start() {
-  for (const ContactConstraint& c : contacts_) {
+  for_each_contact([&](const ContactConstraint& c) {
     PairState pair = pair_of(bodies_, masses_, c);
     for (std::uint8_t i = 0; i < c.count; ++i) {
       const ContactPointConstraint& p = c.points[i];
@@ -166,7 +236,7 @@ void ContactPipeline::warm_start() {
       pair.apply(p.tangent[0], c.tangent[0], p.tangent[0].impulse);
       pair.apply(p.tangent[1], c.tangent[1], p.tangent[1].impulse);
     }
-  }
+  });
 }
 
 void ContactPipeline::solve(double h, bool bias) {
@@ -175,7 +245,7 @@ void ContactPipeline::solve(double h, bool bias) {
   // sequential impulse: the Baumgarte bias removes this fraction of the penetration past the
   // slop in one step (Catto GDC 2006)
   const double baumgarte_rate = settings_.baumgarte * inverse_h;
-  for (ContactConstraint& c : contacts_) {
+  for_each_contact([&](ContactConstraint& c) {
     PairState pair = pair_of(bodies_, masses_, c);
     // non-penetration: the normal impulse accumulates and stays ≥ 0 (Catto GDC 2006). A
     // manifold with no warm start (a new contact, an impact) runs its points several times in a
@@ -230,14 +300,14 @@ void ContactPipeline::solve(double h, bool bias) {
       pair.apply(p.tangent[0], c.tangent[0], t0 - old0);
       pair.apply(p.tangent[1], c.tangent[1], t1 - old1);
     }
-  }
+  });
 }
 
 void ContactPipeline::restitution() {
   const double threshold = settings_.restitution_threshold;
   for (int iteration = 0; iteration < settings_.restitution_iterations; ++iteration)
-    for (ContactConstraint& c : contacts_) {
-      if (c.restitution == 0.0) continue;
+    for_each_contact([&](ContactConstraint& c) {
+      if (c.restitution == 0.0) return;
       PairState pair = pair_of(bodies_, masses_, c);
       // each manifold's points several times in a row, as for a fresh contact in solve()
       for (int k = 0; k < settings_.local_iterations * c.count; ++k) {
@@ -251,7 +321,7 @@ void ContactPipeline::restitution() {
         pair.apply(p.normal, c.normal, accumulated - p.normal.impulse);
         p.normal.impulse = accumulated;
       }
-    }
+    });
 }
 
 void ContactPipeline::solve_seed(double dt) {
@@ -265,7 +335,8 @@ void ContactPipeline::solve_seed(double dt) {
   const double converged_velocity = 1e-5;
   for (int iteration = 0; iteration < settings_.velocity_iterations; ++iteration) {
     bool any = false;
-    for (ContactConstraint& c : contacts_) {
+    for (std::uint32_t index : colour_order_) {
+      ContactConstraint& c = contacts_[index];
       if (c.converged) continue;
       PairState pair = pair_of(bodies_, masses_, c);
       const SolverMass& mass_a = masses_[c.body_a];

@@ -177,19 +177,31 @@ void ContactPipeline::find_pairs() {
 }
 
 void ContactPipeline::collide_pairs(std::span<const BodyState> states) {
+  // every candidate through the collision table, on the pipeline's threads (each writes its own
+  // manifold), then the touching ones in pair order into contacts matched with last step's
+  const std::size_t n = candidates_.size();
+  if (manifolds_.size() < n) {
+    manifolds_.resize(n);
+    pair_growth_.resize(n);
+  }
+#pragma omp parallel for num_threads(settings_.threads) schedule(dynamic, 64) if (n >= 1024)
+  for (std::size_t k = 0; k < n; ++k) {
+    const BodyId a = BodyId(candidates_[k] >> 32), b = BodyId(candidates_[k] & 0xffffffffu);
+    Shape grown_a = shapes_[a].shape, grown_b = shapes_[b].shape;
+    pair_growth_[k] = grow_pair(shapes_[a], shapes_[b], grown_a, grown_b);
+    if (!collide(grown_a, pose_of(states[a]), grown_b, pose_of(states[b]), manifolds_[k]))
+      manifolds_[k].count = 0;
+  }
+
   std::swap(contacts_, previous_);
   contacts_.clear();
   std::size_t previous_index = 0;
-  Manifold manifold;
   deepest_ = 0.0;
   matched_ = 0;
-  for (const std::uint64_t key : candidates_) {
-    const BodyId a = BodyId(key >> 32), b = BodyId(key & 0xffffffffu);
-    const BodyShapeData& shape_a = shapes_[a];
-    const BodyShapeData& shape_b = shapes_[b];
-    Shape grown_a = shape_a.shape, grown_b = shape_b.shape;
-    const double growth = grow_pair(shape_a, shape_b, grown_a, grown_b);
-    if (!collide(grown_a, pose_of(states[a]), grown_b, pose_of(states[b]), manifold)) continue;
+  for (std::size_t k = 0; k < n; ++k) {
+    const Manifold& manifold = manifolds_[k];
+    if (manifold.count == 0) continue;
+    const BodyId a = BodyId(candidates_[k] >> 32), b = BodyId(candidates_[k] & 0xffffffffu);
     ContactConstraint& c = contacts_.emplace_back();
     c.points.fill(ContactPointConstraint{});
     c.body_a = a;
@@ -197,15 +209,15 @@ void ContactPipeline::collide_pairs(std::span<const BodyState> states) {
     c.normal = manifold.normal;
     tangent_basis(c.normal, c.tangent);
     // the pair's coefficients (docs/scene-format.md): √(μa μb), max(ea, eb)
-    c.friction = std::sqrt(shape_a.friction * shape_b.friction);
-    c.restitution = std::max(shape_a.restitution, shape_b.restitution);
+    c.friction = std::sqrt(shapes_[a].friction * shapes_[b].friction);
+    c.restitution = std::max(shapes_[a].restitution, shapes_[b].restitution);
     c.count = manifold.count;
     for (std::uint8_t i = 0; i < manifold.count; ++i) {
       ContactPointConstraint& p = c.points[i];
       p.anchor_a = manifold.points[i].point - states[a].position;
       p.anchor_b = manifold.points[i].point - states[b].position;
       // depth of the grown shapes less the growth: the real separation (< 0: penetrating)
-      p.base_separation = growth - manifold.points[i].depth;
+      p.base_separation = pair_growth_[k] - manifold.points[i].depth;
       p.feature = manifold.points[i].feature;
       deepest_ = std::max(deepest_, -p.base_separation);
     }

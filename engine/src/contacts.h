@@ -126,6 +126,19 @@ class ContactPipeline {
   std::vector<BodyId> dynamic_shaped_;  // bodies that meet the planes
   std::vector<std::uint64_t> candidates_;  // pair keys, sorted
   std::vector<ContactConstraint> contacts_, previous_;
+  // contacts by colour (graph colouring, as Box2D v3's constraint graph): no two contacts of a
+  // colour share a dynamic body, so a colour's contacts are solved at once, on any number of
+  // threads, with the same result as on one; every solve visits contacts in this order
+  void colour_contacts();
+  template <class Solve>
+  void for_each_contact(Solve&& solve);
+  std::vector<std::uint32_t> colour_order_;  // contact indices, colour by colour
+  std::vector<std::uint32_t> colour_start_;  // colour k: colour_order_[start[k], start[k + 1])
+  std::vector<std::uint64_t> body_colours_;  // per body, the colours holding it this step
+  std::vector<std::uint8_t> colour_scratch_;
+  // the narrow phase's results per candidate, filled in parallel
+  std::vector<Manifold> manifolds_;
+  std::vector<double> pair_growth_;
   std::vector<SolverBody> bodies_;
   std::vector<SolverMass> masses_;
   double deepest_ = 0.0;

@@ -36,7 +36,7 @@ Vec3 world_point(const BodyState& s, const Vec3& local_point) {
 World::World(Vec3 gravity, Integrator integrator, ContactSettings contacts)
     : gravity_(gravity), integrator_(integrator), contact_settings_(contacts) {
   if (contacts.substeps < 1 || contacts.velocity_iterations < 0 || contacts.relax_iterations < 0 ||
-      contacts.restitution_iterations < 0)
+      contacts.restitution_iterations < 0 || contacts.local_iterations < 1 || contacts.threads < 1)
     throw std::invalid_argument("rtp: contact substeps must be >= 1 and iterations >= 0");
   if (!(contacts.speculative_distance >= 0.0) || !(contacts.linear_slop >= 0.0) ||
       !(contacts.contact_hertz >= 0.0) || !(contacts.damping_ratio >= 0.0) ||

@@ -130,6 +130,8 @@ struct ContactSettings {
   bool warm_start = true;              // soft step and sequential impulse
   double match_distance = 0.02;  // m: a point with no feature match takes the impulses of last
                                  // step's nearest point within this distance
+  int threads = 1;  // the narrow phase and each colour of the solve (identical results at any
+                    // count: a colour's contacts share no dynamic body)
 };
 
 // wall time of each stage of the last step (s)
