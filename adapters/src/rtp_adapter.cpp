@@ -5,9 +5,11 @@
 #include <rtp/world.h>
 
 #include <optional>
+#include <sstream>
 
 #include "physbench/particle_driver.h"
 #include "physbench/registry.h"
+#include "physbench/rtp_world.h"
 
 namespace physbench {
 
@@ -26,36 +28,6 @@ rtp::ParticleIntegrator particle_integrator_for(const std::string& variant) {
   return rtp::ParticleIntegrator::Midpoint;
 }
 
-// the contact solver a contact variant names
-std::optional<rtp::ContactSolver> contact_solver_for(const std::string& variant) {
-  if (variant == "soft-step") return rtp::ContactSolver::SoftStep;
-  if (variant == "sequential-impulse") return rtp::ContactSolver::SequentialImpulse;
-  if (variant == "seed") return rtp::ContactSolver::Seed;
-  return std::nullopt;
-}
-
-bool is_contact_variant(const std::string& variant) {
-  return contact_solver_for(variant).has_value();
-}
-
-rtp::ShapeDef shape_def(const Shape& shape) {
-  rtp::ShapeDef def;
-  switch (shape.kind) {
-    case ShapeKind::Box:
-      def.kind = rtp::BodyShape::Box;
-      def.half_extents = shape.half_extents;
-      break;
-    case ShapeKind::Sphere:
-      def.kind = rtp::BodyShape::Sphere;
-      def.radius = shape.radius;
-      break;
-    case ShapeKind::Plane:
-      def.kind = rtp::BodyShape::Plane;
-      break;
-  }
-  return def;
-}
-
 // particle variants run the particle update on this many threads
 int threads_for(const std::string& variant) { return variant.ends_with("-2t") ? 2 : 1; }
 
@@ -63,45 +35,47 @@ std::string base_variant(const std::string& variant) {
   return variant.ends_with("-2t") ? variant.substr(0, variant.size() - 3) : variant;
 }
 
+// The contact variants: rtp's default soft step, Box2D v3's own soft-step settings (4 substeps,
+// 30 Hz, damping ratio 10, one relax pass), sequential impulses, and the seed's lab 5; "-2t"
+// runs the narrow phase and each colour of the solve on two threads
+std::optional<rtp::ContactSettings> contact_settings_for(const std::string& variant) {
+  const std::string base = base_variant(variant);
+  rtp::ContactSettings settings;
+  if (base == "soft-step") {
+    settings.solver = rtp::ContactSolver::SoftStep;
+  } else if (base == "soft-step-4") {
+    settings.solver = rtp::ContactSolver::SoftStep;
+    settings.substeps = 4;
+    settings.contact_hertz = 30.0;
+    settings.damping_ratio = 10.0;
+    settings.relax_iterations = 1;
+  } else if (base == "sequential-impulse") {
+    settings.solver = rtp::ContactSolver::SequentialImpulse;
+  } else if (base == "seed") {
+    settings.solver = rtp::ContactSolver::Seed;
+  } else {
+    return std::nullopt;
+  }
+  settings.threads = threads_for(variant);
+  return settings;
+}
+
+bool is_contact_variant(const std::string& variant) {
+  return contact_settings_for(variant).has_value();
+}
+
 class RtpEngine final : public Engine {
  public:
   explicit RtpEngine(const std::string& variant)
       : integrator_(integrator_for(base_variant(variant))),
-        contact_solver_(contact_solver_for(variant)),
+        contacts_(contact_settings_for(variant).value_or(rtp::ContactSettings{})),
         particle_integrator_(particle_integrator_for(base_variant(variant))),
         threads_(threads_for(variant)) {}
 
   void load(const Scene& scene) override {
     dt_ = scene.dt;
-    rtp::ContactSettings contacts;
-    if (contact_solver_) contacts.solver = *contact_solver_;
-    world_ = std::make_unique<rtp::World>(scene.gravity, integrator_, contacts);
-    // shapes only where bodies can touch: a scene without contacts keeps its integrator
-    const bool shaped = scene.has_contacts();
-    for (const BodySpec& b : scene.bodies) {
-      rtp::BodyDef def;
-      def.position = b.position;
-      def.orientation = b.orientation;
-      def.linear_velocity = b.linear_velocity;
-      def.angular_velocity = b.angular_velocity;
-      def.mass = b.mass;
-      if (b.mass > 0.0) def.principal_inertia = principal_inertia(b.shape, b.mass);
-      if (shaped) def.shape = shape_def(b.shape);
-      def.friction = b.friction;
-      def.restitution = b.restitution;
-      world_->add_body(def);
-    }
-    for (const SpringSpec& s : scene.springs) {
-      rtp::SpringDef def;
-      def.body_a = static_cast<rtp::BodyId>(s.body_a);
-      def.local_point_a = s.local_point_a;
-      def.body_b = s.body_b < 0 ? rtp::kWorldAnchor : static_cast<rtp::BodyId>(s.body_b);
-      def.point_b = s.point_b;
-      def.stiffness = s.stiffness;
-      def.damping = s.damping;
-      def.rest_length = s.rest_length;
-      world_->add_spring(def);
-    }
+    world_ = std::make_unique<rtp::World>(
+        make_rtp_world(scene, integrator_, contacts_));
     body_count_ = static_cast<int>(scene.bodies.size());
     if (scene.particles) {
       rtp::ParticleSystemDef def = particle_system_def(scene);
@@ -132,7 +106,7 @@ class RtpEngine final : public Engine {
 
  private:
   rtp::Integrator integrator_;
-  std::optional<rtp::ContactSolver> contact_solver_;
+  rtp::ContactSettings contacts_;
   rtp::ParticleIntegrator particle_integrator_;
   int threads_;
   int body_count_ = 0;
@@ -146,8 +120,9 @@ class RtpEngine final : public Engine {
 EngineInfo rtp_engine_info() {
   EngineInfo info;
   info.name = "rtp";
-  info.variants = {"rk4",       "midpoint",           "euler", "symplectic", "explicit-euler",
-                   "midpoint-2t", "soft-step", "sequential-impulse", "seed"};
+  info.variants = {"rk4",       "midpoint",     "euler",        "symplectic",
+                   "explicit-euler", "midpoint-2t", "soft-step",  "soft-step-2t",
+                   "soft-step-4", "sequential-impulse", "seed"};
   // particles integrate by explicit Euler, semi-implicit Euler or midpoint (the seed's three);
   // the rigid-body-only integrators do not apply to a particle scene, nor the particle-only ones
   // to a scene without particles. A scene with contacts steps by a contact solver (the three
@@ -170,38 +145,48 @@ EngineInfo rtp_engine_info() {
     return std::make_unique<RtpEngine>(variant);
   };
   info.settings = [](const std::string& variant) {
-    if (auto solver = contact_solver_for(variant)) {
-      rtp::ContactSettings c;
-      c.solver = *solver;
+    if (auto contacts = contact_settings_for(variant)) {
+      const rtp::ContactSettings& c = *contacts;
+      const std::string base = base_variant(variant);
+      auto number = [](double value) {
+        std::ostringstream out;
+        out << value;
+        return out.str();
+      };
       std::vector<Setting> table = {
-          {"contact solver", variant,
-           *solver == rtp::ContactSolver::SoftStep
-               ? "substeps, soft biased solve + relax, restitution last (docs/solver.md)"
-           : *solver == rtp::ContactSolver::SequentialImpulse
+          {"contact solver", base,
+           c.solver == rtp::ContactSolver::SoftStep
+               ? "substeps, each a soft biased solve and relax solves, restitution last "
+                 "(docs/solver.md)"
+           : c.solver == rtp::ContactSolver::SequentialImpulse
                ? "one step of accumulated impulses, warm start, Baumgarte past the slop"
                : "the seed's lab 5: impulse magnitudes with a penalty term, no warm start"},
           {"integration", "semi-implicit Euler, exponential-map rotation",
            "contact scenes step at the velocity level; RK4's stages do not fit a contact solve"},
-          {"speculative distance", std::to_string(c.speculative_distance) + " m",
-           *solver == rtp::ContactSolver::Seed ? "points found this far apart are ignored"
-                                               : "contacts made before bodies touch"},
+          {"speculative distance", number(c.speculative_distance) + " m",
+           c.solver == rtp::ContactSolver::Seed
+               ? "points found apart are ignored (the seed's contacts touch)"
+               : "contacts made this far apart, plus each body's motion in the step"},
+          {"threads", std::to_string(c.threads), "narrow phase and each colour of the solve"},
           {"sleeping", "none", "rtp has no sleeping"},
       };
-      if (*solver == rtp::ContactSolver::SoftStep) {
-        table.push_back({"substeps", std::to_string(c.substeps), "Box2D v3's default"});
+      if (c.solver == rtp::ContactSolver::SoftStep) {
+        table.push_back({"substeps", std::to_string(c.substeps),
+                         base == "soft-step-4" ? "Box2D v3's default"
+                                               : "the stiffness a 20-box tower needs"});
         table.push_back({"relax iterations", std::to_string(c.relax_iterations), "per substep"});
-        table.push_back({"contact stiffness", std::to_string(c.contact_hertz) + " Hz, damping ratio " +
-                                                  std::to_string(c.damping_ratio),
-                         "twice as stiff against static bodies"});
+        table.push_back({"contact stiffness",
+                         number(c.contact_hertz) + " Hz, damping ratio " + number(c.damping_ratio),
+                         "capped at a quarter of the substep rate"});
       } else {
         table.push_back({"velocity iterations", std::to_string(c.velocity_iterations),
-                         "equal to the peers' equal-iterations setting"});
-        table.push_back({"Baumgarte", std::to_string(c.baumgarte) + ", slop " +
-                                          std::to_string(c.linear_slop) + " m",
+                         "as the peers' equal-iterations variants"});
+        table.push_back({"Baumgarte", number(c.baumgarte) + ", slop " + number(c.linear_slop) + " m",
                          "fraction of the penetration past the slop removed per step"});
       }
-      table.push_back({"restitution threshold", std::to_string(c.restitution_threshold) + " m/s",
-                       "slower approaches do not bounce"});
+      if (c.solver != rtp::ContactSolver::Seed)
+        table.push_back({"restitution threshold", number(c.restitution_threshold) + " m/s",
+                         "slower approaches do not bounce"});
       return table;
     }
     const std::string base = base_variant(variant);
