@@ -581,7 +581,17 @@ void judge_bounce(const Scene& scene, const Trajectory& run, ContactSummary& out
     worst = std::max(worst, std::abs(out.apex_relative_errors.back()));
   }
   if (!out.apex_relative_errors.empty()) out.apex_relative_error_max = worst;
-  if (!out.apex_relative_errors.empty() && static_cast<int>(apexes.size()) <
+  // the closed form is for a box that stays flat: one that turned has tumbled
+  double turned = 0.0;
+  for (const Sample& s : run.samples)
+    turned = std::max(turned, orientation_angle(b.orientation, s.bodies[std::size_t(slot)].orientation));
+  if (turned > kTumbledBeyond) {
+    out.verdict = "tumbled";
+    std::ostringstream why;
+    why.precision(2);
+    why << "tumbled: turned " << turned * 180.0 / M_PI << "° (the closed form is for a flat drop)";
+    out.message = why.str();
+  } else if (!out.apex_relative_errors.empty() && static_cast<int>(apexes.size()) <
                                                static_cast<int>(out.apex_relative_errors.size())) {
     out.verdict = "no bounce";
     out.message = "no bounce: " + std::to_string(apexes.size()) + " apex(es) where the closed form has " +
@@ -692,7 +702,7 @@ void judge_tunnelling(const Scene& scene, const Trajectory& run, ContactSummary&
 }  // namespace
 
 bool verdict_is_failure(const std::string& verdict) {
-  return verdict == "collapsed" || verdict == "sinks" || verdict == "drifts" ||
+  return verdict == "collapsed" || verdict == "sinks" || verdict == "drifts" || verdict == "tumbled" ||
          verdict == "tunnelled" || verdict == "stuck" || verdict == "no bounce" ||
          verdict == "exploded";
 }

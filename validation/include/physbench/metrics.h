@@ -72,6 +72,7 @@ inline constexpr double kSinksBeyond = 0.02;     // m: final penetration of a st
 inline constexpr double kMovedBeyond = 0.01;     // m: an incline block that moved
 inline constexpr double kApexFloor = 0.02;       // m: closed-form apexes below this are not judged
 inline constexpr int kMaxApexes = 5;
+inline constexpr double kTumbledBeyond = 0.1;  // rad: a dropped box that turned this far tumbled
 
 // Everything a contact scene's question asks for, from the sampled poses. A value that cannot be
 // computed stays empty (nullopt), never zero.
@@ -94,7 +95,8 @@ struct ContactSummary {
   std::optional<double> exchange_error;
   // tunnelling: the body ended wholly beyond the wall's far face
   std::optional<bool> tunnelled;
-  // stands, drifts, sinks, collapsed, stays, slides, tunnelled, stopped, stuck, "" (no verdict)
+  // stands, drifts, sinks, collapsed, tumbled, no bounce, stays, slides, tunnelled, stopped, stuck,
+  // "" (no verdict)
   std::string verdict;
   std::string message;  // why, for any verdict that is a failure of the scene's question
 };
