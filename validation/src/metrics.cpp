@@ -536,10 +536,14 @@ void judge_stack(const Scene& scene, const Trajectory& run, const ErrorSeries& s
   } else if (sunk > kSinksBeyond) {
     out.verdict = "sinks";
     why << "sinks: final penetration " << metres(sunk) << " (> " << metres(kSinksBeyond) << ")";
-  } else if (drift > kStandsWithin || std::abs(height) > kStandsWithin) {
+  } else if (drift > kStandsWithin) {
     out.verdict = "drifts";
     why << "drifts: drift " << metres(drift) << ", top height change " << metres(height)
         << " (stands within " << metres(kStandsWithin) << ")";
+  } else if (std::abs(height) > kStandsWithin) {
+    out.verdict = "settles";
+    why << "settles: top height change " << metres(height) << " (stands within "
+        << metres(kStandsWithin) << "), drift " << metres(drift);
   } else {
     out.verdict = "stands";
   }
@@ -691,9 +695,9 @@ void judge_tunnelling(const Scene& scene, const Trajectory& run, ContactSummary&
     out.verdict = "tunnelled";
     out.message = "tunnelled: ended " + metres(travelled - reach - far_face) +
                   " beyond the wall's far face";
-  } else if (travelled + reach > near_face) {
+  } else if (travelled > near_face && travelled < far_face) {
     out.verdict = "stuck";
-    out.message = "stuck in the wall at the end";
+    out.message = "stuck: its centre ends inside the wall";
   } else {
     out.verdict = "stopped";
   }
@@ -702,7 +706,8 @@ void judge_tunnelling(const Scene& scene, const Trajectory& run, ContactSummary&
 }  // namespace
 
 bool verdict_is_failure(const std::string& verdict) {
-  return verdict == "collapsed" || verdict == "sinks" || verdict == "drifts" || verdict == "tumbled" ||
+  return verdict == "collapsed" || verdict == "sinks" || verdict == "drifts" ||
+         verdict == "settles" || verdict == "tumbled" ||
          verdict == "tunnelled" || verdict == "stuck" || verdict == "no bounce" ||
          verdict == "exploded";
 }

@@ -95,7 +95,7 @@ struct ContactSummary {
   std::optional<double> exchange_error;
   // tunnelling: the body ended wholly beyond the wall's far face
   std::optional<bool> tunnelled;
-  // stands, drifts, sinks, collapsed, tumbled, no bounce, stays, slides, tunnelled, stopped, stuck,
+  // stands, settles, drifts, sinks, collapsed, tumbled, no bounce, stays, slides, tunnelled, stopped, stuck,
   // "" (no verdict)
   std::string verdict;
   std::string message;  // why, for any verdict that is a failure of the scene's question
