@@ -11,9 +11,9 @@ struct MujocoBuffers {
 };
 
 // Room for the contacts of every pair that touches at the start or can meet (bounds within 5 cm,
-// grown by the starting speeds over the duration) and of every dynamic body with every plane, at
-// 4 points a box pair, plus a quarter; a contact set that outgrows it overflows, and the adapter
-// reports that as an error
+// grown by the starting speeds over the duration) and of each dynamic body with each plane it is
+// that near or that it can fall onto (nothing else is near it), at 4 points a box pair, plus a
+// quarter; a contact set that outgrows it overflows, and the adapter reports that as an error
 MujocoBuffers mujoco_buffers(const Scene& scene);
 
 }  // namespace physbench
