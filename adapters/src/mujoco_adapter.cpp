@@ -102,6 +102,8 @@ int contacts_per_pair(const BodySpec& a, const BodySpec& b) {
 // the largest njmax this adapter asks for: MuJoCo 2.2.2's mjData holds efc_AR, njmax × njmax
 // doubles, whatever the solver (12,000 rows: 1.1 GB; at 16,000 rows mj_makeData failed here)
 constexpr long kMaxConstraintRows = 12000;
+// the rk4 and implicit variants on contact scenes up to this many bodies (their cost)
+constexpr int kMaxBodiesForCostlyVariants = 60;
 
 bool uniform_materials(const Scene& scene) {
   for (const BodySpec& b : scene.bodies)
@@ -458,13 +460,20 @@ EngineInfo mujoco_engine_info() {
   info.name = "mujoco";
   info.variants = {"euler", "rk4", "implicit", "pgs-10"};
   info.version = mj_versionString();
-  info.unsupported = [](const Scene& scene, const std::string&) -> std::optional<std::string> {
+  info.unsupported = [](const Scene& scene,
+                        const std::string& variant) -> std::optional<std::string> {
     if (auto why = peer_particles_unsupported(scene, "MuJoCo")) return why;
     if (scene.particles && scene.particles->count > kMaxMujocoParticles)
       return "over " + std::to_string(kMaxMujocoParticles) +
              " particles MuJoCo 2.2.2 cannot create its mjData here (3,000 free bodies failed: "
              "its buffers are sized from nv and njmax when the model loads)";
     if (scene.has_contacts()) {
+      int dynamic = 0;
+      for (const BodySpec& b : scene.bodies) dynamic += b.mass > 0.0;
+      if ((variant == "rk4" || variant == "implicit") && dynamic > kMaxBodiesForCostlyVariants)
+        return "over " + std::to_string(kMaxBodiesForCostlyVariants) +
+               " bodies in contact only euler and pgs-10 run: euler took 100 ms per step on the "
+               "210-box pyramid, rk4 about 4x that (the suite's time budget)";
       if (!uniform_materials(scene))
         return "MuJoCo combines two geoms' friction by max and solref by mean: the scene's pair "
                "rule holds here only when every body has the same friction and restitution";

@@ -548,6 +548,9 @@ void judge_stack(const Scene& scene, const Trajectory& run, const ErrorSeries& s
   for (double d : series.stack_drift) drift = std::isnan(d) ? d : std::max(drift, d);
   const double height = *out.top_height_change;
   const double sunk = series.penetration.empty() ? 0.0 : series.penetration.back();
+  // a stack started overlapping rises as the overlap is undone: its height is not judged
+  const bool started_overlapping =
+      !series.penetration.empty() && series.penetration.front() > 1e-3;
   std::ostringstream why;
   if (!(drift <= kCollapsedBeyond) || height < -kCollapsedBeyond) {
     out.verdict = "collapsed";
@@ -560,7 +563,7 @@ void judge_stack(const Scene& scene, const Trajectory& run, const ErrorSeries& s
     out.verdict = "drifts";
     why << "drifts: drift " << metres(drift) << ", top height change " << metres(height)
         << " (stands within " << metres(kStandsWithin) << ")";
-  } else if (std::abs(height) > kStandsWithin) {
+  } else if (std::abs(height) > kStandsWithin && !started_overlapping) {
     out.verdict = "settles";
     why << "settles: top height change " << metres(height) << " (stands within "
         << metres(kStandsWithin) << "), drift " << metres(drift);
@@ -656,9 +659,11 @@ void judge_incline(const Scene& scene, const Trajectory& run, ContactSummary& ou
     out.slide_acceleration_error = (*out.slide_acceleration - expected) / expected;
   const bool moved = std::abs(s) > kMovedBeyond;
   out.verdict = moved ? "slides" : "stays";
-  if (moved != (expected > 0.0))
-    out.message = out.verdict + " where the closed form " + (expected > 0.0 ? "slides" : "stays") +
+  if (moved != (expected > 0.0)) {
+    out.verdict += expected > 0.0 ? ", should slide" : ", should stay";
+    out.message = out.verdict + ": the closed form " + (expected > 0.0 ? "slides" : "stays") +
                   " (moved " + metres(s) + ")";
+  }
 }
 
 void judge_exchange(const Scene& scene, const Trajectory& run, ContactSummary& out) {
@@ -727,7 +732,8 @@ void judge_tunnelling(const Scene& scene, const Trajectory& run, ContactSummary&
 
 bool verdict_is_failure(const std::string& verdict) {
   return verdict == "collapsed" || verdict == "sinks" || verdict == "drifts" ||
-         verdict == "settles" || verdict == "tumbled" ||
+         verdict == "settles" || verdict == "tumbled" || verdict == "slides, should stay" ||
+         verdict == "stays, should slide" ||
          verdict == "tunnelled" || verdict == "stuck" || verdict == "no bounce" ||
          verdict == "exploded";
 }

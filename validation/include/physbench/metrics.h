@@ -95,8 +95,8 @@ struct ContactSummary {
   std::optional<double> exchange_error;
   // tunnelling: the body ended wholly beyond the wall's far face
   std::optional<bool> tunnelled;
-  // stands, settles, drifts, sinks, collapsed, tumbled, no bounce, stays, slides, tunnelled, stopped, stuck,
-  // "" (no verdict)
+  // stands, settles, drifts, sinks, collapsed, tumbled, no bounce, stays, slides, "slides, should
+  // stay", "stays, should slide", tunnelled, stopped, stuck, "" (no verdict)
   std::string verdict;
   std::string message;  // why, for any verdict that is a failure of the scene's question
 };
