@@ -773,6 +773,7 @@ def build_report(folder: Path) -> Path:
 
     engines = []
     for name, info in meta.get("engines", {}).items():
+        info = info or {}  # older runs wrote null for an engine that only had unsupported rows
         variants = [dict(name=v, settings=s) for v, s in info.get("variants", {}).items()]
         engines.append(dict(name=name, version=info.get("version", ""), variants=variants))
 

@@ -468,9 +468,10 @@ int run_suite(const RunOptions& options, const fs::path& self) {
           continue;
         }
 
-        json& engine_meta = metadata["engines"][ev.engine];
+        // an engine whose every row is unsupported has no entry (not a null one)
         if (r.status != Status::Unsupported && r.status != Status::Crashed &&
             r.status != Status::Timeout) {
+          json& engine_meta = metadata["engines"][ev.engine];
           engine_meta["version"] = r.engine_version;
           json settings = json::array();
           for (const Setting& s : r.settings)
