@@ -24,12 +24,72 @@ import plotly.offline
 SERIES = [
     ("position_err", "Position error against the reference", "m", "position_err_max"),
     ("orientation_err", "Orientation error against the reference", "rad", "orientation_err_max"),
+    ("stack_drift", "Stack drift: largest horizontal displacement of any body", "m", "stack_drift_max"),
+    ("penetration", "Deepest penetration (rtp's narrow phase on the true shapes)", "m", "penetration_max"),
     ("energy_drift", "Relative energy drift |E − E₀| / KE₀", "", "energy_drift_max"),
     ("linear_momentum_drift", "Linear momentum drift |P − P₀|", "kg m/s", "linear_momentum_drift_max"),
     ("angular_momentum_drift", "Relative angular momentum drift |L − L₀| / |L₀|", "", "angular_momentum_drift_max"),
 ]
 
 STATUS_ORDER = ["ok", "exploded", "unsupported", "timeout", "crashed", "error"]
+
+# the contact table of a contact scenario: results.csv column, heading (docs/metrics.md, "Contact")
+CONTACT_COLUMNS = [
+    ("contact_verdict", "verdict"), ("stack_drift_max", "drift max (m)"), ("top_height_change", "top height change (m)"),
+    ("penetration_max", "penetration max (m)"), ("penetration_final", "penetration final (m)"),
+    ("energy_added_max", "energy added max (J)"), ("speed_max", "speed max (m/s)"),
+    ("rest_speed_rms", "RMS speed, last second (m/s)"), ("apex_rel_err", "apex errors (relative)"),
+    ("slide_distance", "slide (m)"), ("slide_accel", "slide a (m/s²)"), ("slide_accel_expected", "closed form a"),
+    ("exchange_err", "exchange error"), ("tunnelled", "tunnelled"),
+]
+# verdicts that answer a contact scene's question badly (reports colour them)
+FAILED_VERDICTS = {"collapsed", "sinks", "drifts", "settles", "tumbled", "no bounce", "tunnelled", "stuck",
+                   "exploded", "slides, should stay", "stays, should slide"}
+
+
+def has_contact_metrics(rows: pd.DataFrame) -> bool:
+    """Whether these rows come from a contact scene (they carry a penetration or drift column)."""
+    return any(c in rows and rows[c].notna().any() for c in ("penetration_max", "stack_drift_max"))
+
+
+def contact_table(rows: pd.DataFrame) -> list[dict]:
+    """One row per engine/variant of a contact scenario: its verdict, the contact metrics it has
+    and ms per step; the columns no row fills are left out."""
+    if not has_contact_metrics(rows):
+        return []
+    present = [(c, t) for c, t in CONTACT_COLUMNS if c in rows and rows[c].notna().any()]
+    table = []
+    for _, r in rows.iterrows():
+        ms = 1e3 / r["steps_per_s"] if pd.notna(r.get("steps_per_s")) and r["steps_per_s"] > 0 else None
+        verdict = r.get("contact_verdict")
+        table.append(dict(label=r["label"], status=r["status"], ms=fmt(ms),
+                          failed=isinstance(verdict, str) and verdict in FAILED_VERDICTS,
+                          cells=[fmt(r.get(c)) for c, _ in present]))
+    return [dict(headings=[t for _, t in present], rows=table)]
+
+
+def verdict_table(results: pd.DataFrame) -> dict | None:
+    """Every contact scenario at its own step against every engine/variant: the verdict (stands,
+    drifts, collapsed, tunnelled, …), or the status when the run did not give one."""
+    contact = [name for name, rows in results.groupby("scenario", sort=False) if has_contact_metrics(rows)]
+    if not contact:
+        return None
+    rows = []
+    for label in results[results["scenario"].isin(contact)]["label"].unique():
+        cells = []
+        for name in contact:
+            hit = results[(results["scenario"] == name) & (results["label"] == label)]
+            if hit.empty:
+                cells.append(("", ""))
+                continue
+            row = hit.iloc[0]
+            verdict = row.get("contact_verdict")
+            text = verdict if isinstance(verdict, str) and verdict else ("ok" if row["status"] == "ok" else row["status"])
+            css = "unstable" if text in FAILED_VERDICTS or row["status"] in ("error", "crashed", "timeout") else (
+                "stable" if text in ("stands", "stays", "slides", "stopped", "ok") else "")
+            cells.append((text, css))
+        rows.append(dict(label=label, cells=cells))
+    return dict(scenarios=contact, rows=rows)
 
 
 class ReportError(Exception):
@@ -97,8 +157,11 @@ def error_over_time(folder: Path, rows: pd.DataFrame, column: str, title: str, u
                                  name=row["label"]))
     if not fig.data:
         return None
-    fig.update_layout(title=title, xaxis_title="time (s)",
-                      yaxis_title=f"{title.split(' ')[0].lower()} error ({unit})" if unit else "relative drift")
+    if column in ("stack_drift", "penetration"):
+        axis = f"{title.split(':')[0].split(' (')[0].lower()} ({unit})"
+    else:
+        axis = f"{title.split(' ')[0].lower()} error ({unit})" if unit else "relative drift"
+    fig.update_layout(title=title, xaxis_title="time (s)", yaxis_title=axis)
     fig.update_yaxes(type="log", exponentformat="power")
     return figure_html(fig)
 
@@ -436,6 +499,23 @@ def scaling_charts(results: pd.DataFrame, meta: dict, benchmark: dict | None = N
             continue  # a stability map
         parameter = {name: value for value, name, _ in members}
         fig = go.Figure()
+        if has_contact_metrics(rows):
+            # a body-count series of a contact scene: ms per step against the bodies, log-log
+            for label, curve in rows[rows["steps_per_s"].notna()].groupby("label", sort=False):
+                curve = curve.sort_values("bodies")
+                fig.add_trace(go.Scatter(x=curve["bodies"], y=1e3 / curve["steps_per_s"], mode="lines+markers",
+                                         name=label))
+            if not fig.data:
+                continue
+            fig.update_layout(title=f"{family}: ms per step against bodies", xaxis_title="dynamic bodies",
+                              yaxis_title="ms per step, median")
+            fig.update_xaxes(type="log", exponentformat="power")
+            fig.update_yaxes(type="log", exponentformat="power")
+            skipped = [f"{r['label']} at {parameter[r['scenario']]:g}: {r['message']}"
+                       for _, r in rows.iterrows() if r["status"] == "unsupported"]
+            charts.append(dict(name=family, chart=figure_html(fig), question=members[0][2].get("question", ""),
+                               skipped=skipped))
+            continue
         for label, curve in rows[rows["body_steps_per_s"].notna()].groupby("label", sort=False):
             counts = curve["scenario"].map(parameter)
             order = counts.argsort()
@@ -503,6 +583,11 @@ TEMPLATE = jinja2.Template("""<!doctype html>
 {% if s.self_error %} · reference changes by at most {{ s.self_error }} when its step is halved (its own error){% endif %}
 {% if s.sweep %}<br>speed against error swept over dt = {{ s.sweep }} s; the charts above the sweep use dt {{ s.dt }} s{% endif %}
  · scene files in <code>scenes/</code></p>
+{% for t in s.contact %}<table><tr><th class="l">engine/variant</th><th class="l">status</th><th>ms per step</th>
+{% for h in t.headings %}<th>{{ h }}</th>{% endfor %}</tr>
+{% for r in t.rows %}<tr><td class="l">{{ r.label }}</td><td class="l {{ r.status }}">{{ r.status }}</td><td>{{ r.ms }}</td>
+{% for v in r.cells %}<td class="{{ 'unstable' if r.failed and loop.first else '' }}">{{ v }}</td>{% endfor %}</tr>{% endfor %}
+</table>{% endfor %}
 {% for chart in s.charts %}{{ chart | safe }}{% endfor %}
 {% if s.front %}<table><tr><th class="l" colspan="4">Pareto front: nothing else is both faster and more accurate</th></tr>
 <tr><th class="l">engine/variant</th><th>dt (s)</th><th>wall s per simulated s</th><th>max error</th></tr>
@@ -510,6 +595,15 @@ TEMPLATE = jinja2.Template("""<!doctype html>
 </table>{% endif %}
 {% if s.unsupported %}<p class="note">Not run: {% for u in s.unsupported %}<br>{{ u }}{% endfor %}</p>{% endif %}
 </section>{% endfor %}
+
+{% if verdicts %}<section><h2>Contact verdicts</h2>
+<p class="note">Each contact scenario's verdict per engine and variant (docs/metrics.md, "Contact"): stands (drift and
+top-height change within 1 cm), settles (the top sank over 1 cm), drifts (over 1 cm sideways), sinks (final
+penetration over 2 cm), collapsed (over 0.5 m), tumbled / no bounce (a dropped box), stays / slides (a slope),
+tunnelled / stuck / stopped (a fast box at a wall); otherwise the run's status.</p>
+<table><tr><th class="l">engine/variant</th>{% for n in verdicts.scenarios %}<th>{{ n }}</th>{% endfor %}</tr>
+{% for r in verdicts.rows %}<tr><td class="l">{{ r.label }}</td>{% for text, css in r.cells %}<td class="{{ css }}">{{ text }}</td>{% endfor %}</tr>{% endfor %}
+</table></section>{% endif %}
 
 {% for f in families %}<section><h2>Stability map: {{ f.name }}</h2>
 <p>{{ f.description }}</p>
@@ -619,7 +713,9 @@ def build_report(folder: Path) -> Path:
     summary_columns = [(c, f"{c.replace('_', ' ')} max") for c, _ in present]
 
     # the summary holds each scenario at its own step; families appear as their stability maps
-    in_family = {n for n, i in meta.get("scenarios", {}).items() if i.get("family")}
+    # a contact family (pyramids) also has its sections: its drift and penetration are the question
+    in_family = {n for n, i in meta.get("scenarios", {}).items()
+                 if i.get("family") and not has_contact_metrics(results[results["scenario"] == n])}
     nominal = results[[is_nominal(meta, r) and r["scenario"] not in in_family for _, r in results.iterrows()]]
     summary_rows = []
     for _, r in nominal.iterrows():
@@ -636,8 +732,8 @@ def build_report(folder: Path) -> Path:
     scenarios = []
     for name, rows in results.groupby("scenario", sort=False):
         info = meta.get("scenarios", {}).get(name, {})
-        if info.get("family"):
-            continue  # shown as its family's stability map
+        if name in in_family:
+            continue  # shown as its family's stability map or scaling chart
         own = rows[[is_nominal(meta, r) for _, r in rows.iterrows()]]
         charts = []
         for column, title, unit, summary in SERIES:
@@ -668,7 +764,7 @@ def build_report(folder: Path) -> Path:
             dt=fmt(info.get("dt")), duration=fmt(info.get("duration")), reference=info.get("reference", ""),
             self_error=fmt(self_error) if self_error is not None else "",
             sweep=", ".join(f"1/{1 / dt:.0f}" for dt in sweep) if len(sweep) > 1 else "",
-            charts=charts, front=front,
+            charts=charts, front=front, contact=contact_table(own),
             unsupported=[f"{r['label']}: {r['message']}" for _, r in own.iterrows() if r["status"] == "unsupported"]))
 
     families = stability_maps(results, meta)
@@ -677,12 +773,14 @@ def build_report(folder: Path) -> Path:
 
     engines = []
     for name, info in meta.get("engines", {}).items():
+        info = info or {}  # older runs wrote null for an engine that only had unsupported rows
         variants = [dict(name=v, settings=s) for v, s in info.get("variants", {}).items()]
         engines.append(dict(name=name, version=info.get("version", ""), variants=variants))
 
     page = TEMPLATE.render(meta=meta, plotlyjs=plotly.offline.get_plotlyjs(), summary_columns=summary_columns,
                            summary_rows=summary_rows, scenarios=scenarios, families=families, scaling=scaling,
                            benchmark=benchmark, broadphase=broadphase_benchmark(folder),
+                           verdicts=verdict_table(results[[is_nominal(meta, r) for _, r in results.iterrows()]]),
                            narrowphase=narrowphase_benchmark(folder), engines=engines)
     out = folder / "index.html"
     partial = folder / "index.html.partial"

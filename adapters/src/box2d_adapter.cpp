@@ -15,6 +15,9 @@ namespace {
 
 constexpr int kVelocityIterations = 8;  // Box2D's recommended default
 constexpr int kPositionIterations = 3;  // Box2D's recommended default
+constexpr int kEqualVelocityIterations = 10;  // the equal-iterations variant: every engine's 10
+// a scene plane is an edge this long each way from the plane body's origin (m)
+constexpr float kGroundHalfLength = 1000.0f;
 
 // particles touch planes only: one collision category each
 constexpr std::uint16_t kPlaneCategory = 0x0001, kParticleCategory = 0x0002;
@@ -28,7 +31,8 @@ double angle_about_z(const Quat& q) { return 2.0 * std::atan2(q.z(), q.w()); }
 
 class Box2dEngine final : public Engine {
  public:
-  explicit Box2dEngine(bool spring_joints) : spring_joints_(spring_joints) {}
+  Box2dEngine(bool spring_joints, int velocity_iterations)
+      : spring_joints_(spring_joints), velocity_iterations_(velocity_iterations) {}
 
   void load(const Scene& scene) override {
     scene_ = scene;
@@ -47,17 +51,28 @@ class Box2dEngine final : public Engine {
 
       b2PolygonShape box;
       b2CircleShape circle;
+      b2EdgeShape edge;
       b2FixtureDef fixture;
       if (b.shape.kind == ShapeKind::Box) {
-        box.SetAsBox(float(b.shape.half_extents.x()), float(b.shape.half_extents.y()));
+        // every polygon carries a b2_polygonRadius (1 cm) skin: the core shrinks by it, so the
+        // rounded box's faces are the scene's and exactly touching boxes start touching
+        box.SetAsBox(float(b.shape.half_extents.x()) - b2_polygonRadius,
+                     float(b.shape.half_extents.y()) - b2_polygonRadius);
         fixture.shape = &box;
+      } else if (b.shape.kind == ShapeKind::Plane) {
+        // the plane's line (local y = 0) as a long edge moved down by the edge's own skin
+        edge.SetTwoSided(b2Vec2(-kGroundHalfLength, -b2_polygonRadius),
+                         b2Vec2(kGroundHalfLength, -b2_polygonRadius));
+        fixture.shape = &edge;
       } else {
         circle.m_radius = float(b.shape.radius);
         fixture.shape = &circle;
       }
       fixture.density = 1.0f;  // replaced below by the scene's mass properties
+      // Box2D's own mixing is the scene's pair rule: √(μa μb) and max(ea, eb)
       fixture.friction = float(b.friction);
       fixture.restitution = float(b.restitution);
+      fixture.restitutionThreshold = float(kRestitutionThreshold);
       if (!scene.collisions) fixture.filter.maskBits = 0;
       body->CreateFixture(&fixture);
       if (b.mass > 0.0) {
@@ -184,7 +199,7 @@ class Box2dEngine final : public Engine {
                                    b2Vec2(float(p.x()), float(p.y())), true);
           });
     if (driver_) step_particles_before();
-    world_->Step(float(dt_), kVelocityIterations, kPositionIterations);
+    world_->Step(float(dt_), velocity_iterations_, kPositionIterations);
     if (driver_) step_particles_after();
   }
 
@@ -200,6 +215,7 @@ class Box2dEngine final : public Engine {
  private:
   Scene scene_;
   bool spring_joints_;
+  int velocity_iterations_;
   double dt_ = 0.0;
   std::unique_ptr<b2World> world_;
   std::vector<b2Body*> bodies_;  // owned by world_; the particles follow the scene's bodies
@@ -212,7 +228,7 @@ class Box2dEngine final : public Engine {
 EngineInfo box2d_engine_info() {
   EngineInfo info;
   info.name = "box2d";
-  info.variants = {"default", "joint"};
+  info.variants = {"default", "joint", "iterations-10"};
   info.version = std::to_string(b2_version.major) + "." + std::to_string(b2_version.minor) + "." +
                  std::to_string(b2_version.revision) + " (as the library reports it)";
   info.unsupported = [](const Scene& scene, const std::string&) -> std::optional<std::string> {
@@ -225,12 +241,12 @@ EngineInfo box2d_engine_info() {
       if (fastest * scene.dt > 0.5 * b2_maxTranslation)
         return "particles start near Box2D's per-step limit b2_maxTranslation";
     }
-    if (scene.has_contacts())
-      return "contact scenes are not mapped onto Box2D yet (its 1 cm polygon skin is not "
-             "compensated)";
     for (std::size_t i = 0; i < scene.bodies.size(); ++i) {
       const BodySpec& b = scene.bodies[i];
-      if (b.shape.kind == ShapeKind::Plane) return "planes are not mapped onto Box2D yet";
+      if (b.shape.kind == ShapeKind::Box &&
+          std::min(b.shape.half_extents.x(), b.shape.half_extents.y()) <= 2.0 * b2_polygonRadius)
+        return "bodies[" + std::to_string(i) +
+               "] is too thin for Box2D's 1 cm polygon skin (half extent <= 2 cm)";
       // Box2D clamps translation per step to b2_maxTranslation, silently
       if (b.linear_velocity.norm() * scene.dt > 0.5 * b2_maxTranslation)
         return "bodies[" + std::to_string(i) +
@@ -240,15 +256,33 @@ EngineInfo box2d_engine_info() {
     }
     return std::nullopt;
   };
+  // joint differs only with springs, iterations-10 only where there are contacts to solve
   info.applies = [](const Scene& scene, const std::string& variant) {
-    return variant != "joint" || !scene.springs.empty();
+    if (variant == "joint") return !scene.springs.empty();
+    if (variant == "iterations-10") return scene.has_contacts();
+    return true;
   };
   info.create = [](const std::string& variant) -> std::unique_ptr<Engine> {
-    return std::make_unique<Box2dEngine>(variant == "joint");
+    return std::make_unique<Box2dEngine>(
+        variant == "joint",
+        variant == "iterations-10" ? kEqualVelocityIterations : kVelocityIterations);
   };
   info.settings = [](const std::string& variant) {
     return std::vector<Setting>{
-        {"velocity / position iterations", "8 / 3", "Box2D's recommended values"},
+        variant == "iterations-10"
+            ? Setting{"velocity / position iterations", "10 / 3",
+                      "the equal-iterations variant: 10 velocity iterations, as every engine's"}
+            : Setting{"velocity / position iterations", "8 / 3", "Box2D's recommended values"},
+        {"polygon skin", "box cores shrunk by b2_polygonRadius (1 cm) on each side",
+         "the rounded box's faces are the scene's: exactly touching boxes start touching, not "
+         "2 cm overlapped"},
+        {"planes", "a two-sided edge 1 km each way along the plane's line, moved 1 cm below it",
+         "Box2D has no half-plane; the edge's skin then lies on the plane itself"},
+        {"contact materials", "the scene's friction and restitution per fixture; restitution "
+         "threshold 0.1 m/s (default 1 m/s)",
+         "Box2D mixes friction as √(a b) and restitution as max(a, b): the scene's pair rule"},
+        {"continuous collision", "Box2D's default: time of impact against static bodies",
+         "the engine's own defaults; tunnelling scenes show what that does"},
         {"allow sleeping", "false (world and bodies)", "sleeping off in every engine"},
         {"mass properties", "from the scene (SetMassData, I = scene's Izz)",
          "same inertia in every engine"},

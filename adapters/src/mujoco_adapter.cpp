@@ -6,6 +6,7 @@
 // in the body frame: the adapter converts both ways.
 #include <mujoco/mujoco.h>
 
+#include <algorithm>
 #include <cmath>
 #include <cstring>
 #include <iomanip>
@@ -13,6 +14,7 @@
 #include <sstream>
 #include <stdexcept>
 
+#include "physbench/mujoco_buffers.h"
 #include "physbench/particle_driver.h"
 #include "physbench/registry.h"
 #include "physbench/springs.h"
@@ -80,6 +82,117 @@ void particles_xml(const Scene& scene, std::ostringstream& xml) {
         << "/></body>\n";
 }
 
+// ---- contact scenes ----
+
+// the body's bounding box in the world (a plane has none: it is handled apart)
+void bounds_of(const BodySpec& b, Vec3& low, Vec3& high) {
+  const Vec3 reach = b.shape.kind == ShapeKind::Box
+                         ? Vec3(b.orientation.toRotationMatrix().cwiseAbs() * b.shape.half_extents)
+                         : Vec3::Constant(b.shape.radius);
+  low = b.position - reach;
+  high = b.position + reach;
+}
+
+// contact points MuJoCo 2.2 makes for a pair at rest: a box face on a box face or on a plane
+// gives 4, a sphere 1
+int contacts_per_pair(const BodySpec& a, const BodySpec& b) {
+  return a.shape.kind == ShapeKind::Sphere || b.shape.kind == ShapeKind::Sphere ? 1 : 4;
+}
+
+// the largest njmax this adapter asks for: MuJoCo 2.2.2's mjData holds efc_AR, njmax × njmax
+// doubles, whatever the solver (12,000 rows: 1.1 GB; at 16,000 rows mj_makeData failed here)
+constexpr long kMaxConstraintRows = 12000;
+// the rk4 and implicit variants on contact scenes up to this many bodies (their cost)
+constexpr int kMaxBodiesForCostlyVariants = 60;
+
+bool uniform_materials(const Scene& scene) {
+  for (const BodySpec& b : scene.bodies)
+    if (b.friction != scene.bodies[0].friction || b.restitution != scene.bodies[0].restitution)
+      return false;
+  return true;
+}
+
+// the contact attributes every geom of a contact scene carries: Coulomb μ (condim 3, or 1 when
+// frictionless), and for a restitution e > 0 the spring-damper that keeps the fraction e of the
+// normal speed (as for particles); e = 0 keeps MuJoCo's default solref (0.02 s, 1) and solimp
+std::string contact_attributes(const Scene& scene) {
+  const BodySpec& material = scene.bodies.front();
+  std::ostringstream out;
+  out << std::setprecision(17) << " friction=\"" << material.friction << " 0.005 0.0001\" condim=\""
+      << (material.friction > 0.0 ? 3 : 1) << "\"";
+  if (material.restitution > 0.0) {
+    const double zeta = damping_ratio_for_restitution(material.restitution);
+    out << " solref=\"" << 2.0 * scene.dt / zeta << ' ' << zeta << "\"";
+  }
+  return out.str();
+}
+
+}  // namespace
+
+MujocoBuffers mujoco_buffers(const Scene& scene) {
+  MujocoBuffers buffers;
+  if (!scene.has_contacts()) return buffers;
+  // pairs that touch at the start or can meet: bounding boxes within 5 cm, grown by what the two
+  // bodies' starting speeds cover in the scene's duration; every dynamic body with every plane.
+  // A contact set that grows beyond this (a collapse, a pile) overflows and is reported.
+  constexpr double kGap = 0.05;
+  const std::size_t n = scene.bodies.size();
+  std::vector<Vec3> low(n), high(n);
+  for (std::size_t i = 0; i < n; ++i)
+    if (scene.bodies[i].shape.kind != ShapeKind::Plane) bounds_of(scene.bodies[i], low[i], high[i]);
+  std::vector<std::size_t> order;
+  long contacts = 0;
+  std::vector<bool> has_neighbour(n, false);
+  for (std::size_t i = 0; i < n; ++i)
+    if (scene.bodies[i].shape.kind != ShapeKind::Plane) order.push_back(i);
+  double fastest = 0.0;
+  for (const BodySpec& b : scene.bodies) fastest = std::max(fastest, b.linear_velocity.norm());
+  const double reach = kGap + 2.0 * fastest * scene.duration;
+  std::sort(order.begin(), order.end(),
+            [&](std::size_t a, std::size_t b) { return low[a].x() < low[b].x(); });
+  for (std::size_t k = 0; k < order.size(); ++k) {
+    const std::size_t i = order[k];
+    for (std::size_t m = k + 1; m < order.size() && low[order[m]].x() <= high[i].x() + reach; ++m) {
+      const std::size_t j = order[m];
+      const BodySpec& a = scene.bodies[i];
+      const BodySpec& b = scene.bodies[j];
+      if (a.mass == 0.0 && b.mass == 0.0) continue;
+      const double grow = (a.linear_velocity.norm() + b.linear_velocity.norm()) * scene.duration +
+                          kGap;
+      bool apart = false;
+      for (int axis = 0; axis < 3; ++axis)
+        apart = apart || low[j][axis] > high[i][axis] + grow || low[i][axis] > high[j][axis] + grow;
+      if (!apart) {
+        contacts += contacts_per_pair(a, b);
+        has_neighbour[i] = has_neighbour[j] = true;
+      }
+    }
+  }
+  // a plane, for each dynamic body near it or with nothing else near it (a body dropped onto
+  // it): a box high in a pyramid meets the ground only if the pyramid falls, which overflows
+  for (std::size_t i : order) {
+    const BodySpec& a = scene.bodies[i];
+    if (a.mass == 0.0) continue;
+    for (const BodySpec& p : scene.bodies) {
+      if (p.shape.kind != ShapeKind::Plane) continue;
+      const Vec3 normal = p.orientation * Vec3::UnitY();
+      const double lowest = (a.position - p.position).dot(normal) -
+                            (a.shape.kind == ShapeKind::Box
+                                 ? (a.orientation.conjugate() * normal).cwiseAbs().dot(
+                                       a.shape.half_extents)
+                                 : a.shape.radius);
+      if (lowest <= reach || !has_neighbour[i]) contacts += contacts_per_pair(a, p);
+    }
+  }
+  // headroom for a contact or two that flickers in and out
+  buffers.nconmax = contacts + contacts / 4 + 8;
+  const int rows_per_contact = scene.bodies.front().friction > 0.0 ? 4 : 1;  // pyramidal, condim 3
+  buffers.njmax = rows_per_contact * buffers.nconmax;
+  return buffers;
+}
+
+namespace {
+
 // A spring is a spatial tendon between two sites, with the scene's stiffness, damping and rest
 // length: MuJoCo's own passive force, Hooke plus damping along the line — the scene's law —
 // evaluated at every integrator stage. (An external force held through RK4's four stages would
@@ -115,7 +228,8 @@ std::string model_xml(const Scene& scene, const std::string& variant) {
   xml << "<mujoco model=\"physbench\">\n";
   xml << "  <option timestep=\"" << scene.dt << "\" gravity=\"" << triple(scene.gravity)
       << "\" integrator=\"" << integrator_name(variant) << "\""
-      << (scene.particles ? " jacobian=\"sparse\"" : "") << ">\n";
+      << (scene.particles ? " jacobian=\"sparse\"" : "")
+      << (variant == "pgs-10" ? " solver=\"PGS\" iterations=\"10\"" : "") << ">\n";
   // a scene without collisions runs no collision detection at all
   if (!scene.collisions) xml << "    <flag contact=\"disable\"/>\n";
   xml << "  </option>\n";
@@ -126,8 +240,28 @@ std::string model_xml(const Scene& scene, const std::string& variant) {
     const long contacts = 2 * scene.particles->count + 8;
     xml << "  <size nconmax=\"" << contacts << "\" njmax=\"" << 4 * contacts << "\"/>\n";
   }
+  const bool contacts = scene.has_contacts();
+  const std::string material = contacts ? contact_attributes(scene) : std::string();
+  if (contacts) {
+    const MujocoBuffers buffers = mujoco_buffers(scene);
+    xml << "  <size nconmax=\"" << buffers.nconmax << "\" njmax=\"" << buffers.njmax << "\"/>\n";
+  }
   xml << "  <worldbody>\n";
   for (const std::string& s : world_sites) xml << "    " << s << "\n";
+  // static bodies of a contact scene: world geoms (a plane's normal is its local y)
+  for (const BodySpec& b : scene.bodies) {
+    if (b.mass > 0.0 || !contacts) continue;
+    if (b.shape.kind == ShapeKind::Plane)
+      xml << "    <geom type=\"plane\" size=\"0 0 1\" pos=\"" << triple(b.position)
+          << "\" zaxis=\"" << triple(b.orientation * Vec3::UnitY()) << "\"" << material << "/>\n";
+    else if (b.shape.kind == ShapeKind::Box)
+      xml << "    <geom type=\"box\" size=\"" << triple(b.shape.half_extents) << "\" pos=\""
+          << triple(b.position) << "\" quat=\"" << quaternion(b.orientation) << "\"" << material
+          << "/>\n";
+    else
+      xml << "    <geom type=\"sphere\" size=\"" << b.shape.radius << "\" pos=\""
+          << triple(b.position) << "\"" << material << "/>\n";
+  }
   for (std::size_t i = 0; i < scene.bodies.size(); ++i) {
     const BodySpec& b = scene.bodies[i];
     if (b.mass == 0.0) continue;  // static geometry arrives with contact scenes
@@ -138,9 +272,10 @@ std::string model_xml(const Scene& scene, const std::string& variant) {
     xml << "      <inertial pos=\"0 0 0\" mass=\"" << b.mass << "\" diaginertia=\""
         << triple(inertia) << "\"/>\n";
     if (b.shape.kind == ShapeKind::Box)
-      xml << "      <geom type=\"box\" size=\"" << triple(b.shape.half_extents) << "\"/>\n";
+      xml << "      <geom type=\"box\" size=\"" << triple(b.shape.half_extents) << "\"" << material
+          << "/>\n";
     else
-      xml << "      <geom type=\"sphere\" size=\"" << b.shape.radius << "\"/>\n";
+      xml << "      <geom type=\"sphere\" size=\"" << b.shape.radius << "\"" << material << "/>\n";
     for (const std::string& s : body_sites[i]) xml << "      " << s << "\n";
     xml << "    </body>\n";
   }
@@ -188,6 +323,10 @@ class MujocoEngine final : public Engine {
     mj_deleteVFS(vfs.get());
     if (!model_) throw std::runtime_error(std::string("mujoco: model rejected: ") + error);
     data_ = mj_makeData(model_);
+    if (!data_)
+      throw std::runtime_error("mujoco: mj_makeData failed (nconmax " +
+                               std::to_string(model_->nconmax) + ", njmax " +
+                               std::to_string(model_->njmax) + ")");
 
     // the dynamic scene bodies in MuJoCo's body order (body 0 is the world)
     int mujoco_body = 1;
@@ -223,6 +362,17 @@ class MujocoEngine final : public Engine {
 
   void step() override {
     mj_step(model_, data_);
+    ++steps_;
+    // MuJoCo drops the contacts beyond nconmax (and constraints beyond njmax) and carries on: a
+    // run that lost contacts is not a result
+    if (data_->warning[mjWARN_CONTACTFULL].number > 0 ||
+        data_->warning[mjWARN_CNSTRFULL].number > 0) {
+      std::ostringstream why;
+      why << "MuJoCo's contact buffer overflowed at step " << steps_ << " (nconmax "
+          << model_->nconmax << ", njmax " << model_->njmax << ", " << data_->ncon
+          << " contacts kept): contacts were dropped, so the run is not a result";
+      throw std::runtime_error(why.str());
+    }
     if (driver_) {
       const std::size_t first = scene_.bodies.size();
       driver_->age(scene_.dt, [&](long i, const rtp::ParticleSpawn& spawn) {
@@ -300,6 +450,7 @@ class MujocoEngine final : public Engine {
   mjModel* model_ = nullptr;
   mjData* data_ = nullptr;
   std::vector<int> body_of_;  // scene body → MuJoCo body id, -1 for static
+  long steps_ = 0;
 };
 
 }  // namespace
@@ -307,18 +458,41 @@ class MujocoEngine final : public Engine {
 EngineInfo mujoco_engine_info() {
   EngineInfo info;
   info.name = "mujoco";
-  info.variants = {"euler", "rk4", "implicit"};
+  info.variants = {"euler", "rk4", "implicit", "pgs-10"};
   info.version = mj_versionString();
-  info.unsupported = [](const Scene& scene, const std::string&) -> std::optional<std::string> {
+  info.unsupported = [](const Scene& scene,
+                        const std::string& variant) -> std::optional<std::string> {
     if (auto why = peer_particles_unsupported(scene, "MuJoCo")) return why;
     if (scene.particles && scene.particles->count > kMaxMujocoParticles)
       return "over " + std::to_string(kMaxMujocoParticles) +
              " particles MuJoCo 2.2.2 cannot create its mjData here (3,000 free bodies failed: "
              "its buffers are sized from nv and njmax when the model loads)";
-    if (scene.has_contacts())
-      return "contact scenes are not mapped onto MuJoCo yet (nconmax/njmax are not sized from the "
-             "scene)";
+    if (scene.has_contacts()) {
+      int dynamic = 0;
+      for (const BodySpec& b : scene.bodies) dynamic += b.mass > 0.0;
+      if ((variant == "rk4" || variant == "implicit") && dynamic > kMaxBodiesForCostlyVariants)
+        return "over " + std::to_string(kMaxBodiesForCostlyVariants) +
+               " bodies in contact only euler and pgs-10 run: euler took 100 ms per step on the "
+               "210-box pyramid, rk4 about 4x that (the suite's time budget)";
+      if (!uniform_materials(scene))
+        return "MuJoCo combines two geoms' friction by max and solref by mean: the scene's pair "
+               "rule holds here only when every body has the same friction and restitution";
+      const MujocoBuffers buffers = mujoco_buffers(scene);
+      if (buffers.njmax > kMaxConstraintRows) {
+        std::ostringstream why;
+        why << std::setprecision(2) << "the scene needs about " << buffers.njmax
+            << " constraint rows, and MuJoCo 2.2.2's mjData holds an njmax x njmax matrix "
+               "(efc_AR): "
+            << 8.0 * double(buffers.njmax) * double(buffers.njmax) / double(1 << 30)
+            << " GB (this adapter's limit: " << kMaxConstraintRows << " rows)";
+        return why.str();
+      }
+    }
     return std::nullopt;
+  };
+  // pgs-10 differs from euler only where there are contacts to solve
+  info.applies = [](const Scene& scene, const std::string& variant) {
+    return variant != "pgs-10" || scene.has_contacts();
   };
   info.create = [](const std::string& variant) -> std::unique_ptr<Engine> {
     return std::make_unique<MujocoEngine>(variant);
@@ -326,6 +500,25 @@ EngineInfo mujoco_engine_info() {
   info.settings = [](const std::string& variant) {
     return std::vector<Setting>{
         {"integrator", integrator_name(variant), "the variant"},
+        variant == "pgs-10"
+            ? Setting{"solver", "PGS, 10 iterations",
+                      "the equal-iterations variant: projected Gauss-Seidel is MuJoCo's nearest to "
+                      "10 velocity iterations of sequential impulses"}
+            : Setting{"solver", "Newton, 100 iterations, tolerance 1e-8 (MuJoCo's defaults)",
+                      "the engine's own defaults"},
+        {"contact buffers", "nconmax from the scene: 4 points per pair whose bounds lie within 5 "
+         "cm (grown by the starting speeds over the duration), and per body and plane where the "
+         "body is that near the plane or near nothing else, +25 % + 8; at most 12,000 rows; "
+         "njmax = 4 rows per contact (1 when frictionless)",
+         "MuJoCo 2.2.2 drops contacts beyond nconmax silently: sized from the scene, and an "
+         "overflow ends the run as an error"},
+        {"contact materials", "friction μ 0.005 0.0001, condim 3 (1 when μ = 0); e > 0: solref = "
+         "(2 dt / ζ, ζ), ζ = −ln e / √(π² + ln² e); e = 0: default solref (0.02, 1) and solimp "
+         "(0.9, 0.95, 0.001); margin 0",
+         "MuJoCo's contact is soft by design; every geom carries the scene's one material, since "
+         "MuJoCo combines friction by max"},
+        {"static bodies", "world geoms: planes (zaxis = the plane's normal), boxes, spheres",
+         "the scene's static geometry"},
         {"contact flag", "disabled when the scene has collisions off",
          "model only what the scene needs"},
         {"mass properties", "explicit <inertial> from the scene", "same inertia in every engine"},

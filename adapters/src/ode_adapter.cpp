@@ -1,6 +1,10 @@
 // ODE adapter (0.16, double precision). ODE has no "up": gravity is the scene's vector.
 #include <ode/ode.h>
 
+#include <cstdarg>
+#include <cstdio>
+#include <stdexcept>
+
 #include "physbench/particle_driver.h"
 #include "physbench/registry.h"
 #include "physbench/springs.h"
@@ -13,21 +17,46 @@ namespace physbench {
 
 namespace {
 
+// ODE reports a failed solve (e.g. "LCP internal error" from dWorldStep's Dantzig solver on
+// degenerate contact sets) through its message handler and carries on with a wrong answer: the
+// adapter counts them and turns the step into an error, so a failed solve is never a result
+thread_local std::string ode_last_message;
+thread_local long ode_messages = 0;
+
+void record_ode_message(int number, const char* format, va_list arguments) {
+  char text[512];
+  std::vsnprintf(text, sizeof text, format, arguments);
+  ode_last_message = "ODE message " + std::to_string(number) + ": " + text;
+  ++ode_messages;
+}
+
 // dInitODE2 once per process, dCloseODE at exit
 struct OdeLibrary {
-  OdeLibrary() { dInitODE2(0); }
+  OdeLibrary() {
+    dInitODE2(0);
+    dSetMessageHandler(&record_ode_message);
+  }
   ~OdeLibrary() { dCloseODE(); }
 };
 
 void ensure_ode_initialised() { static OdeLibrary library; }
 
+// contact points ODE may report per pair (dBoxBox clips up to 8, a box on a plane gives 4)
+constexpr int kMaxContactsPerPair = 8;
+// QuickStep iterations of the equal-iterations variant, against ODE's default of 20
+constexpr int kEqualIterations = 10;
+// dWorldStep factorises each island's whole constraint matrix, O(rows³): a 20-box tower is
+// about 240 rows; a 55-box pyramid is already thousands
+constexpr int kMaxStepBodies = 20;
+
 class OdeEngine final : public Engine {
  public:
-  OdeEngine(bool quick_step, bool spring_joints)
-      : quick_step_(quick_step), spring_joints_(spring_joints) {}
+  OdeEngine(bool quick_step, bool spring_joints, int iterations)
+      : quick_step_(quick_step), spring_joints_(spring_joints), iterations_(iterations) {}
   ~OdeEngine() override {
     for (dGeomID plane : planes_) dGeomDestroy(plane);
     if (particle_space_) dSpaceDestroy(particle_space_);  // destroys its sphere geoms too
+    if (space_) dSpaceDestroy(space_);                    // and the contact scene's geoms
     if (contacts_) dJointGroupDestroy(contacts_);
     if (world_) dWorldDestroy(world_);
   }
@@ -41,6 +70,7 @@ class OdeEngine final : public Engine {
     world_ = dWorldCreate();
     dWorldSetGravity(world_, scene.gravity.x(), scene.gravity.y(), scene.gravity.z());
     dWorldSetAutoDisableFlag(world_, 0);
+    if (iterations_ > 0) dWorldSetQuickStepNumIterations(world_, iterations_);
     for (const BodySpec& b : scene.bodies) {
       if (b.mass == 0.0) {
         // static bodies are geometry only in ODE; with no contacts yet they are only a pose
@@ -65,6 +95,65 @@ class OdeEngine final : public Engine {
     }
     if (spring_joints_) create_spring_joints();
     if (scene.particles) create_particles();
+    if (scene.has_contacts()) create_geoms();
+  }
+
+  // contact scenes: a geom per body in one hash space; static bodies are geoms without a body
+  // (a plane is ODE's plane geom, n · x = d). Each geom's data is its scene index.
+  void create_geoms() {
+    space_ = dHashSpaceCreate(nullptr);
+    if (!contacts_) contacts_ = dJointGroupCreate(0);
+    for (std::size_t i = 0; i < scene_.bodies.size(); ++i) {
+      const BodySpec& b = scene_.bodies[i];
+      dGeomID geom = nullptr;
+      switch (b.shape.kind) {
+        case ShapeKind::Box: {
+          const Vec3 size = 2.0 * b.shape.half_extents;
+          geom = dCreateBox(space_, size.x(), size.y(), size.z());
+          break;
+        }
+        case ShapeKind::Sphere:
+          geom = dCreateSphere(space_, b.shape.radius);
+          break;
+        case ShapeKind::Plane: {
+          const Vec3 n = b.orientation * Vec3::UnitY();
+          geom = dCreatePlane(space_, n.x(), n.y(), n.z(), n.dot(b.position));
+          break;
+        }
+      }
+      dGeomSetData(geom, reinterpret_cast<void*>(i));
+      if (bodies_[i]) {
+        dGeomSetBody(geom, bodies_[i]);
+      } else if (b.shape.kind != ShapeKind::Plane) {
+        dGeomSetPosition(geom, b.position.x(), b.position.y(), b.position.z());
+        const dQuaternion q = {b.orientation.w(), b.orientation.x(), b.orientation.y(),
+                               b.orientation.z()};
+        dGeomSetQuaternion(geom, q);
+      }
+    }
+  }
+
+  // a contact joint per point, with the scene's pair rule: μ = √(μa μb), bounce = max(ea, eb)
+  static void body_contact(void* data, dGeomID a, dGeomID b) {
+    auto* self = static_cast<OdeEngine*>(data);
+    dBodyID body_a = dGeomGetBody(a), body_b = dGeomGetBody(b);
+    if (!body_a && !body_b) return;  // two static geoms
+    dContact contact[kMaxContactsPerPair];
+    const int count = dCollide(a, b, kMaxContactsPerPair, &contact[0].geom, sizeof(dContact));
+    if (count == 0) return;
+    const BodySpec& spec_a = self->scene_.bodies[reinterpret_cast<std::size_t>(dGeomGetData(a))];
+    const BodySpec& spec_b = self->scene_.bodies[reinterpret_cast<std::size_t>(dGeomGetData(b))];
+    const double mu = pair_friction(spec_a, spec_b), bounce = pair_restitution(spec_a, spec_b);
+    for (int i = 0; i < count; ++i) {
+      // Approx1: the friction pyramid, its limit μ times the normal force (Coulomb); without
+      // it ODE's mu is a fixed force limit
+      contact[i].surface.mode = dContactApprox1 | (bounce > 0.0 ? dContactBounce : 0);
+      contact[i].surface.mu = mu;
+      contact[i].surface.bounce = bounce;
+      contact[i].surface.bounce_vel = kRestitutionThreshold;
+      dJointID joint = dJointCreateContact(self->world_, self->contacts_, &contact[i]);
+      dJointAttach(joint, body_a, body_b);
+    }
   }
 
   // particles: a dBody sphere each (the scene's radius and mass) in a simple space, and the planes
@@ -145,11 +234,18 @@ class OdeEngine final : public Engine {
             dBodyAddForceAtPos(bodies_[b], f.x(), f.y(), f.z(), p.x(), p.y(), p.z());
           });
     if (driver_) step_particles_before();
+    if (space_) dSpaceCollide(space_, this, &body_contact);
+    ode_messages = 0;
     if (quick_step_)
       dWorldQuickStep(world_, dt_);
     else
       dWorldStep(world_, dt_);
+    ++steps_;
+    if (ode_messages > 0)
+      throw std::runtime_error(ode_last_message + " (step " + std::to_string(steps_) +
+                               "): ODE's solver failed, so the run is not a result");
     if (driver_) step_particles_after();
+    if (space_) dJointGroupEmpty(contacts_);
   }
 
   BodyState body_state(int index) const override {
@@ -193,6 +289,9 @@ class OdeEngine final : public Engine {
 
   bool quick_step_;
   bool spring_joints_;
+  int iterations_;  // QuickStep iterations; 0: ODE's default
+  long steps_ = 0;
+  dSpaceID space_ = nullptr;
   std::unique_ptr<ParticleDriver> driver_;
   std::size_t first_particle_ = 0;
   dSpaceID particle_space_ = nullptr;
@@ -209,27 +308,42 @@ class OdeEngine final : public Engine {
 EngineInfo ode_engine_info() {
   EngineInfo info;
   info.name = "ode";
-  info.variants = {"quickstep", "step", "step-joint"};
+  info.variants = {"quickstep", "step", "step-joint", "quickstep-10"};
   ensure_ode_initialised();
   info.version = std::string(PHYSBENCH_ODE_VERSION) + " (" + dGetConfiguration() + ")";
-  info.unsupported = [](const Scene& scene, const std::string&) -> std::optional<std::string> {
+  info.unsupported = [](const Scene& scene,
+                        const std::string& variant) -> std::optional<std::string> {
     if (auto why = peer_particles_unsupported(scene, "ODE")) return why;
-    if (scene.has_contacts())
-      return "contact scenes are not mapped onto ODE yet (the contact settings table is not "
-             "written)";
+    if (scene.has_contacts() && scene.particles)
+      return "bodies in contact together with particles are not mapped onto ODE";
+    if (scene.has_contacts() && variant != "quickstep" && variant != "quickstep-10") {
+      int dynamic = 0;
+      for (const BodySpec& b : scene.bodies) dynamic += b.mass > 0.0;
+      if (dynamic > kMaxStepBodies)
+        return "dWorldStep factorises the whole island's constraint matrix (O(rows³)): over " +
+               std::to_string(kMaxStepBodies) + " bodies in contact it takes minutes per step";
+    }
     return std::nullopt;
   };
   info.create = [](const std::string& variant) -> std::unique_ptr<Engine> {
-    return std::make_unique<OdeEngine>(variant == "quickstep", variant == "step-joint");
+    const bool quick = variant == "quickstep" || variant == "quickstep-10";
+    return std::make_unique<OdeEngine>(quick, variant == "step-joint",
+                                       variant == "quickstep-10" ? kEqualIterations : 0);
   };
+  // step-joint differs only with springs, quickstep-10 only where there are contacts to solve
   info.applies = [](const Scene& scene, const std::string& variant) {
-    return variant != "step-joint" || !scene.springs.empty();
+    if (variant == "step-joint") return !scene.springs.empty();
+    if (variant == "quickstep-10") return scene.has_contacts();
+    return true;
   };
   info.settings = [](const std::string& variant) {
     return std::vector<Setting>{
         {"stepper",
-         variant == "quickstep" ? "dWorldQuickStep (20 iterations, ODE default)" : "dWorldStep",
-         "the variant"},
+         variant == "quickstep"      ? "dWorldQuickStep (20 iterations, ODE default)"
+         : variant == "quickstep-10" ? "dWorldQuickStep, 10 iterations"
+                                     : "dWorldStep",
+         variant == "quickstep-10" ? "the equal-iterations variant: 10, as every engine's"
+                                   : "the variant"},
         {"dRandSetSeed", "0 before each run",
          "QuickStep shuffles constraints with a global generator"},
         {"auto-disable", "off (world and every body)", "sleeping off in every engine"},
@@ -240,6 +354,24 @@ EngineInfo ode_engine_info() {
          "plane-sphere "
          "pairs tested (dSpaceCollide2); drag, wind, attractors as dBodyAddForce each step",
          "model only what the scene needs: no particle-particle contact"},
+        {"contacts",
+         "one dHashSpace of geoms (statics without a body, planes as plane geoms); up to 8 "
+         "points per pair, a contact joint each",
+         "ODE needs a joint per contact point; 8 is as many as its box-box clip gives"},
+        {"contact surface",
+         "dContactApprox1 (friction pyramid, limit μ × normal force) with μ = √(μa μb); "
+         "dContactBounce with bounce = max(ea, eb), bounce_vel 0.1 m/s",
+         "the scene's pair rule and restitution threshold; without Approx1 ODE's mu is a fixed "
+         "force limit, not Coulomb"},
+        {"ERP / CFM", "world defaults: ERP 0.2, CFM 1e-10 (double); no soft contact",
+         "ODE's own defaults, stated; contact surface layer 0 and max correcting velocity "
+         "infinite (defaults)"},
+        {"dWorldStep on contacts", "only up to 20 dynamic bodies (else unsupported)",
+         "its direct solve is O(rows³) per island"},
+        {"message handler", "ODE's messages recorded; any message during a step ends the run "
+         "as an error",
+         "dWorldStep reports 'LCP internal error' on degenerate contact sets and carries on "
+         "with a wrong answer (a 10-box tower fell through itself)"},
         {"particle contacts",
          "dContactBounce, bounce = restitution, bounce_vel 0, Coulomb mu = friction",
          "ODE's friction is Coulomb; the scene's (and rtp's) removes a fraction of tangential "

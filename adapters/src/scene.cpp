@@ -80,6 +80,22 @@ const char* to_string(ReferenceKind kind) {
   return "?";
 }
 
+double pair_friction(const BodySpec& a, const BodySpec& b) {
+  return std::sqrt(a.friction * b.friction);
+}
+
+double pair_restitution(const BodySpec& a, const BodySpec& b) {
+  return std::max(a.restitution, b.restitution);
+}
+
+const std::vector<Metric>& all_metrics() {
+  static const std::vector<Metric> all = {
+      Metric::Position,   Metric::Orientation, Metric::Energy,     Metric::LinearMomentum,
+      Metric::AngularMomentum, Metric::StackDrift, Metric::Penetration, Metric::BounceApex,
+      Metric::Incline,    Metric::Exchange,    Metric::Tunnelling};
+  return all;
+}
+
 const char* to_string(Metric metric) {
   switch (metric) {
     case Metric::Position:
@@ -92,13 +108,24 @@ const char* to_string(Metric metric) {
       return "linear_momentum";
     case Metric::AngularMomentum:
       return "angular_momentum";
+    case Metric::StackDrift:
+      return "stack_drift";
+    case Metric::Penetration:
+      return "penetration";
+    case Metric::BounceApex:
+      return "bounce_apex";
+    case Metric::Incline:
+      return "incline";
+    case Metric::Exchange:
+      return "exchange";
+    case Metric::Tunnelling:
+      return "tunnelling";
   }
   return "?";
 }
 
 std::optional<Metric> metric_from_string(const std::string& name) {
-  for (Metric m : {Metric::Position, Metric::Orientation, Metric::Energy, Metric::LinearMomentum,
-                   Metric::AngularMomentum})
+  for (Metric m : all_metrics())
     if (name == to_string(m)) return m;
   return std::nullopt;
 }
@@ -132,6 +159,58 @@ void require_positive(const std::string& field, double value) {
 void require_nonnegative(const std::string& field, double value) {
   require_finite(field, value);
   if (!(value >= 0.0)) fail(field, "must be >= 0, got " + show(value));
+}
+
+
+// the contact metrics' closed forms hold only for the scenes they describe
+void validate_contact_metrics(const Scene& scene) {
+  auto wants = [&](Metric metric) {
+    return std::find(scene.probe.metrics.begin(), scene.probe.metrics.end(), metric) !=
+           scene.probe.metrics.end();
+  };
+  std::vector<int> dynamic, planes, static_boxes;
+  for (int i = 0; i < static_cast<int>(scene.bodies.size()); ++i) {
+    const BodySpec& b = scene.bodies[i];
+    if (b.mass > 0.0)
+      dynamic.push_back(i);
+    else if (b.shape.kind == ShapeKind::Plane)
+      planes.push_back(i);
+    else if (b.shape.kind == ShapeKind::Box)
+      static_boxes.push_back(i);
+  }
+  const bool contact_metric = wants(Metric::StackDrift) || wants(Metric::Penetration) ||
+                              wants(Metric::BounceApex) || wants(Metric::Incline) ||
+                              wants(Metric::Exchange) || wants(Metric::Tunnelling);
+  if (!contact_metric) return;
+  if (scene.particles) fail("probe.metrics", "the contact metrics are for bodies, not particles");
+  if (dynamic.empty()) fail("probe.metrics", "the contact metrics need a dynamic body");
+  if (wants(Metric::BounceApex)) {
+    if (dynamic.size() != 1 || planes.size() != 1)
+      fail("probe.metrics", "bounce_apex needs one dynamic body and one static plane");
+    const BodySpec& b = scene.bodies[dynamic[0]];
+    const Vec3 normal = scene.bodies[planes[0]].orientation * Vec3::UnitY();
+    if (b.linear_velocity.norm() != 0.0 || b.angular_velocity.norm() != 0.0)
+      fail("bodies[" + std::to_string(dynamic[0]) + "]", "bounce_apex needs a drop from rest");
+    if (scene.gravity.norm() == 0.0 || normal.cross(scene.gravity).norm() > 1e-9 * scene.gravity.norm() ||
+        normal.dot(scene.gravity) >= 0.0)
+      fail("gravity", "bounce_apex needs gravity straight into the plane");
+  }
+  if (wants(Metric::Incline)) {
+    if (dynamic.size() != 1 || planes.size() != 1)
+      fail("probe.metrics", "incline needs one dynamic body and one static plane");
+    if (scene.gravity.norm() == 0.0) fail("gravity", "incline needs gravity");
+  }
+  if (wants(Metric::Exchange)) {
+    if (dynamic.size() != 2) fail("probe.metrics", "exchange needs exactly two dynamic bodies");
+    if (scene.gravity.norm() != 0.0) fail("gravity", "exchange holds without gravity");
+  }
+  if (wants(Metric::Tunnelling)) {
+    if (dynamic.size() != 1 || static_boxes.empty())
+      fail("probe.metrics", "tunnelling needs one dynamic body and a static box (the wall)");
+    if (scene.bodies[dynamic[0]].linear_velocity.norm() == 0.0)
+      fail("bodies[" + std::to_string(dynamic[0]) + "].linear_velocity",
+           "tunnelling needs a moving body");
+  }
 }
 
 }  // namespace
@@ -339,6 +418,7 @@ void validate(const Scene& scene) {
       if (m == Metric::Orientation)
         fail("probe.metrics", "the oscillator reference has no orientation");
   }
+  validate_contact_metrics(scene);
   if (scene.reference.kind == ReferenceKind::Ballistic) {
     if (!scene.springs.empty()) fail("reference.kind", "ballistic holds only without springs");
     const bool orientation = std::find(scene.probe.metrics.begin(), scene.probe.metrics.end(),

@@ -320,10 +320,11 @@ Scene scene_from_json(const json& document, const std::string& source) {
         for (std::size_t i = 0; i < list.array().size(); ++i) {
           const std::string name = list.at(i).string();
           const auto metric = metric_from_string(name);
-          if (!metric)
-            list.at(i).fail(
-                "unknown metric \"" + name +
-                "\" (known: position, orientation, energy, linear_momentum, angular_momentum)");
+          if (!metric) {
+            std::string known;
+            for (Metric m : all_metrics()) known += (known.empty() ? "" : ", ") + std::string(to_string(m));
+            list.at(i).fail("unknown metric \"" + name + "\" (known: " + known + ")");
+          }
           scene.probe.metrics.push_back(*metric);
         }
       }

@@ -198,6 +198,23 @@ const std::vector<std::string> kColumns = {"scenario",
                                            "linear_momentum_drift_final",
                                            "angular_momentum_drift_max",
                                            "angular_momentum_drift_final",
+                                           "contact_verdict",
+                                           "stack_drift_max",
+                                           "stack_drift_final",
+                                           "top_height_change",
+                                           "penetration_max",
+                                           "penetration_final",
+                                           "energy_added_max",
+                                           "speed_max",
+                                           "rest_speed_rms",
+                                           "apex_rel_err",
+                                           "apex_rel_err_max",
+                                           "slide_distance",
+                                           "slide_accel",
+                                           "slide_accel_expected",
+                                           "slide_accel_rel_err",
+                                           "exchange_err",
+                                           "tunnelled",
                                            "reference",
                                            "reference_self_error",
                                            "trajectory",
@@ -209,7 +226,8 @@ void write_trajectory_csv(const fs::path& path, const Trajectory& run, const Err
   std::ofstream out(path);
   out << "time,body,px,py,pz,qw,qx,qy,qz,vx,vy,vz,wx,wy,wz,position_err,orientation_err,energy_"
          "drift,"
-         "linear_momentum_drift,angular_momentum_drift,body_position_err\n";
+         "linear_momentum_drift,angular_momentum_drift,body_position_err,stack_drift,"
+         "penetration\n";
   auto at = [](const std::vector<double>& v, std::size_t k) {
     return k < v.size() ? number(v[k]) : std::string();
   };
@@ -232,7 +250,7 @@ void write_trajectory_csv(const fs::path& path, const Trajectory& run, const Err
           << at(series.angular_momentum_drift, k) << ',';
       if (reference && k < reference->samples.size())
         out << number((st.position - reference->samples[k].bodies[b].position).norm());
-      out << '\n';
+      out << ',' << at(series.stack_drift, k) << ',' << at(series.penetration, k) << '\n';
     }
   }
 }
@@ -450,9 +468,10 @@ int run_suite(const RunOptions& options, const fs::path& self) {
           continue;
         }
 
-        json& engine_meta = metadata["engines"][ev.engine];
+        // an engine whose every row is unsupported has no entry (not a null one)
         if (r.status != Status::Unsupported && r.status != Status::Crashed &&
             r.status != Status::Timeout) {
+          json& engine_meta = metadata["engines"][ev.engine];
           engine_meta["version"] = r.engine_version;
           json settings = json::array();
           for (const Setting& s : r.settings)
@@ -531,6 +550,35 @@ int run_suite(const RunOptions& options, const fs::path& self) {
                 r.status == Status::Exploded ? "exploded" : stability_of(scene, series);
             put("linear_momentum_drift", summary.linear_momentum, false);
             put("angular_momentum_drift", summary.angular_momentum, false);
+            put("stack_drift", summary.stack_drift, false);
+            put("penetration", summary.penetration, false);
+            // the contact scene's own question; an empty value could not be computed
+            const ContactSummary contact = contact_summary(scene, r.trajectory, series);
+            auto put_value = [&](const char* key, const std::optional<double>& v) {
+              if (v) row[key] = number(*v);
+            };
+            put_value("top_height_change", contact.top_height_change);
+            put_value("energy_added_max", contact.energy_added_max);
+            put_value("speed_max", contact.speed_max);
+            put_value("rest_speed_rms", contact.rest_speed_rms);
+            std::string apexes;
+            for (double e : contact.apex_relative_errors) {
+              if (!apexes.empty()) apexes += ';';
+              apexes += number(e);
+            }
+            row["apex_rel_err"] = apexes;
+            put_value("apex_rel_err_max", contact.apex_relative_error_max);
+            put_value("slide_distance", contact.slide_distance);
+            put_value("slide_accel", contact.slide_acceleration);
+            put_value("slide_accel_expected", contact.slide_acceleration_expected);
+            put_value("slide_accel_rel_err", contact.slide_acceleration_error);
+            put_value("exchange_err", contact.exchange_error);
+            if (contact.tunnelled) row["tunnelled"] = *contact.tunnelled ? "1" : "0";
+            row["contact_verdict"] = contact.verdict;
+            if (r.status == Status::Exploded && scene.has_contacts())
+              row["contact_verdict"] = "exploded";
+            else if (!contact.message.empty())
+              message += (message.empty() ? "" : "; ") + contact.message;
             const fs::path trajectory = out / "trajectories" / (job + ".csv");
             write_trajectory_csv(trajectory, r.trajectory, series, against);
             row["trajectory"] = fs::relative(trajectory, out).string();
@@ -554,7 +602,11 @@ int run_suite(const RunOptions& options, const fs::path& self) {
           std::cerr << "  orient err max " << row["orientation_err_max"] << " rad";
         if (!row["energy_drift_max"].empty())
           std::cerr << "  energy drift " << row["energy_drift_max"];
-        if (r.status != Status::Ok) std::cerr << "  (" << message << ")";
+        if (!row["contact_verdict"].empty()) std::cerr << "  " << row["contact_verdict"];
+        if (!row["stack_drift_max"].empty()) std::cerr << "  drift " << row["stack_drift_max"] << " m";
+        if (!row["penetration_max"].empty())
+          std::cerr << "  penetration max " << row["penetration_max"] << " m";
+        if (r.status != Status::Ok || !message.empty()) std::cerr << "  (" << message << ")";
         std::cerr << '\n';
       }
     }

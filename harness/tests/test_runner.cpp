@@ -118,6 +118,50 @@ TEST(Runner, ProjectileOnEveryEngineVariant) {
 }
 #endif
 
+#if defined(PHYSBENCH_HAVE_BULLET) && defined(PHYSBENCH_HAVE_ODE) && \
+    defined(PHYSBENCH_HAVE_BOX2D) && defined(PHYSBENCH_HAVE_MUJOCO)
+// the contact smoke run: every peer variant makes a row on a tower and a bounce, none crashes,
+// the contact columns are filled, and a failure of the scene's question is named in the message
+TEST(Runner, ContactScenesOnEveryPeer) {
+  const fs::path dir = fresh_dir("contacts");
+  const Invocation inv =
+      physbench({"run", "-s", "tower-10,bounce-e0.5", "-e", "bullet,ode,box2d,mujoco", "--budget",
+                 "0", "--out", (dir / "r").string()},
+                dir);
+  ASSERT_EQ(inv.outcome.kind, ChildOutcome::Kind::Exited) << inv.output;
+  ASSERT_EQ(inv.outcome.exit_code, 0) << inv.output;
+  const auto rows = read_rows(dir / "r" / "results.csv");
+  int ok = 0;
+  for (const auto& row : rows) {
+    const std::string what = row.at("scenario") + " " + row.at("engine") + "/" + row.at("variant");
+    EXPECT_NE(row.at("status"), "crashed") << what;
+    EXPECT_NE(row.at("status"), "timeout") << what;
+    if (row.at("status") != "ok") {
+      EXPECT_FALSE(row.at("message").empty()) << what;
+      continue;
+    }
+    ++ok;
+    EXPECT_FALSE(row.at("penetration_max").empty()) << what;
+    if (row.at("scenario") == "tower-10") {
+      EXPECT_FALSE(row.at("stack_drift_max").empty()) << what;
+      EXPECT_FALSE(row.at("contact_verdict").empty()) << what;
+      if (row.at("contact_verdict") != "stands") {
+        EXPECT_NE(row.at("message").find(row.at("contact_verdict")), std::string::npos) << what;
+      }
+    } else {
+      EXPECT_FALSE(row.at("apex_rel_err").empty()) << what;
+      EXPECT_TRUE(row.at("stack_drift_max").empty()) << what;  // not asked for: empty, not 0
+    }
+  }
+  for (const std::string engine : {"bullet", "ode", "box2d", "mujoco"})
+    for (const std::string scenario : {"tower-10", "bounce-e0.5"})
+      EXPECT_TRUE(std::any_of(rows.begin(), rows.end(), [&](const auto& r) {
+        return r.at("engine") == engine && r.at("scenario") == scenario && r.at("status") == "ok";
+      })) << engine << " has no ok row on " << scenario;
+  EXPECT_GE(ok, 16);
+}
+#endif
+
 #ifdef PHYSBENCH_HAVE_BOX2D
 TEST(Runner, UnsupportedSceneIsARowWithItsReason) {
   const fs::path dir = fresh_dir("unsupported");

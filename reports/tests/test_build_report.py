@@ -261,3 +261,29 @@ def test_a_malformed_benchmark_file_is_named(tmp_path):
     with pytest.raises(build_report.ReportError, match="broadphase.json: not valid JSON"):
         build_report.broadphase_benchmark(tmp_path)
     assert build_report.particle_benchmark(tmp_path) is None  # absent: nothing to draw
+
+
+@pytest.fixture(scope="module")
+def contact_results(tmp_path_factory) -> Path:
+    if not PHYSBENCH:
+        pytest.skip("PHYSBENCH_EXE is not set (CTest sets it)")
+    out = tmp_path_factory.mktemp("contacts") / "r"
+    subprocess.run([PHYSBENCH, "run", "-s", "tower-10,bounce-e0.5", "-e", "rtp,box2d,ode", "--budget", "0",
+                    "--out", str(out)], check=True, capture_output=True)
+    return out
+
+
+def test_contact_scenes_have_their_tables(contact_results):
+    table = pd.read_csv(contact_results / "results.csv")
+    ran = table[table["status"] == "ok"]
+    if ran.empty:
+        pytest.skip("no engine in this build runs contact scenes")
+    page = build_report.build_report(contact_results).read_text()
+    assert "Contact verdicts" in page
+    assert "drift max (m)" in page and "penetration max (m)" in page
+    assert "Stack drift: largest horizontal displacement" in page  # drift over time
+    for _, row in ran[ran["scenario"] == "tower-10"].iterrows():
+        assert isinstance(row["contact_verdict"], str) and row["contact_verdict"] in page
+    # rtp has no contact solver yet: its rows say why, and the report shows it
+    for message in table[table["status"] == "unsupported"]["message"]:
+        assert build_report.html.escape(message) in page

@@ -1,7 +1,15 @@
 #include "physbench/metrics.h"
 
+#include <algorithm>
 #include <cmath>
+#include <limits>
+#include <map>
+#include <memory>
+#include <numeric>
+#include <sstream>
 #include <stdexcept>
+
+#include "rtp/collision.h"
 
 namespace physbench {
 
@@ -82,6 +90,115 @@ SeriesSummary summary_of(const std::vector<double>& values) {
   return s;
 }
 
+
+// the world's up: against gravity, or y without gravity
+Vec3 up_of(const Scene& scene) {
+  return scene.gravity.norm() > 0.0 ? Vec3(-scene.gravity.normalized()) : Vec3::UnitY();
+}
+
+// The deepest overlap of any two bodies at one sample, by rtp's narrow phase on the scene's true
+// shapes (so no engine's skin or margin hides or adds depth). Dynamic bodies take their sampled
+// pose, static ones the scene's; unprobed dynamic bodies are left out. Pairs are found by a sweep
+// of bounding boxes along x; planes are tested against every body.
+class PenetrationGauge {
+ public:
+  PenetrationGauge(const Scene& scene, const std::vector<int>& probed) : scene_(scene) {
+    for (std::size_t i = 0; i < probed.size(); ++i)
+      if (probed[i] < static_cast<int>(scene.bodies.size())) slot_[probed[i]] = i;
+    for (int i = 0; i < static_cast<int>(scene.bodies.size()); ++i) {
+      const BodySpec& b = scene.bodies[i];
+      if (b.mass > 0.0 && !slot_.count(i)) continue;
+      if (b.shape.kind == ShapeKind::Box) {
+        hulls_.push_back(std::make_unique<rtp::ConvexHull>(rtp::make_box_hull(b.shape.half_extents)));
+        shapes_.push_back(rtp::Shape::box(*hulls_.back(), b.shape.half_extents));
+      } else if (b.shape.kind == ShapeKind::Sphere) {
+        shapes_.push_back(rtp::Shape::sphere(b.shape.radius));
+      } else {
+        shapes_.push_back(rtp::Shape::plane(Vec3::UnitY(), 0.0));
+      }
+      bodies_.push_back(i);
+    }
+  }
+
+  double deepest(const Sample& sample) const {
+    const std::size_t n = bodies_.size();
+    std::vector<rtp::Pose> poses(n);
+    std::vector<Vec3> low(n), high(n);
+    std::vector<std::size_t> solids, planes;
+    for (std::size_t k = 0; k < n; ++k) {
+      const BodySpec& b = scene_.bodies[bodies_[k]];
+      const auto slot = slot_.find(bodies_[k]);
+      const bool moving = b.mass > 0.0 && slot != slot_.end();
+      const Vec3 position = moving ? sample.bodies[slot->second].position : b.position;
+      const Quat orientation =
+          moving ? sample.bodies[slot->second].orientation.normalized() : b.orientation;
+      poses[k] = rtp::Pose(position, orientation);
+      if (b.shape.kind == ShapeKind::Plane) {
+        planes.push_back(k);
+        continue;
+      }
+      const Vec3 reach = b.shape.kind == ShapeKind::Box
+                             ? Vec3(poses[k].rotation.cwiseAbs() * b.shape.half_extents)
+                             : Vec3::Constant(b.shape.radius);
+      low[k] = position - reach;
+      high[k] = position + reach;
+      solids.push_back(k);
+    }
+    double worst = 0.0;
+    rtp::Manifold manifold;
+    auto test = [&](std::size_t a, std::size_t b) {
+      if (!rtp::collide(shapes_[a], poses[a], shapes_[b], poses[b], manifold)) return;
+      double depth = manifold.count ? manifold.depth : 0.0;
+      for (std::uint8_t p = 0; p < manifold.count; ++p)
+        depth = std::max(depth, manifold.points[p].depth);
+      // two boxes overlap by no more than along any of their six face normals; rtp's box path
+      // has been seen to answer 0.98 m for two nearly aligned boxes 1 mm apart (docs/metrics.md)
+      if (shapes_[a].kind == rtp::ShapeKind::Box && shapes_[b].kind == rtp::ShapeKind::Box)
+        depth = std::min(depth, face_axis_overlap(a, b, poses));
+      worst = std::max(worst, depth);
+    };
+    auto is_static = [&](std::size_t k) { return scene_.bodies[bodies_[k]].mass == 0.0; };
+    std::sort(solids.begin(), solids.end(),
+              [&](std::size_t a, std::size_t b) { return low[a].x() < low[b].x(); });
+    for (std::size_t i = 0; i < solids.size(); ++i) {
+      const std::size_t a = solids[i];
+      for (std::size_t j = i + 1; j < solids.size() && low[solids[j]].x() <= high[a].x(); ++j) {
+        const std::size_t b = solids[j];
+        if (is_static(a) && is_static(b)) continue;
+        if (low[b].y() > high[a].y() || low[a].y() > high[b].y() || low[b].z() > high[a].z() ||
+            low[a].z() > high[b].z())
+          continue;
+        test(a, b);
+      }
+      if (!is_static(a))
+        for (std::size_t p : planes) test(a, p);
+    }
+    return worst;
+  }
+
+ private:
+  // the least overlap of two boxes along the face normals of either (0 when one separates them)
+  double face_axis_overlap(std::size_t a, std::size_t b, const std::vector<rtp::Pose>& poses) const {
+    const Vec3& ha = scene_.bodies[bodies_[a]].shape.half_extents;
+    const Vec3& hb = scene_.bodies[bodies_[b]].shape.half_extents;
+    const Vec3 between = poses[b].position - poses[a].position;
+    double least = std::numeric_limits<double>::infinity();
+    for (int k = 0; k < 6; ++k) {
+      const Vec3 axis = k < 3 ? Vec3(poses[a].rotation.col(k)) : Vec3(poses[b].rotation.col(k - 3));
+      const double reach = (poses[a].rotation.transpose() * axis).cwiseAbs().dot(ha) +
+                           (poses[b].rotation.transpose() * axis).cwiseAbs().dot(hb);
+      least = std::min(least, reach - std::abs(between.dot(axis)));
+    }
+    return std::max(least, 0.0);
+  }
+
+  const Scene& scene_;
+  std::map<int, std::size_t> slot_;  // scene body → index in a sample
+  std::vector<int> bodies_;          // the scene bodies measured
+  std::vector<std::unique_ptr<rtp::ConvexHull>> hulls_;
+  std::vector<rtp::Shape> shapes_;   // one per bodies_ entry
+};
+
 }  // namespace
 
 double orientation_angle(const Quat& a, const Quat& b) {
@@ -107,9 +224,24 @@ ErrorSeries compare(const Scene& scene, const Trajectory& run, const Trajectory*
   const double angular_scale =
       initial.angular_momentum.norm() > 0.0 ? initial.angular_momentum.norm() : 1.0;
 
+  const bool drift = wants(scene, Metric::StackDrift);
+  std::optional<PenetrationGauge> gauge;
+  if (wants(scene, Metric::Penetration)) gauge.emplace(scene, run.bodies);
+  const Vec3 up = up_of(scene);
+
   for (std::size_t k = 0; k < run.samples.size(); ++k) {
     const Sample& s = run.samples[k];
     series.time.push_back(s.time);
+    if (drift) {
+      double widest = 0.0;
+      for (std::size_t b = 0; b < s.bodies.size(); ++b) {
+        const Vec3 moved = s.bodies[b].position - run.samples.front().bodies[b].position;
+        widest = std::max(widest, (moved - moved.dot(up) * up).norm());
+        if (!std::isfinite(moved.squaredNorm())) widest = std::nan("");
+      }
+      series.stack_drift.push_back(widest);
+    }
+    if (gauge) series.penetration.push_back(gauge->deepest(s));
     if (position || orientation) {
       const Sample& r = reference->samples[k];
       if (std::abs(r.time - s.time) > 1e-9 * std::max(1.0, s.time))
@@ -151,6 +283,8 @@ ErrorSummary summarise(const ErrorSeries& series) {
     summary.linear_momentum = summary_of(series.linear_momentum_drift);
   if (!series.angular_momentum_drift.empty())
     summary.angular_momentum = summary_of(series.angular_momentum_drift);
+  if (!series.stack_drift.empty()) summary.stack_drift = summary_of(series.stack_drift);
+  if (!series.penetration.empty()) summary.penetration = summary_of(series.penetration);
   return summary;
 }
 
@@ -334,6 +468,8 @@ Trajectory analytic_reference(const Scene& scene, const Trajectory& sampled_at) 
 
 std::string stability_of(const Scene& scene, const ErrorSeries& series) {
   if (series.energy_change.size() < 4) return "";
+  // contacts dissipate and correct by design: a contact scene is judged by its verdict instead
+  if (scene.has_contacts()) return "";
   for (const SpringSpec& s : scene.springs)
     if (s.damping > 0.0) return "";
   const std::size_t half = series.energy_change.size() / 2;
@@ -347,6 +483,278 @@ std::string stability_of(const Scene& scene, const ErrorSeries& series) {
   if (second > 2.0 * first || std::max(first, second) > 20.0) return "unstable";
   if (second < 0.5) return "over-damped";
   return "stable";
+}
+
+namespace {
+
+std::string metres(double value) {
+  std::ostringstream out;
+  out.precision(3);
+  out << value << " m";
+  return out.str();
+}
+
+// the static plane or box bodies of a scene, and its dynamic ones, by scene index
+std::vector<int> bodies_where(const Scene& scene, bool dynamic, std::optional<ShapeKind> kind) {
+  std::vector<int> found;
+  for (int i = 0; i < static_cast<int>(scene.bodies.size()); ++i)
+    if ((scene.bodies[i].mass > 0.0) == dynamic && (!kind || scene.bodies[i].shape.kind == *kind))
+      found.push_back(i);
+  return found;
+}
+
+// how far a shape reaches from its centre along a world direction
+double support_extent(const BodySpec& b, const Quat& orientation, const Vec3& direction) {
+  if (b.shape.kind == ShapeKind::Sphere) return b.shape.radius;
+  if (b.shape.kind == ShapeKind::Plane) return 0.0;
+  return (orientation.normalized().conjugate() * direction).cwiseAbs().dot(b.shape.half_extents);
+}
+
+// where a probed scene body sits in the samples, or -1
+int slot_of(const Trajectory& run, int body) {
+  const auto at = std::find(run.bodies.begin(), run.bodies.end(), body);
+  return at == run.bodies.end() ? -1 : static_cast<int>(at - run.bodies.begin());
+}
+
+void judge_stack(const Scene& scene, const Trajectory& run, const ErrorSeries& series,
+                 ContactSummary& out) {
+  const Vec3 up = up_of(scene);
+  // the top body: the probed dynamic body that starts highest
+  int top = -1;
+  for (std::size_t b = 0; b < run.bodies.size(); ++b)
+    if (top < 0 || run.samples.front().bodies[b].position.dot(up) >
+                       run.samples.front().bodies[std::size_t(top)].position.dot(up))
+      top = static_cast<int>(b);
+  if (top < 0) return;
+  out.top_height_change =
+      (run.samples.back().bodies[top].position - run.samples.front().bodies[top].position).dot(up);
+  double fastest = 0.0, squares = 0.0;
+  long counted = 0;
+  const double last_second = run.samples.back().time - 1.0;
+  for (const Sample& s : run.samples)
+    for (const BodyState& b : s.bodies) {
+      const double speed = b.linear_velocity.norm();
+      fastest = std::max(fastest, speed);
+      if (s.time >= last_second - 1e-9) {
+        squares += speed * speed;
+        ++counted;
+      }
+    }
+  out.speed_max = fastest;
+  if (counted > 0 && run.samples.back().time >= 1.0 - 1e-9)
+    out.rest_speed_rms = std::sqrt(squares / static_cast<double>(counted));
+
+  double drift = 0.0;
+  for (double d : series.stack_drift) drift = std::isnan(d) ? d : std::max(drift, d);
+  const double height = *out.top_height_change;
+  const double sunk = series.penetration.empty() ? 0.0 : series.penetration.back();
+  // a stack started overlapping rises as the overlap is undone: its height is not judged
+  const bool started_overlapping =
+      !series.penetration.empty() && series.penetration.front() > 1e-3;
+  std::ostringstream why;
+  if (!(drift <= kCollapsedBeyond) || height < -kCollapsedBeyond) {
+    out.verdict = "collapsed";
+    why << "collapsed: drift " << metres(drift) << ", top height change " << metres(height)
+        << " (collapsed beyond " << metres(kCollapsedBeyond) << ")";
+  } else if (sunk > kSinksBeyond) {
+    out.verdict = "sinks";
+    why << "sinks: final penetration " << metres(sunk) << " (> " << metres(kSinksBeyond) << ")";
+  } else if (drift > kStandsWithin) {
+    out.verdict = "drifts";
+    why << "drifts: drift " << metres(drift) << ", top height change " << metres(height)
+        << " (stands within " << metres(kStandsWithin) << ")";
+  } else if (std::abs(height) > kStandsWithin && !started_overlapping) {
+    out.verdict = "settles";
+    why << "settles: top height change " << metres(height) << " (stands within "
+        << metres(kStandsWithin) << "), drift " << metres(drift);
+  } else {
+    out.verdict = "stands";
+  }
+  out.message = why.str();
+}
+
+void judge_bounce(const Scene& scene, const Trajectory& run, ContactSummary& out) {
+  const int body = bodies_where(scene, true, std::nullopt).at(0);
+  const int plane_index = bodies_where(scene, false, ShapeKind::Plane).at(0);
+  const int slot = slot_of(run, body);
+  if (slot < 0) return;
+  const BodySpec& b = scene.bodies[body];
+  const BodySpec& plane = scene.bodies[plane_index];
+  const Vec3 n = plane.orientation * Vec3::UnitY();
+  const double g = -scene.gravity.dot(n);
+  auto clearance = [&](const BodyState& s) {
+    return (s.position - plane.position).dot(n) - support_extent(b, s.orientation, n);
+  };
+  const double h0 = clearance(run.samples.front().bodies[std::size_t(slot)]);
+  const double e = pair_restitution(b, plane);
+  // apexes: where the normal speed turns from rising to falling, each estimated from both
+  // neighbouring samples as clearance + v²/2g (exact between samples of a ballistic flight)
+  std::vector<double> apexes;
+  for (std::size_t k = 0; k + 1 < run.samples.size(); ++k) {
+    const BodyState& now = run.samples[k].bodies[std::size_t(slot)];
+    const BodyState& next = run.samples[k + 1].bodies[std::size_t(slot)];
+    const double v0 = now.linear_velocity.dot(n), v1 = next.linear_velocity.dot(n);
+    if (!(v0 > 0.0 && v1 <= 0.0)) continue;
+    const double apex = 0.5 * (clearance(now) + v0 * v0 / (2.0 * g) + clearance(next) +
+                               v1 * v1 / (2.0 * g));
+    if (apex > 1e-3) apexes.push_back(apex);  // a rise under 1 mm is contact jitter, not flight
+  }
+  double worst = 0.0;
+  for (int i = 1; i <= kMaxApexes; ++i) {
+    const double expected = std::pow(e, 2.0 * i) * h0;
+    if (expected < kApexFloor) break;
+    const double measured = i <= static_cast<int>(apexes.size()) ? apexes[std::size_t(i - 1)] : 0.0;
+    out.apex_relative_errors.push_back((measured - expected) / expected);
+    worst = std::max(worst, std::abs(out.apex_relative_errors.back()));
+  }
+  if (!out.apex_relative_errors.empty()) out.apex_relative_error_max = worst;
+  // the closed form is for a box that stays flat: one that turned has tumbled
+  double turned = 0.0;
+  for (const Sample& s : run.samples)
+    turned = std::max(turned, orientation_angle(b.orientation, s.bodies[std::size_t(slot)].orientation));
+  if (turned > kTumbledBeyond) {
+    out.verdict = "tumbled";
+    std::ostringstream why;
+    why.precision(2);
+    why << "tumbled: turned " << turned * 180.0 / M_PI << "° (the closed form is for a flat drop)";
+    out.message = why.str();
+  } else if (!out.apex_relative_errors.empty() && static_cast<int>(apexes.size()) <
+                                               static_cast<int>(out.apex_relative_errors.size())) {
+    out.verdict = "no bounce";
+    out.message = "no bounce: " + std::to_string(apexes.size()) + " apex(es) where the closed form has " +
+                  std::to_string(out.apex_relative_errors.size()) + " above " + metres(kApexFloor);
+  }
+}
+
+void judge_incline(const Scene& scene, const Trajectory& run, ContactSummary& out) {
+  const int body = bodies_where(scene, true, std::nullopt).at(0);
+  const int plane_index = bodies_where(scene, false, ShapeKind::Plane).at(0);
+  const int slot = slot_of(run, body);
+  if (slot < 0) return;
+  const BodySpec& b = scene.bodies[body];
+  const BodySpec& plane = scene.bodies[plane_index];
+  const Vec3 n = plane.orientation * Vec3::UnitY();
+  const Vec3 along = scene.gravity - scene.gravity.dot(n) * n;
+  if (along.norm() < 1e-12 * scene.gravity.norm()) return;  // a level plane has no downhill
+  const Vec3 downhill = along.normalized();
+  const double g = scene.gravity.norm(), mu = pair_friction(b, plane);
+  const double sin_theta = along.norm() / g, cos_theta = -scene.gravity.dot(n) / g;
+  out.slide_acceleration_expected =
+      sin_theta <= mu * cos_theta ? 0.0 : g * (sin_theta - mu * cos_theta);
+  // s(t) along the slope; least squares for s = c0 + c1 t + a t² / 2 (normal equations)
+  Eigen::Matrix3d normal_matrix = Eigen::Matrix3d::Zero();
+  Eigen::Vector3d right = Eigen::Vector3d::Zero();
+  const Vec3 start = run.samples.front().bodies[std::size_t(slot)].position;
+  double s = 0.0;
+  for (const Sample& sample : run.samples) {
+    s = (sample.bodies[std::size_t(slot)].position - start).dot(downhill);
+    const Eigen::Vector3d basis(1.0, sample.time, 0.5 * sample.time * sample.time);
+    normal_matrix += basis * basis.transpose();
+    right += basis * s;
+  }
+  out.slide_distance = s;
+  if (run.samples.size() >= 3) out.slide_acceleration = normal_matrix.ldlt().solve(right)[2];
+  const double expected = *out.slide_acceleration_expected;
+  if (expected > 0.0 && out.slide_acceleration)
+    out.slide_acceleration_error = (*out.slide_acceleration - expected) / expected;
+  const bool moved = std::abs(s) > kMovedBeyond;
+  out.verdict = moved ? "slides" : "stays";
+  if (moved != (expected > 0.0)) {
+    out.verdict += expected > 0.0 ? ", should slide" : ", should stay";
+    out.message = out.verdict + ": the closed form " + (expected > 0.0 ? "slides" : "stays") +
+                  " (moved " + metres(s) + ")";
+  }
+}
+
+void judge_exchange(const Scene& scene, const Trajectory& run, ContactSummary& out) {
+  const std::vector<int> pair = bodies_where(scene, true, std::nullopt);
+  const int sa = slot_of(run, pair[0]), sb = slot_of(run, pair[1]);
+  if (sa < 0 || sb < 0) return;
+  const BodySpec& a = scene.bodies[pair[0]];
+  const BodySpec& b = scene.bodies[pair[1]];
+  // a 1D collision along the line of centres, with the pair's restitution
+  const Vec3 u = (b.position - a.position).normalized();
+  const double ua = a.linear_velocity.dot(u), ub = b.linear_velocity.dot(u);
+  const double approach = ua - ub;
+  if (approach <= 0.0) return;  // they never meet
+  const double e = pair_restitution(a, b), m = a.mass + b.mass;
+  const double ua_after = (a.mass * ua + b.mass * ub + b.mass * e * (ub - ua)) / m;
+  const double ub_after = (a.mass * ua + b.mass * ub + a.mass * e * (ua - ub)) / m;
+  const Vec3 va = a.linear_velocity + (ua_after - ua) * u;
+  const Vec3 vb = b.linear_velocity + (ub_after - ub) * u;
+  const Sample& last = run.samples.back();
+  out.exchange_error = std::max((last.bodies[std::size_t(sa)].linear_velocity - va).norm(),
+                                (last.bodies[std::size_t(sb)].linear_velocity - vb).norm()) /
+                       approach;
+}
+
+void judge_tunnelling(const Scene& scene, const Trajectory& run, ContactSummary& out) {
+  const int body = bodies_where(scene, true, std::nullopt).at(0);
+  const int slot = slot_of(run, body);
+  if (slot < 0) return;
+  const BodySpec& b = scene.bodies[body];
+  const Vec3 heading = b.linear_velocity.normalized();
+  // the wall: the static box straight ahead, nearest first
+  int wall = -1;
+  double nearest = 0.0;
+  for (int w : bodies_where(scene, false, ShapeKind::Box)) {
+    const Vec3 offset = scene.bodies[w].position - b.position;
+    const double ahead = offset.dot(heading);
+    if (ahead <= 0.0) continue;
+    const double aside = (offset - ahead * heading).norm();
+    if (aside > scene.bodies[w].shape.half_extents.maxCoeff() * std::sqrt(3.0)) continue;
+    if (wall < 0 || ahead < nearest) {
+      wall = w;
+      nearest = ahead;
+    }
+  }
+  if (wall < 0) return;
+  const BodySpec& w = scene.bodies[wall];
+  const double wall_reach = support_extent(w, w.orientation, heading);
+  const double near_face = nearest - wall_reach, far_face = nearest + wall_reach;
+  const BodyState& end = run.samples.back().bodies[std::size_t(slot)];
+  const double travelled = (end.position - b.position).dot(heading);
+  const double reach = support_extent(b, end.orientation, heading);
+  out.tunnelled = travelled - reach > far_face;
+  if (*out.tunnelled) {
+    out.verdict = "tunnelled";
+    out.message = "tunnelled: ended " + metres(travelled - reach - far_face) +
+                  " beyond the wall's far face";
+  } else if (travelled > near_face && travelled < far_face) {
+    out.verdict = "stuck";
+    out.message = "stuck: its centre ends inside the wall";
+  } else {
+    out.verdict = "stopped";
+  }
+}
+
+}  // namespace
+
+bool verdict_is_failure(const std::string& verdict) {
+  return verdict == "collapsed" || verdict == "sinks" || verdict == "drifts" ||
+         verdict == "settles" || verdict == "tumbled" || verdict == "slides, should stay" ||
+         verdict == "stays, should slide" ||
+         verdict == "tunnelled" || verdict == "stuck" || verdict == "no bounce" ||
+         verdict == "exploded";
+}
+
+ContactSummary contact_summary(const Scene& scene, const Trajectory& run,
+                               const ErrorSeries& series) {
+  ContactSummary out;
+  if (run.samples.empty() || run.bodies.empty()) return out;
+  if (wants(scene, Metric::Energy) && scene.has_contacts()) {
+    const double start = invariants_of(scene, run.bodies, run.samples.front()).energy;
+    double added = 0.0;
+    for (const Sample& s : run.samples)
+      added = std::max(added, invariants_of(scene, run.bodies, s).energy - start);
+    out.energy_added_max = added;
+  }
+  if (wants(scene, Metric::StackDrift)) judge_stack(scene, run, series, out);
+  if (wants(scene, Metric::BounceApex)) judge_bounce(scene, run, out);
+  if (wants(scene, Metric::Incline)) judge_incline(scene, run, out);
+  if (wants(scene, Metric::Exchange)) judge_exchange(scene, run, out);
+  if (wants(scene, Metric::Tunnelling)) judge_tunnelling(scene, run, out);
+  return out;
 }
 
 Scene refined(const Scene& scene, int divisor) {

@@ -481,6 +481,7 @@ const std::vector<Scenario>& scenarios() {
       s.parameter = k;
       all.push_back(s);
     }
+    for (Scenario& s : contact_scenarios()) all.push_back(std::move(s));
     return all;
   }();
   return list;

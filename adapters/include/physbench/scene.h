@@ -37,8 +37,10 @@ struct BodySpec {
   Quat orientation = Quat::Identity();   // body to world
   Vec3 linear_velocity = Vec3::Zero();   // world (m/s)
   Vec3 angular_velocity = Vec3::Zero();  // world (rad/s)
-  double friction = 0.5;                 // Coulomb coefficient of the pair, as the scene means it
-  double restitution = 0.0;              // coefficient of the pair, as the scene means it
+  // the body's material; a pair of bodies touches with friction √(μa μb) and restitution
+  // max(ea, eb) (pair_friction, pair_restitution), and every adapter maps to that
+  double friction = 0.5;     // Coulomb coefficient
+  double restitution = 0.0;  // 0..1
 };
 
 // Hooke spring plus damping between a body point and a world point or another body's point
@@ -104,7 +106,31 @@ enum class ReferenceKind {
   Converged,   // rtp RK4 at dt / divisor, shown converged by halving once more
 };
 
-enum class Metric { Position, Orientation, Energy, LinearMomentum, AngularMomentum };
+// What a scene asks to be measured. The contact metrics (docs/metrics.md) are computed from the
+// sampled poses the same way for every engine:
+//   StackDrift    largest horizontal displacement of any dynamic body from its start, the top
+//                 body's height change, speeds at rest
+//   Penetration   deepest overlap of any two bodies' true shapes, by rtp's narrow phase
+//   BounceApex    one body dropped on a plane: apex heights against e^(2n) h0
+//   Incline       one body on a sloped plane: slide and acceleration against g (sin θ − μ cos θ)
+//   Exchange      two bodies in a head-on collision: final velocities against the 1D closed form
+//   Tunnelling    one fast body at a static wall: did it end up beyond the wall?
+enum class Metric {
+  Position,
+  Orientation,
+  Energy,
+  LinearMomentum,
+  AngularMomentum,
+  StackDrift,
+  Penetration,
+  BounceApex,
+  Incline,
+  Exchange,
+  Tunnelling,
+};
+
+// every metric, in declaration order (for parsing and messages)
+const std::vector<Metric>& all_metrics();
 
 struct Probe {
   std::vector<int> bodies;       // empty: every dynamic body
@@ -137,6 +163,14 @@ struct Scene {
   int probe_every_steps() const;           // interval / dt, rounded, at least 1
   std::vector<int> probed_bodies() const;  // probe.bodies, or every dynamic body
 };
+
+// the pair rule for two materials: friction √(μa μb), restitution max(ea, eb)
+double pair_friction(const BodySpec& a, const BodySpec& b);
+double pair_restitution(const BodySpec& a, const BodySpec& b);
+
+// restitution applies to impacts faster than this normal speed; slower contacts are inelastic, so
+// resting bodies do not jitter. Engines that have such a threshold get this one (m/s).
+inline constexpr double kRestitutionThreshold = 0.1;
 
 // mass properties of a shape of the given mass: principal inertia in the body frame (kg m²)
 Vec3 principal_inertia(const Shape& shape, double mass);

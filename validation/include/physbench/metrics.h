@@ -7,9 +7,11 @@
 //                       E = kinetic + gravitational + spring potential
 //   linear momentum     |P(t) − P(0)| (kg m/s)
 //   angular momentum    |L(t) − L(0)| / |L(0)| about the world origin (absolute when L(0) = 0)
+// and the contact metrics (contact_summary below), all from the sampled poses.
 #pragma once
 
 #include <optional>
+#include <string>
 #include <vector>
 
 #include "physbench/scene.h"
@@ -22,6 +24,9 @@ struct ErrorSeries {
   // one entry per sample; empty when the scene does not ask for the metric
   std::vector<double> position_error, orientation_error, energy_change, linear_momentum_drift,
       angular_momentum_drift;
+  // contact scenes: the largest horizontal displacement of any probed dynamic body from its
+  // start (m), and the deepest overlap of any two bodies' true shapes by rtp's narrow phase (m)
+  std::vector<double> stack_drift, penetration;
 };
 
 struct SeriesSummary {
@@ -29,7 +34,8 @@ struct SeriesSummary {
 };
 
 struct ErrorSummary {
-  std::optional<SeriesSummary> position, orientation, energy, linear_momentum, angular_momentum;
+  std::optional<SeriesSummary> position, orientation, energy, linear_momentum, angular_momentum,
+      stack_drift, penetration;
   std::optional<double> energy_change_final;  // signed: > 0 gained, < 0 lost
 };
 
@@ -56,6 +62,50 @@ Trajectory oscillator_reference(const Scene& scene, const Trajectory& sampled_at
 // ballistic or oscillator, whichever the scene names; throws for the other kinds
 Trajectory analytic_reference(const Scene& scene, const Trajectory& sampled_at);
 bool has_analytic_reference(const Scene& scene);
+
+// ---- contact scenes (docs/metrics.md, "Contact") ----
+
+// the verdict's thresholds
+inline constexpr double kStandsWithin = 0.01;  // m: drift and top-height change of a stack that stands
+inline constexpr double kCollapsedBeyond = 0.5;  // m: drift or top drop of a collapsed stack
+inline constexpr double kSinksBeyond = 0.02;     // m: final penetration of a stack that sinks
+inline constexpr double kMovedBeyond = 0.01;     // m: an incline block that moved
+inline constexpr double kApexFloor = 0.02;       // m: closed-form apexes below this are not judged
+inline constexpr int kMaxApexes = 5;
+inline constexpr double kTumbledBeyond = 0.1;  // rad: a dropped box that turned this far tumbled
+
+// Everything a contact scene's question asks for, from the sampled poses. A value that cannot be
+// computed stays empty (nullopt), never zero.
+struct ContactSummary {
+  // stack_drift
+  std::optional<double> top_height_change;  // the initially highest body, final − start along up (m)
+  std::optional<double> speed_max;          // fastest probed body at any sample (m/s)
+  std::optional<double> rest_speed_rms;     // RMS speed of all probed bodies over the last second (m/s)
+  // energy (absolute: a resting stack has no energy in play to divide by)
+  std::optional<double> energy_added_max;  // max over time of E(t) − E(0), at least 0 (J)
+  // bounce_apex: (measured − e^(2n) h0) / (e^(2n) h0) for each judged apex; −1: no such apex
+  std::vector<double> apex_relative_errors;
+  std::optional<double> apex_relative_error_max;  // of the absolute values
+  // incline: along the slope, downhill positive
+  std::optional<double> slide_distance;                // final displacement (m)
+  std::optional<double> slide_acceleration;            // least-squares fit s = c0 + c1 t + a t²/2
+  std::optional<double> slide_acceleration_expected;   // g (sin θ − μ cos θ), or 0 when tan θ ≤ μ
+  std::optional<double> slide_acceleration_error;      // relative, when the closed form slides
+  // exchange: max over both bodies |v(T) − v_closed_form| / |approach speed|
+  std::optional<double> exchange_error;
+  // tunnelling: the body ended wholly beyond the wall's far face
+  std::optional<bool> tunnelled;
+  // stands, settles, drifts, sinks, collapsed, tumbled, no bounce, stays, slides, "slides, should
+  // stay", "stays, should slide", tunnelled, stopped, stuck, "" (no verdict)
+  std::string verdict;
+  std::string message;  // why, for any verdict that is a failure of the scene's question
+};
+
+ContactSummary contact_summary(const Scene& scene, const Trajectory& run,
+                               const ErrorSeries& series);
+
+// whether a verdict is a failure the row's message must name (collapsed, sinks, tunnelled, …)
+bool verdict_is_failure(const std::string& verdict);
 
 // the scene as the converged reference runs it: dt / divisor
 Scene refined(const Scene& scene, int divisor);
