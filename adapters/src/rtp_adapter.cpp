@@ -36,7 +36,7 @@ std::string base_variant(const std::string& variant) {
 }
 
 // The contact variants: rtp's default soft step, Box2D v3's own soft-step settings (4 substeps,
-// 30 Hz, damping ratio 10, one relax pass), sequential impulses, and the seed's lab 5; "-2t"
+// 30 Hz, damping ratio 10, one relax pass, 3 m/s push-out), sequential impulses, and the seed's lab 5; "-2t"
 // runs the narrow phase and each colour of the solve on two threads
 std::optional<rtp::ContactSettings> contact_settings_for(const std::string& variant) {
   const std::string base = base_variant(variant);
@@ -49,6 +49,7 @@ std::optional<rtp::ContactSettings> contact_settings_for(const std::string& vari
     settings.contact_hertz = 30.0;
     settings.damping_ratio = 10.0;
     settings.relax_iterations = 1;
+    settings.max_push_speed = 3.0;
   } else if (base == "sequential-impulse") {
     settings.solver = rtp::ContactSolver::SequentialImpulse;
   } else if (base == "seed") {
@@ -175,6 +176,8 @@ EngineInfo rtp_engine_info() {
                          base == "soft-step-4" ? "Box2D v3's default"
                                                : "the stiffness a 20-box tower needs"});
         table.push_back({"relax iterations", std::to_string(c.relax_iterations), "per substep"});
+        table.push_back({"push-out speed", number(c.max_push_speed) + " m/s",
+                         "the fastest a contact pushes penetrating bodies apart"});
         table.push_back({"contact stiffness",
                          number(c.contact_hertz) + " Hz, damping ratio " + number(c.damping_ratio),
                          "capped at a quarter of the substep rate"});

@@ -13,6 +13,7 @@ struct ContactPipeline::BodyShapeData {
   BodyShape kind = BodyShape::None;
   Shape shape;  // grown by half the speculative distance
   double reach = 0.0;   // the farthest its surface is from its centre of mass (m)
+  double thinnest = 0.0;  // its smallest half extent, or radius (m)
   double growth = 0.0;  // this step: half the speculative distance and the motion bound (m)
   bool is_static = false;
   double friction = 0.0, restitution = 0.0;
@@ -83,6 +84,7 @@ void ContactPipeline::add_body(BodyId id, const ShapeDef& def, double friction,
       if (!(def.radius > 0.0)) throw std::invalid_argument("rtp: sphere radius must be > 0");
       data.shape = Shape::sphere(def.radius + grow);
       data.reach = def.radius;
+      data.thinnest = def.radius;
       break;
     case BodyShape::Box: {
       const Vec3 half = def.half_extents.array() + grow;
@@ -97,6 +99,7 @@ void ContactPipeline::add_body(BodyId id, const ShapeDef& def, double friction,
       }
       data.shape = Shape::box(*hull, half);
       data.reach = def.half_extents.norm();
+      data.thinnest = def.half_extents.minCoeff();
       break;
     }
     case BodyShape::Hull:
@@ -125,8 +128,11 @@ void ContactPipeline::add_body(BodyId id, const ShapeDef& def, double friction,
 
 void ContactPipeline::update_bounds(std::span<const BodyState> states, double dt) {
   // A body grows by half the speculative distance and by how far its surface can move this step
-  // (|v| + |ω| reach) dt, up to the cap: a box falling 7 cm a step is met by the ground in the
-  // step it arrives, not found 5 cm deep in the next. Hulls keep the fixed growth (their hull is
+  // (|v| + |ω| reach) dt, up to a share of its own thickness: a box falling 7 cm a step is met by
+  // the ground in the step it arrives, not found 5 cm deep in the next. (The growth is the same
+  // on every side: grown by much more than its size, a box's least-penetration axis against a thin
+  // wall can be a side one, and its speculative points push the wrong way; a faster body
+  // tunnels, and the tunnelling scenes report it.) Hulls keep the fixed growth (their hull is
   // grown once, at creation).
   const double fixed = 0.5 * settings_.speculative_distance;
   for (std::size_t i = 0; i < shapes_.size(); ++i) {
@@ -137,7 +143,7 @@ void ContactPipeline::update_bounds(std::span<const BodyState> states, double dt
     if (!data.is_static && (data.kind == BodyShape::Box || data.kind == BodyShape::Sphere)) {
       const double motion =
           (body.linear_velocity.norm() + body.angular_velocity.norm() * data.reach) * dt;
-      data.growth += std::min(motion, settings_.max_motion_margin);
+      data.growth += std::min(motion, settings_.motion_margin_share * data.thinnest);
     }
     const double extra = data.growth - fixed;
     Aabb box;

@@ -1,0 +1,141 @@
+// rtp's contact gates (collision response, seed lab 5): the scenarios' own scenes run through
+// the harness path (simulate, then the metrics a results row holds), on rtp's default solver at
+// its default cost. Unit boxes, μ = 0.6, dt = 1/60, sleeping off, unless a scene says otherwise.
+#include <gtest/gtest.h>
+
+#include <cmath>
+#include <cstdio>
+
+#include "physbench/metrics.h"
+#include "physbench/scenarios.h"
+#include "support.h"
+
+namespace {
+
+using namespace physbench;
+
+struct ContactRun {
+  RunResult run;
+  ErrorSummary summary;
+  ContactSummary contact;
+};
+
+ContactRun run_rtp(const std::string& variant, const Scene& scene) {
+  SimulateOptions options;
+  options.timing_budget = 0.0;  // tests measure physics, never speed
+  ContactRun r;
+  r.run = simulate(physbench::testing::engine("rtp"), variant, scene, options);
+  EXPECT_EQ(r.run.status, Status::Ok) << variant << " on " << scene.name << ": " << r.run.message;
+  if (r.run.status != Status::Ok) return r;
+  const ErrorSeries series = compare(scene, r.run.trajectory, nullptr);
+  r.summary = summarise(series);
+  r.contact = contact_summary(scene, r.run.trajectory, series);
+  return r;
+}
+
+double drift_of(const ContactRun& r) { return r.summary.stack_drift.value_or(SeriesSummary{}).max; }
+double penetration_of(const ContactRun& r) {
+  return r.summary.penetration.value_or(SeriesSummary{}).max;
+}
+
+// a 20-box tower and a 210-box pyramid stand: every box's horizontal drift, the top box's height
+// change and the deepest penetration (rtp's narrow phase on the sampled poses) all under 1 cm;
+// the seed's lab 5 on the same scenes collapses, as the seed says its stacks do
+TEST(ContactGates, TowerAndPyramidStandWhereTheSeedCollapses) {
+  for (const Scene& scene : {tower_scene(20), pyramid_scene(20)}) {
+    const ContactRun r = run_rtp("soft-step", scene);
+    ASSERT_TRUE(r.summary.stack_drift && r.summary.penetration && r.contact.top_height_change)
+        << scene.name;
+    EXPECT_LT(drift_of(r), 0.01) << scene.name;
+    EXPECT_LT(std::abs(*r.contact.top_height_change), 0.01) << scene.name;
+    EXPECT_LT(penetration_of(r), 0.01) << scene.name;
+    EXPECT_EQ(r.contact.verdict, "stands") << scene.name;
+    const ContactRun seed = run_rtp("seed", scene);
+    std::printf("%s: soft-step drift %.3g m, top %.3g m, penetration %.3g m; seed drift %.3g m, "
+                "top %.3g m, penetration %.3g m (%s)\n",
+                scene.name.c_str(), drift_of(r), *r.contact.top_height_change, penetration_of(r),
+                drift_of(seed), seed.contact.top_height_change.value_or(0.0),
+                penetration_of(seed), seed.contact.verdict.c_str());
+    EXPECT_GT(drift_of(seed), 100.0 * drift_of(r)) << scene.name;
+  }
+}
+
+// a box dropped flat: each apex while it is still well above the threshold hop follows
+// e^(2n) h0 within 5 % (the metric judges the apexes, the scene's closed form gives h0)
+TEST(ContactGates, BounceApexesFollowTheRestitution) {
+  for (double e : {0.2, 0.5, 0.8}) {
+    const ContactRun r = run_rtp("soft-step", bounce_scene(e));
+    ASSERT_FALSE(r.contact.apex_relative_errors.empty()) << "e = " << e;
+    // the first three: later ones carry the integration's ~1.5 % loss per bounce past 5 %
+    const std::size_t judged = std::min<std::size_t>(3, r.contact.apex_relative_errors.size());
+    for (std::size_t n = 0; n < judged; ++n)
+      EXPECT_LT(std::abs(r.contact.apex_relative_errors[n]), 0.05) << "e = " << e << ", apex " << n + 1;
+  }
+}
+
+// μ = 0.5: at 25° the block holds (under 1 mm), at 30° it slides with g (sin θ − μ cos θ) ± 3 %
+TEST(ContactGates, SlopeHoldsAt25DegreesAndSlidesAt30) {
+  const ContactRun holds = run_rtp("soft-step", incline_scene(25.0));
+  ASSERT_TRUE(holds.contact.slide_distance);
+  EXPECT_LT(std::abs(*holds.contact.slide_distance), 1e-3);
+  EXPECT_EQ(holds.contact.verdict, "stays");
+  const ContactRun slides = run_rtp("soft-step", incline_scene(30.0));
+  ASSERT_TRUE(slides.contact.slide_acceleration_error);
+  EXPECT_LT(std::abs(*slides.contact.slide_acceleration_error), 0.03);
+}
+
+// a closed stack gains no energy, and a box at rest neither bounces nor jitters
+TEST(ContactGates, RestingStackGainsNoEnergyAndStaysStill) {
+  const ContactRun r = run_rtp("soft-step", tower_scene(10));
+  ASSERT_TRUE(r.contact.energy_added_max && r.contact.rest_speed_rms);
+  EXPECT_LE(*r.contact.energy_added_max, 1e-9);
+  EXPECT_LT(*r.contact.rest_speed_rms, 1e-3);  // m/s over the last second
+}
+
+// two equal boxes head-on, e = 1, no gravity: velocities exchange within 1 %, and the momentum
+// is kept to round-off
+TEST(ContactGates, HeadOnBoxesExchangeVelocities) {
+  const ContactRun r = run_rtp("soft-step", head_on_scene());
+  ASSERT_TRUE(r.contact.exchange_error);
+  EXPECT_LT(*r.contact.exchange_error, 0.01);
+  const Trajectory& t = r.run.trajectory;
+  ASSERT_GE(t.samples.size(), 2u);
+  Vec3 start = Vec3::Zero(), end = Vec3::Zero();
+  for (const auto& s : t.samples.front().bodies) start += s.linear_velocity;
+  for (const auto& s : t.samples.back().bodies) end += s.linear_velocity;  // equal masses
+  EXPECT_LT((end - start).norm(), 1e-12);
+}
+
+// heavy on light: 10:1 holds (under 1 cm); 100:1 and 1000:1 are measured and printed
+TEST(ContactGates, HeavyOnLightHoldsAtTenToOne) {
+  const ContactRun r = run_rtp("soft-step", mass_ratio_scene(10));
+  ASSERT_TRUE(r.contact.top_height_change);
+  EXPECT_LT(drift_of(r), 0.01);
+  EXPECT_LT(std::abs(*r.contact.top_height_change), 0.01);
+  for (double ratio : {100.0, 1000.0}) {
+    const ContactRun heavier = run_rtp("soft-step", mass_ratio_scene(ratio));
+    std::printf("mass-ratio-%g: drift %.3g m, top %.3g m, penetration %.3g m (%s)\n", ratio,
+                drift_of(heavier), heavier.contact.top_height_change.value_or(0.0),
+                penetration_of(heavier), heavier.contact.verdict.c_str());
+  }
+}
+
+// the same scene twice gives bit-identical states, and so does the two-thread variant: a
+// colour's contacts share no dynamic body, so the threads cannot change the order of any sum
+TEST(ContactGates, RunsAreBitIdenticalAtAnyThreadCount) {
+  const Scene scene = pyramid_scene(10);
+  const ContactRun first = run_rtp("soft-step", scene), again = run_rtp("soft-step", scene),
+                   threaded = run_rtp("soft-step-2t", scene);
+  const auto& a = first.run.trajectory.samples;
+  for (const ContactRun* other : {&again, &threaded}) {
+    const auto& b = other->run.trajectory.samples;
+    ASSERT_EQ(a.size(), b.size());
+    for (std::size_t i = 0; i < a.size(); ++i)
+      for (std::size_t k = 0; k < a[i].bodies.size(); ++k) {
+        ASSERT_EQ(a[i].bodies[k].position, b[i].bodies[k].position) << "sample " << i;
+        ASSERT_EQ(a[i].bodies[k].orientation.coeffs(), b[i].bodies[k].orientation.coeffs());
+      }
+  }
+}
+
+}  // namespace
