@@ -23,5 +23,7 @@ interleave=(--benchmark_enable_random_interleaving=true)
 build/bench/bench/broadphase_bench "${interleave[@]}" --benchmark_out="$out/benchmarks/broadphase.json" --benchmark_out_format=json
 # every engine's narrow phase on the same random pose pairs, agreement with rtp counted (Google Benchmark)
 build/bench/bench/narrowphase_bench "${interleave[@]}" --benchmark_out="$out/benchmarks/narrowphase.json" --benchmark_out_format=json
+# rtp's step with contacts on the pyramid scenes, one and two threads, with per-stage shares
+build/bench/bench/contacts_bench --benchmark_out="$out/benchmarks/contacts.json" --benchmark_out_format=json
 .venv/bin/python reports/build_report.py "$out"
 echo "bench: open $out/index.html"

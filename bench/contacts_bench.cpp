@@ -1,0 +1,113 @@
+// rtp's step with contacts on the pyramid scenes (docs/solver.md): ms per step at bases 10, 20,
+// 50 and 100 (55 … 5,050 boxes) on one and two threads, with the step's stages as shares and the
+// solver alone as ns per contact point per pass. The scene is the scenario's own
+// (validation/src/contact_scenarios.cpp), built into a world by the adapter's make_rtp_world.
+//
+//   build/bench/bench/contacts_bench --benchmark_out=contacts.json --benchmark_out_format=json
+//   build/bench/bench/contacts_bench --benchmark_filter='Pyramid/base:100/'
+#include <benchmark/benchmark.h>
+
+#include <map>
+#include <memory>
+#include <string>
+
+#include "physbench/rtp_world.h"
+#include "physbench/scenarios.h"
+
+namespace {
+
+// steps before timing: the pyramid settles and every contact carries a warm start
+constexpr int kSettleSteps = 30;
+
+rtp::ContactSettings settings_for(int threads) {
+  rtp::ContactSettings settings;  // the default soft step
+  settings.threads = threads;
+  return settings;
+}
+
+// one settled world per (base, threads), kept across Google Benchmark's calls, so it meets
+// each repetition as the last one left it and the settling is paid once
+rtp::World& settled_world(int base, int threads) {
+  static std::map<std::pair<int, int>, std::unique_ptr<rtp::World>> worlds;
+  auto& world = worlds[{base, threads}];
+  if (!world) {
+    const physbench::Scene scene = physbench::pyramid_scene(base);
+    world = std::make_unique<rtp::World>(
+        physbench::make_rtp_world(scene, rtp::Integrator::SemiImplicitEuler, settings_for(threads)));
+    for (int i = 0; i < kSettleSteps; ++i) world->step(scene.dt);
+  }
+  return *world;
+}
+
+void Pyramid(benchmark::State& state) {
+  const int base = int(state.range(0)), threads = int(state.range(1));
+  rtp::World& world = settled_world(base, threads);
+  const double dt = 1.0 / 60.0;
+  rtp::StepProfile sum;
+  std::size_t steps = 0;
+  for (auto _ : state) {
+    world.step(dt);
+    const rtp::StepProfile& p = world.profile();
+    sum.bounds += p.bounds;
+    sum.broad_phase += p.broad_phase;
+    sum.narrow_phase += p.narrow_phase;
+    sum.prepare += p.prepare;
+    sum.warm_start += p.warm_start;
+    sum.solve += p.solve;
+    sum.relax += p.relax;
+    sum.integrate += p.integrate + p.integrate_positions;
+    sum.restitution += p.restitution;
+    sum.total += p.total;
+    ++steps;
+  }
+  const rtp::StepProfile& last = world.profile();
+  const rtp::ContactSettings& c = world.contact_settings();
+  const double bodies = double(world.body_count() - 1);
+  state.SetItemsProcessed(std::int64_t(steps * bodies));  // body-steps/s
+  state.counters["bodies"] = bodies;
+  state.counters["contact_pairs"] = double(last.contact_pairs);
+  state.counters["contact_points"] = double(last.contact_points);
+  state.counters["ms_per_step"] = 1e3 * sum.total / double(steps);
+  // the solve's passes over every point in a step: per substep one biased and the relax passes
+  const double passes = double(c.substeps * (1 + c.relax_iterations));
+  state.counters["solver_ns_per_point_pass"] =
+      1e9 * (sum.solve + sum.relax) / (double(steps) * passes * double(last.contact_points));
+  state.counters["ns_per_contact_pair"] = 1e9 * sum.total / (double(steps) * last.contact_pairs);
+  auto share = [&](const char* name, double seconds) {
+    state.counters[std::string("share_") + name] = seconds / sum.total;
+  };
+  share("bounds", sum.bounds);
+  share("broad_phase", sum.broad_phase);
+  share("narrow_phase", sum.narrow_phase);
+  share("prepare", sum.prepare);
+  share("warm_start", sum.warm_start);
+  share("solve", sum.solve);
+  share("relax", sum.relax);
+  share("integrate", sum.integrate);
+  share("restitution", sum.restitution);
+}
+
+}  // namespace
+
+int main(int argc, char** argv) {
+  const rtp::ContactSettings c;
+  benchmark::AddCustomContext(
+      "solver", "soft step, " + std::to_string(c.substeps) + " substeps, " +
+                    std::to_string(c.relax_iterations) + " relax passes, " +
+                    std::to_string(int(c.contact_hertz)) + " Hz; sleeping off; dt 1/60");
+  benchmark::AddCustomContext("scene", "pyramid-N of the contact scenarios, settled " +
+                                           std::to_string(kSettleSteps) + " steps before timing");
+  for (int base : {10, 20, 50, 100})
+    for (int threads : {1, 2})
+      benchmark::RegisterBenchmark("Pyramid", Pyramid)
+          ->Args({base, threads})
+          ->ArgNames({"base", "threads"})
+          ->Unit(benchmark::kMillisecond)
+          ->UseRealTime()
+          ->MinTime(base >= 100 ? 2.0 : 0.5);
+  benchmark::Initialize(&argc, argv);
+  if (benchmark::ReportUnrecognizedArguments(argc, argv)) return 1;
+  benchmark::RunSpecifiedBenchmarks();
+  benchmark::Shutdown();
+  return 0;
+}
