@@ -43,11 +43,22 @@ struct PairState {
       b.angular_velocity += impulse * row.response_b;
     }
   }
+};
+
+// how far a contact's bodies have moved along its normal since the step's start, as what the
+// points need: s = s₀' + n·(Δx_b − Δx_a) + (ΔR_bᵀ n)·r_b − (ΔR_aᵀ n)·r_a, the two turned normals
+// computed once per contact rather than two rotations per point
+struct NormalMotion {
+  double translation;  // n·(Δx_b − Δx_a) (m)
+  Vec3 turned_a, turned_b;  // ΔR_aᵀ n, ΔR_bᵀ n
+
+  NormalMotion(const PairState& pair, const Vec3& normal)
+      : translation(normal.dot(pair.b.delta_position - pair.a.delta_position)),
+        turned_a(pair.a.delta_rotation.transpose() * normal),
+        turned_b(pair.b.delta_rotation.transpose() * normal) {}
   // the point's separation now: at the step's start plus the bodies' motion since (m)
-  double separation(const ContactPointConstraint& p, const Vec3& normal) const {
-    const Vec3 moved = (b.delta_position + b.delta_rotation * p.anchor_b) -
-                       (a.delta_position + a.delta_rotation * p.anchor_a);
-    return p.base_separation + normal.dot(moved);
+  double separation(const ContactPointConstraint& p) const {
+    return p.base_separation + translation + turned_b.dot(p.anchor_b) - turned_a.dot(p.anchor_a);
   }
 };
 
@@ -257,10 +268,11 @@ void ContactPipeline::solve(double h, bool bias) {
     for (std::uint8_t i = 0; i < c.count; ++i)
       if (c.points[i].max_normal_impulse == 0.0 && !c.points[i].starts_apart)
         c.points[i].approach_velocity = pair.velocity(c.points[i].normal, c.normal);
+    const NormalMotion motion(pair, c.normal);
     const int rounds = c.fresh ? settings_.local_iterations : 1;
     for (int k = 0; k < rounds * c.count; ++k) {
       ContactPointConstraint& p = c.points[k % c.count];
-      const double s = pair.separation(p, c.normal);
+      const double s = motion.separation(p);
       const double vn = pair.velocity(p.normal, c.normal);
       double velocity_bias = 0.0, mass_scale = 1.0, impulse_scale = 0.0;
       if (s > 0.0) {
