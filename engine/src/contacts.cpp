@@ -63,7 +63,7 @@ ContactPipeline::ContactPipeline(const ContactSettings& settings)
 ContactPipeline::~ContactPipeline() = default;
 
 void ContactPipeline::add_body(BodyId id, const ShapeDef& def, double friction,
-                               double restitution, bool is_static, const BodyState& state) {
+                               double restitution, bool is_static) {
   if (id != shapes_.size()) throw std::logic_error("rtp: bodies reach the pipeline in order");
   if (!(friction >= 0.0) || !std::isfinite(friction))
     throw std::invalid_argument("rtp: friction must be finite and >= 0");
@@ -123,7 +123,6 @@ void ContactPipeline::add_body(BodyId id, const ShapeDef& def, double friction,
   shapes_.push_back(data);
   bodies_.emplace_back();
   masses_.emplace_back();
-  (void)state;
 }
 
 void ContactPipeline::update_bounds(std::span<const BodyState> states, double dt) {

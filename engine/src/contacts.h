@@ -88,7 +88,7 @@ class ContactPipeline {
 
   // called for every body in order, shaped or not
   void add_body(BodyId id, const ShapeDef& shape, double friction, double restitution,
-                bool is_static, const BodyState& state);
+                bool is_static);
 
   // ---- the stages, in order ----
   void update_bounds(std::span<const BodyState> states, double dt);

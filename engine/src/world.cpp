@@ -74,12 +74,11 @@ BodyId World::add_body(const BodyDef& def) {
   if (def.shape.kind != BodyShape::None && !pipeline_) {
     pipeline_ = std::make_unique<ContactPipeline>(contact_settings_);
     for (std::size_t i = 0; i < states_.size(); ++i)
-      pipeline_->add_body(BodyId(i), ShapeDef{}, 0.0, 0.0, masses_[i].inverse_mass == 0.0,
-                          states_[i]);
+      pipeline_->add_body(BodyId(i), ShapeDef{}, 0.0, 0.0, masses_[i].inverse_mass == 0.0);
   }
   if (pipeline_)
     pipeline_->add_body(BodyId(states_.size()), def.shape, def.friction, def.restitution,
-                        def.mass == 0.0, state);
+                        def.mass == 0.0);
   states_.push_back(state);
   masses_.push_back(mass);
   // scratch grows with the world, never inside a step
