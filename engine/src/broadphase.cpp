@@ -4,11 +4,12 @@
 #include <bit>
 #include <cmath>
 #include <boost/sort/spreadsort/float_sort.hpp>
-#include <experimental/simd>
 #include <limits>
 #include <stdexcept>
 #include <string>
 #include <unordered_map>
+
+#include "simd.h"
 
 namespace rtp {
 
@@ -378,7 +379,7 @@ class BoxPruning final : public ProxyStore {
   }
 
  private:
-  using Lanes = std::experimental::native_simd<float>;
+  using Lanes = simd::FloatN;  // as many boxes as the widest register holds
   // a box's min x and handle, 8 bytes: what the sorts move
   struct Keyed {
     float key;
@@ -557,7 +558,7 @@ class BoxPruning final : public ProxyStore {
   // boxes starting at +∞ so the sweep needs no scalar tail. begin_columns makes room for that
   // many members in all; append_columns writes the next slab.
   void begin_columns(std::size_t members) {
-    const std::size_t total = members + members_.size() * Lanes::size();
+    const std::size_t total = members + members_.size() * Lanes::kLanes;
     for (auto* column : {&min_x_, &max_x_, &min_y_, &max_y_, &min_z_, &max_z_, &home_})
       if (column->size() < total) column->resize(total);
     if (ids_.size() < total) ids_.resize(total);
@@ -578,7 +579,7 @@ class BoxPruning final : public ProxyStore {
       ids_[i] = id;
       ++i;
     }
-    const std::size_t end = i + Lanes::size();
+    const std::size_t end = i + Lanes::kLanes;
     std::fill(min_x_.begin() + std::ptrdiff_t(i), min_x_.begin() + std::ptrdiff_t(end),
               std::numeric_limits<float>::infinity());
     first_.push_back(end);
@@ -586,31 +587,24 @@ class BoxPruning final : public ProxyStore {
 
   // in each slab, each box against the boxes after it that start before it ends on x
   void sweep() {
-    namespace stdx = std::experimental;
     for (std::size_t s = 0; s < members_.size(); ++s) {
       const Lanes this_slab = Lanes(float(s));
       const std::size_t end = first_[s] + members_[s].size();
       for (std::size_t i = first_[s]; i < end; ++i) {
         const float end_x = max_x_[i], lo_y = min_y_[i], hi_y = max_y_[i], lo_z = min_z_[i],
                     hi_z = max_z_[i], home = home_[i];
-        for (std::size_t j = i + 1;; j += Lanes::size()) {
-          const Lanes start_x(&min_x_[j], stdx::element_aligned);
-          const auto on_x = start_x <= end_x;
-          if (stdx::none_of(on_x)) break;
-          const auto hit =
-              on_x && Lanes(&min_y_[j], stdx::element_aligned) <= hi_y &&
-              Lanes(&max_y_[j], stdx::element_aligned) >= lo_y &&
-              Lanes(&min_z_[j], stdx::element_aligned) <= hi_z &&
-              Lanes(&max_z_[j], stdx::element_aligned) >= lo_z &&
-              stdx::max(Lanes(&home_[j], stdx::element_aligned), Lanes(home)) == this_slab;
-          if (stdx::any_of(hit)) {
-            // the hits as bits, then one pass per set bit: usually one, and no branch per lane
-            unsigned bits = 0;
-            for (std::size_t l = 0; l < Lanes::size(); ++l) bits |= unsigned(hit[l]) << l;
-            for (; bits != 0; bits &= bits - 1)
-              pairs_.push_back(ordered(ids_[i], ids_[j + std::size_t(std::countr_zero(bits))]));
-          }
-          if (!stdx::all_of(on_x)) break;  // sorted: the boxes after these start later still
+        for (std::size_t j = i + 1;; j += Lanes::kLanes) {
+          const simd::MaskN on_x = simd::load_floats(&min_x_[j]) <= end_x;
+          if (!simd::any_of(on_x)) break;
+          const simd::MaskN hit =
+              on_x & (simd::load_floats(&min_y_[j]) <= hi_y) &
+              (simd::load_floats(&max_y_[j]) >= lo_y) & (simd::load_floats(&min_z_[j]) <= hi_z) &
+              (simd::load_floats(&max_z_[j]) >= lo_z) &
+              (simd::max(simd::load_floats(&home_[j]), Lanes(home)) == this_slab);
+          // the hits as bits, then one pass per set bit: usually one, and no branch per lane
+          for (unsigned bits = simd::lane_bits(hit); bits != 0; bits &= bits - 1)
+            pairs_.push_back(ordered(ids_[i], ids_[j + std::size_t(std::countr_zero(bits))]));
+          if (!simd::all_of(on_x)) break;  // sorted: the boxes after these start later still
         }
       }
     }

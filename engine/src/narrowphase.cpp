@@ -7,6 +7,7 @@
 #include <limits>
 
 #include "rtp/collision.h"
+#include "simd.h"
 
 namespace rtp {
 namespace {
@@ -21,70 +22,35 @@ constexpr double kParallelSine = 1e-5;
 // the second shape's face is a duplicate of the first's when their normals are this close
 constexpr double kDuplicateCosine = 1.0 - 1e-9;
 
-// four doubles in one register (GCC's vector extension: one AVX register with -march=native,
-// two SSE2 halves in the portable build); comparisons give lanes of all ones or zero. The helpers
-// below have internal linkage and are inlined, so the portable build's note that passing such a
-// vector changes the ABI without AVX does not apply.
-#pragma GCC diagnostic ignored "-Wpsabi"  // for the rest of this file: GCC notes it at each call
-using Double4 = double __attribute__((vector_size(4 * sizeof(double))));
-using Mask4 = std::int64_t __attribute__((vector_size(4 * sizeof(std::int64_t))));
+using simd::Double4;
+using simd::Double8;
+using simd::Mask4;
+using simd::load4;
+using simd::load8;
 constexpr double kInfinity = std::numeric_limits<double>::infinity();
-constexpr Double4 kInfinity4 = {kInfinity, kInfinity, kInfinity, kInfinity};
-// |x| by clearing the sign bits (one instruction, where a compare and a select take three)
-inline Double4 abs4(Double4 x) {
-  constexpr std::int64_t kMagnitude = std::numeric_limits<std::int64_t>::max();
-  return reinterpret_cast<Double4>(reinterpret_cast<Mask4>(x) & kMagnitude);
-}
-// the lane-wise least and largest (x < y ? x : y is what vminpd computes, but GCC keeps the
-// compare and the select)
-#ifdef __AVX__
-inline Double4 min4(Double4 a, Double4 b) { return __builtin_ia32_minpd256(a, b); }
-inline Double4 max4(Double4 a, Double4 b) { return __builtin_ia32_maxpd256(a, b); }
-#else
-inline Double4 min4(Double4 a, Double4 b) { return a < b ? a : b; }
-inline Double4 max4(Double4 a, Double4 b) { return a > b ? a : b; }
-#endif
-inline double largest_lane(Double4 x) {
-  return std::max(std::max(x[0], x[1]), std::max(x[2], x[3]));
-}
+constexpr Double4 kInfinity4 = Double4(kInfinity);
 // lanes 0, 1, 2 ← 1, 2, 0; lane 3 stays
-inline Double4 rotate4(Double4 x) { return __builtin_shuffle(x, Mask4{1, 2, 0, 3}); }
+inline Double4 rotate4(Double4 x) { return simd::shuffle<1, 2, 0, 3>(x); }
 // lanes 0, 1, 2, 3 ← 1, 2, 3, 0
-inline Double4 next4(Double4 x) { return __builtin_shuffle(x, Mask4{1, 2, 3, 0}); }
-// bit k set where lane k is (one vmovmskpd where AVX is on, not four extractions)
-inline unsigned lane_bits(Mask4 m) {
-#ifdef __AVX__
-  return unsigned(__builtin_ia32_movmskpd256(reinterpret_cast<Double4>(m)));
-#else
-  return unsigned(m[0] & 1) | unsigned(m[1] & 2) | unsigned(m[2] & 4) | unsigned(m[3] & 8);
-#endif
-}
-inline int lane_count(Mask4 m) { return std::popcount(lane_bits(m)); }
-// −x where the mask is set, by the sign bit (GCC branches on a scalar condition's ?:)
-inline Double4 flip_where(Double4 x, Mask4 m) {
-  constexpr std::int64_t kSign = std::numeric_limits<std::int64_t>::min();
-  return reinterpret_cast<Double4>(reinterpret_cast<Mask4>(x) ^ (m & kSign));
-}
+inline Double4 next4(Double4 x) { return simd::shuffle<1, 2, 3, 0>(x); }
 // the three rows of a column-major 3×3 matrix (lane 3 zero) from two unaligned loads and shuffles,
 // where element-wise loads take three loads and two inserts a row
 inline void rows_of(const Mat3& m, Double4 rows[3]) {
   static_assert(sizeof(Mat3) == 9 * sizeof(double));
-  Double4 low, high;  // m00 m10 m20 m01 and m11 m21 m02 m12
-  std::memcpy(&low, m.data(), sizeof low);
-  std::memcpy(&high, m.data() + 4, sizeof high);
+  const Double4 low = load4(m.data()), high = load4(m.data() + 4);  // m00 m10 m20 m01, m11 m21 m02 m12
   constexpr Mask4 kThree = {-1, -1, -1, 0};
-  rows[0] = kThree ? __builtin_shuffle(low, high, Mask4{0, 3, 6, 0}) : Double4{};
-  rows[1] = kThree ? __builtin_shuffle(low, high, Mask4{1, 4, 7, 0}) : Double4{};
-  rows[2] = __builtin_shuffle(low, high, Mask4{2, 5, 0, 0});
-  rows[2][2] = m(2, 2), rows[2][3] = 0.0;
+  rows[0] = simd::select(kThree, simd::shuffle<0, 3, 6, 0>(low, high), 0.0);
+  rows[1] = simd::select(kThree, simd::shuffle<1, 4, 7, 0>(low, high), 0.0);
+  rows[2] = simd::shuffle<2, 5, 0, 0>(low, high);
+  rows[2].set(2, m(2, 2)), rows[2].set(3, 0.0);
 }
 // the columns of a 3×3 matrix held as rows in lanes 0–2 (lane 3 zero), by shuffles
 inline void transpose3(const Double4 rows[3], Double4 columns[3]) {
-  const Double4 low = __builtin_shuffle(rows[0], rows[1], Mask4{0, 4, 1, 5});   // r00 r10 r01 r11
-  const Double4 high = __builtin_shuffle(rows[0], rows[1], Mask4{2, 6, 3, 7});  // r02 r12 0 0
-  columns[0] = __builtin_shuffle(low, rows[2], Mask4{0, 1, 4, 7});
-  columns[1] = __builtin_shuffle(low, rows[2], Mask4{2, 3, 5, 7});
-  columns[2] = __builtin_shuffle(high, rows[2], Mask4{0, 1, 6, 3});
+  const Double4 low = simd::shuffle<0, 4, 1, 5>(rows[0], rows[1]);   // r00 r10 r01 r11
+  const Double4 high = simd::shuffle<2, 6, 3, 7>(rows[0], rows[1]);  // r02 r12 0 0
+  columns[0] = simd::shuffle<0, 1, 4, 7>(low, rows[2]);
+  columns[1] = simd::shuffle<2, 3, 5, 7>(low, rows[2]);
+  columns[2] = simd::shuffle<0, 1, 6, 3>(high, rows[2]);
 }
 
 // the separation an edge axis must exceed to replace the best face axis
@@ -355,25 +321,6 @@ void hull_face_manifold(const ConvexHull& reference_hull, const Pose& reference_
 struct Extent {
   double min, max;
 };
-// eight doubles: one AVX-512 register in the native build, for the hull test's longest loop
-using Double8 = double __attribute__((vector_size(8 * sizeof(double))));
-using Mask8 = std::int64_t __attribute__((vector_size(8 * sizeof(std::int64_t))));
-inline unsigned lane_bits(Mask8 m) {
-  Mask4 half[2];
-  std::memcpy(half, &m, sizeof half);
-  return lane_bits(half[0]) | lane_bits(half[1]) << 4;
-}
-inline Double8 load8(const double* p) {
-  Double8 x;
-  std::memcpy(&x, p, sizeof x);
-  return x;
-}
-inline Double4 load4(const double* p) {
-  Double4 x;
-  std::memcpy(&x, p, sizeof x);
-  return x;
-}
-
 // a convex polyhedron has at most 2V − 4 faces
 constexpr std::size_t kMaxHullFaces = 2 * kMaxHullVertices - 4;
 
@@ -408,7 +355,7 @@ struct PointLanes {
     Double4 least = kInfinity4, largest = -kInfinity4;
     for (std::size_t i = 0; i < padded; i += 4) {
       const Double4 d = dot(i, direction);
-      least = min4(least, d), largest = max4(largest, d);
+      least = simd::min(least, d), largest = simd::max(largest, d);
     }
     return {-largest_lane(-least), largest_lane(largest)};
   }
@@ -657,7 +604,7 @@ bool collide_boxes(const Shape& a, const Pose& pose_a, const Shape& b, const Pos
   Double4 row[3], column[3], abs_row[3], abs_column[3];
   for (int k = 0; k < 3; ++k) row[k] = ra(0, k) * b_x + ra(1, k) * b_y + ra(2, k) * b_z;
   transpose3(row, column);
-  for (int k = 0; k < 3; ++k) abs_row[k] = abs4(row[k]), abs_column[k] = abs4(column[k]);
+  for (int k = 0; k < 3; ++k) abs_row[k] = simd::abs(row[k]), abs_column[k] = simd::abs(column[k]);
   const Vec3 d = pose_b.position - pose_a.position;
   const Double4 t4 = d.x() * a_x + d.y() * a_y + d.z() * a_z;
   const Double4 ha4 = {ha.x(), ha.y(), ha.z(), 0.0}, hb4 = {hb.x(), hb.y(), hb.z(), 0.0};
@@ -666,17 +613,18 @@ bool collide_boxes(const Shape& a, const Pose& pose_a, const Shape& b, const Pos
   // predictor): along a_i the separation is |t_i| − (ha_i + Σ_j hb_j |c_ij|), along b_j it is
   // |(cᵀt)_j| − (hb_j + Σ_i ha_i |c_ij|); a b_j parallel to some a_i was tested as that a_i
   constexpr Mask4 kThreeLanes = {-1, -1, -1, 0};
-  const Double4 separation_a =
-      kThreeLanes ? abs4(t4) - (ha4 + hb.x() * abs_column[0] + hb.y() * abs_column[1] +
-                                hb.z() * abs_column[2])
-                  : -kInfinity4;
+  const Double4 separation_a = simd::select(
+      kThreeLanes,
+      simd::abs(t4) - (ha4 + hb.x() * abs_column[0] + hb.y() * abs_column[1] +
+                       hb.z() * abs_column[2]),
+      -kInfinity4);
   const Double4 t_in_b4 = t4[0] * row[0] + t4[1] * row[1] + t4[2] * row[2];
   const Mask4 duplicate =
-      (max4(max4(abs_row[0], abs_row[1]), abs_row[2]) > kDuplicateCosine) & kThreeLanes;
-  const Double4 separation_b =
-      kThreeLanes & ~duplicate
-          ? abs4(t_in_b4) - (hb4 + ha.x() * abs_row[0] + ha.y() * abs_row[1] + ha.z() * abs_row[2])
-          : -kInfinity4;
+      (simd::max(simd::max(abs_row[0], abs_row[1]), abs_row[2]) > kDuplicateCosine) & kThreeLanes;
+  const Double4 separation_b = simd::select(
+      kThreeLanes & ~duplicate,
+      simd::abs(t_in_b4) - (hb4 + ha.x() * abs_row[0] + ha.y() * abs_row[1] + ha.z() * abs_row[2]),
+      -kInfinity4);
   std::uint16_t axes = std::uint16_t(6 - lane_count(duplicate));
   if (lane_bits((separation_a > 0.0) | (separation_b > 0.0)) != 0) {
     out.axes_tested = axes;
@@ -708,25 +656,25 @@ bool collide_boxes(const Shape& a, const Pose& pose_a, const Shape& b, const Pos
     const int i1 = (i + 1) % 3, i2 = (i + 2) % 3;
     const Double4 length_squared = row[i1] * row[i1] + row[i2] * row[i2];
     // (the division starts here, not after the gap)
-    const Double4 inverse_length_squared = 1.0 / (length_squared >= kSine2 ? length_squared : 1.0);
-    const Double4 least_a = min4(abs_row[i1], abs_row[i2]);
+    const Double4 inverse_length_squared = 1.0 / simd::select(length_squared >= kSine2, length_squared, 1.0);
+    const Double4 least_a = simd::min(abs_row[i1], abs_row[i2]);
     // |c(i, j1)| and |c(i, j2)|
     const Double4 c_next = rotate4(abs_row[i]), c_after = rotate4(c_next);
-    const Double4 least_b = min4(c_next, c_after);
+    const Double4 least_b = simd::min(c_next, c_after);
     const Mask4 valid = (length_squared >= kSine2) &
                         (least_a * least_a >= kSine2 * length_squared) &
                         (least_b * least_b >= kSine2 * length_squared);
     const Double4 radius_a = ha[i1] * abs_row[i2] + ha[i2] * abs_row[i1];
     const Double4 radius_b = hb_next * c_after + hb_after * c_next;
-    const Double4 gap = abs4(t4[i2] * row[i1] - t4[i1] * row[i2]) - (radius_a + radius_b);
+    const Double4 gap = simd::abs(t4[i2] * row[i1] - t4[i1] * row[i2]) - (radius_a + radius_b);
     any_apart |= valid & (gap > 0.0);
     axes += std::uint16_t(lane_count(valid));
-    metric[i] = valid ? gap * gap * inverse_length_squared : kInfinity4;
+    metric[i] = simd::select(valid, gap * gap * inverse_length_squared, kInfinity4);
   }
   out.axes_tested = axes;
   if (lane_bits(any_apart) != 0) return no_contact(out);
   // the least metric and the first (i-major) axis holding it, without a branch per axis
-  const Double4 least = min4(min4(metric[0], metric[1]), metric[2]);
+  const Double4 least = simd::min(simd::min(metric[0], metric[1]), metric[2]);
   const double best_metric = std::min({least[0], least[1], least[2]});
   // (axis (2, 2)'s bit, set always, keeps the index in range for a non-finite pose)
   const unsigned holders = lane_bits(metric[0] == best_metric) |
@@ -742,18 +690,19 @@ bool collide_boxes(const Shape& a, const Pose& pose_a, const Shape& b, const Pos
   auto edge_manifold = [&] {
     const int i = best_edge_i, j = best_edge_j;
     constexpr Mask4 kLane[3] = {{-1, 0, 0, 0}, {0, -1, 0, 0}, {0, 0, -1, 0}};
-    const Double4 a_i = kLane[i] ? Double4{1, 1, 1, 1} : Double4{}, b_j = column[j];
+    const Double4 a_i = simd::select(kLane[i], 1.0, 0.0), b_j = column[j];
     // a_i × b_j, turned to run from A towards B
     Double4 normal = rotate4(a_i) * rotate4(rotate4(b_j)) - rotate4(rotate4(a_i)) * rotate4(b_j);
     const Double4 normal_t = normal * t4;
-    normal = flip_where(normal, Double4{} + (normal_t[0] + normal_t[1] + normal_t[2]) < 0.0);
+    normal = flip_where(normal, Double4(normal_t[0] + normal_t[1] + normal_t[2]) < 0.0);
     // the edges' midpoints: A's at ±ha_k on its two other axes by the normal's signs there, B's at
     // ∓hb_k by the signs of the normal in B's frame
     const Mask4 up_a = normal >= 0.0;
-    const Double4 mid_a = kThreeLanes & ~kLane[i] ? (up_a ? ha4 : -ha4) : Double4{};
+    const Double4 mid_a = simd::select(kThreeLanes & ~kLane[i], simd::select(up_a, ha4, -ha4), 0.0);
     const Double4 normal_in_b = normal[0] * row[0] + normal[1] * row[1] + normal[2] * row[2];
     const Mask4 up_b = normal_in_b < 0.0;
-    const Double4 mid_b_in_b = kThreeLanes & ~kLane[j] ? (up_b ? hb4 : -hb4) : Double4{};
+    const Double4 mid_b_in_b =
+        simd::select(kThreeLanes & ~kLane[j], simd::select(up_b, hb4, -hb4), 0.0);
     const Double4 mid_b =
         t4 + mid_b_in_b[0] * column[0] + mid_b_in_b[1] * column[1] + mid_b_in_b[2] * column[2];
     // the closest points of the edges mid_a + α a_i, |α| ≤ ha_i, and mid_b + β b_j, |β| ≤ hb_j:
@@ -798,13 +747,15 @@ bool collide_boxes(const Shape& a, const Pose& pose_a, const Shape& b, const Pos
   const bool flipped = best_face_axis >= 3;
   const Pose* const poses[2] = {&pose_a, &pose_b};
   const Pose& reference_pose = *poses[flipped];  // (by index: GCC branches on a ?: of references)
-  const Mask4 flip = -Mask4{flipped, flipped, flipped, flipped};
-  const Double4 reference_half4 = flip ? hb4 : ha4, incident_half4 = flip ? ha4 : hb4;
+  const Mask4 flip = flipped;
+  const Double4 reference_half4 = simd::select(flip, hb4, ha4);
+  const Double4 incident_half4 = simd::select(flip, ha4, hb4);
   // the incident box's axes and centre in the reference frame: c's columns and t when A holds
   // the reference face, c's rows and −cᵀt when B does
-  const Double4 incident_axes[3] = {flip ? row[0] : column[0], flip ? row[1] : column[1],
-                                    flip ? row[2] : column[2]};
-  const Double4 incident_centre = flip ? -t_in_b4 : t4;
+  const Double4 incident_axes[3] = {simd::select(flip, row[0], column[0]),
+                                    simd::select(flip, row[1], column[1]),
+                                    simd::select(flip, row[2], column[2])};
+  const Double4 incident_centre = simd::select(flip, -t_in_b4, t4);
   const int axis = best_face_axis - 3 * flipped, ku = (axis + 1) % 3, kv = (axis + 2) % 3;
   // +1 where the centre is at or above 0 (x + 0 turns −0 into +0), by the sign bit
   const double sign = std::copysign(1.0, incident_centre[axis] + 0.0);
@@ -814,8 +765,8 @@ bool collide_boxes(const Shape& a, const Pose& pose_a, const Shape& b, const Pos
   // first on a tie)
   // (the incident axes' components along the reference axis: row `axis` of c, or its column when
   // B holds the reference face; lane 3 is 0 and loses to a unit vector's largest component)
-  const Double4 alignment = flip ? column[axis] : row[axis];
-  const Double4 abs_alignment = abs4(alignment);
+  const Double4 alignment = simd::select(flip, column[axis], row[axis]);
+  const Double4 abs_alignment = simd::abs(alignment);
   const int incident_axis = std::countr_zero(
       lane_bits(abs_alignment == largest_lane(abs_alignment)) | 0b100u);
   // −1 where the face's outward axis points along the reference normal (the product is never 0:
@@ -849,13 +800,13 @@ bool collide_boxes(const Shape& a, const Pose& pose_a, const Shape& b, const Pos
   Double4 cu[6], cv[6], cw[6];
   Mask4 inside[6];
   cu[0] = u, cv[0] = v, cw[0] = w;
-  inside[0] = (abs4(u) <= hu) & (abs4(v) <= hv);
+  inside[0] = (simd::abs(u) <= hu) & (simd::abs(v) <= hv);
   // an edge crosses u = ±h_u at the fraction (u ∓ h_u) / (u − u_next) of its length, v = ±h_v
   // likewise: two divisions serve the four sides (an edge parallel to a side does not cross it)
   const Double4 du = u - u_next, dv = v - v_next;
   const Double4 one = {1, 1, 1, 1};
-  const Double4 inverse_du = one / (du != 0.0 ? du : one);
-  const Double4 inverse_dv = one / (dv != 0.0 ? dv : one);
+  const Double4 inverse_du = one / simd::select(du != 0.0, du, one);
+  const Double4 inverse_dv = one / simd::select(dv != 0.0, dv, one);
   for (int side = 0; side < 4; ++side) {
     const bool along_u = side < 2;  // the side is a line of constant u
     const double side_sign = side % 2 == 0 ? 1.0 : -1.0, limit = side_sign * (along_u ? hu : hv);
@@ -865,10 +816,10 @@ bool collide_boxes(const Shape& a, const Pose& pose_a, const Shape& b, const Pos
     const Double4 f = (across - limit) * (along_u ? inverse_du : inverse_dv);
     Double4& x = cu[1 + side];
     Double4& y = cv[1 + side];
-    x = along_u ? Double4{limit, limit, limit, limit} : u - f * du;
-    y = along_u ? v - f * dv : Double4{limit, limit, limit, limit};
+    x = along_u ? Double4(limit) : u - f * du;
+    y = along_u ? v - f * dv : Double4(limit);
     cw[1 + side] = w + f * (w_next - w);
-    inside[1 + side] = crosses & (along_u ? abs4(y) <= hv : abs4(x) <= hu);
+    inside[1 + side] = crosses & (along_u ? simd::abs(y) <= hv : simd::abs(x) <= hu);
   }
   // a rectangle corner is inside the quad when it is strictly on the inner side of every edge
   // (strictly, so that a quad vertex on the corner is not counted twice); the quad's winding in
@@ -879,7 +830,7 @@ bool collide_boxes(const Shape& a, const Pose& pose_a, const Shape& b, const Pos
     Double4 innermost = kInfinity4;  // the least signed distance, scaled, to the quad's edges
     for (int k = 0; k < 4; ++k) {
       const double eu = u_next[k] - u[k], ev = v_next[k] - v[k];
-      innermost = min4(innermost, winding * (eu * (qv - v[k]) - ev * (qu - u[k])));
+      innermost = simd::min(innermost, winding * (eu * (qv - v[k]) - ev * (qu - u[k])));
     }
     // the corner's height on the incident face's plane (|n_w| ≥ 1/√3: it is the face most
     // aligned with the reference normal)
@@ -1013,7 +964,7 @@ bool collide_hulls(const Shape& a, const Pose& pose_a, const Shape& b, const Pos
     std::uint32_t a_plus = kNoFace, a_minus = kNoFace;
     std::size_t parallel = normals_a.count;  // none
     for (std::size_t m = 0; m < normals_a.count; m += 4) {
-      const unsigned bits = lane_bits(abs4(normals_a.dot(m, u)) > kDuplicateCosine) &
+      const unsigned bits = lane_bits(simd::abs(normals_a.dot(m, u)) > kDuplicateCosine) &
                             normals_a.lanes_in_count(m);
       if (bits != 0) parallel = m + std::size_t(31 - std::countl_zero(bits));
     }

@@ -1,0 +1,461 @@
+// rtp's SIMD vocabulary: the lane types the engine computes in, and the few operations on them.
+//
+// This is the only file that knows instruction sets: no other source has an instruction-set #if,
+// a target attribute or an intrinsic. Two kinds of type:
+//
+//   Pack<T, N>, Mask<T, N>  N lanes of T in GCC's vector extension (one register, or several
+//                           halves on a narrower core: the compiler splits them), and a mask of
+//                           the same shape whose lanes are all ones or zero. The narrow phase's
+//                           4 and 8 doubles and the broad phase's native-width floats.
+//   Float16, Mask16         16 floats in one AVX-512 register and a 16-bit lane mask, for the
+//                           particle kernels, which run on cores found at run time to have
+//                           AVX-512F in a build that may target less: their operations carry the
+//                           target attribute (RTP_SIMD_TARGET_AVX512 marks the kernels that use
+//                           them), and core_has_avx512() is the one run-time check.
+//
+// Every operation has a scalar fallback, a loop over the lanes computing the same thing lane by
+// lane. The CMake option RTP_DISABLE_SIMD defines RTP_DISABLE_SIMD and builds the engine on the
+// fallbacks alone: no vector type, no intrinsic (the compiler may still vectorise plain loops).
+// Results are the same bit for bit, lane for lane — the lane arithmetic is IEEE either way — except
+// the AVX-512 estimates (rsqrt14, rcp14), which have no scalar twin; the particle kernels that use
+// them are never chosen without SIMD (core_has_avx512() is false), and their fallbacks compute
+// exact 1/√x and 1/x so that the code still builds and reads the same.
+//
+// Modelled on Box2D v3's b2FloatW (a lane type per instruction set, each operation written once
+// per set with a scalar version) and Jolt's Vec4 (operators on a wrapped register).
+#pragma once
+
+#include <algorithm>
+#include <array>
+#include <bit>
+#include <cmath>
+#include <cstdint>
+#include <cstring>
+#include <limits>
+#include <type_traits>
+#include <utility>
+
+#if !defined(RTP_DISABLE_SIMD) && defined(__GNUC__)
+#define RTP_SIMD_VECTORS 1  // GCC's vector extension (GCC and Clang)
+#if defined(__x86_64__)
+#include <immintrin.h>
+#define RTP_SIMD_AVX512_KERNELS 1  // the particle kernels' Float16 is an AVX-512 register
+#endif
+#endif
+
+#ifdef RTP_SIMD_AVX512_KERNELS
+#define RTP_SIMD_TARGET_AVX512 __attribute__((target("avx512f")))
+#else
+#define RTP_SIMD_TARGET_AVX512
+#endif
+
+namespace rtp::simd {
+
+// the integer of a lane's width: what a mask lane holds
+template <typename T>
+using LaneInt = std::conditional_t<sizeof(T) == 8, std::int64_t, std::int32_t>;
+
+#ifdef RTP_SIMD_VECTORS
+// N lanes of T in the vector extension (the attribute, written so, may depend on the template)
+template <typename T, std::size_t N>
+struct VectorOf {
+  using type [[gnu::vector_size(N * sizeof(T))]] = T;
+};
+#endif
+
+template <typename T, std::size_t N>
+struct Mask {
+  using Int = LaneInt<T>;
+#ifdef RTP_SIMD_VECTORS
+  using Native = typename VectorOf<Int, N>::type;
+#else
+  using Native = std::array<Int, N>;
+#endif
+  Native v;  // −1 (all bits) where true, 0 where false
+
+  Mask() = default;
+  constexpr explicit Mask(Native n) : v(n) {}
+  // every lane b
+  constexpr Mask(bool b) : v(fill(b ? Int(-1) : Int(0))) {}
+  // lane by lane
+  template <typename... B>
+    requires(sizeof...(B) == N && N > 1)
+  constexpr Mask(B... b) : v{Int(b ? -1 : 0)...} {}
+
+  static constexpr Native fill(Int x) {
+    return [&]<std::size_t... I>(std::index_sequence<I...>) {
+      return Native{((void)I, x)...};
+    }(std::make_index_sequence<N>{});
+  }
+  bool operator[](std::size_t i) const { return v[i] != 0; }
+
+#ifdef RTP_SIMD_VECTORS
+  friend Mask operator&(Mask a, Mask b) { return Mask(a.v & b.v); }
+  friend Mask operator|(Mask a, Mask b) { return Mask(a.v | b.v); }
+  friend Mask operator^(Mask a, Mask b) { return Mask(a.v ^ b.v); }
+  friend Mask operator~(Mask a) { return Mask(~a.v); }
+#else
+  template <typename F>
+  static Mask lanewise(Mask a, Mask b, F f) {
+    Mask r;
+    for (std::size_t i = 0; i < N; ++i) r.v[i] = f(a.v[i], b.v[i]);
+    return r;
+  }
+  friend Mask operator&(Mask a, Mask b) { return lanewise(a, b, [](Int x, Int y) { return Int(x & y); }); }
+  friend Mask operator|(Mask a, Mask b) { return lanewise(a, b, [](Int x, Int y) { return Int(x | y); }); }
+  friend Mask operator^(Mask a, Mask b) { return lanewise(a, b, [](Int x, Int y) { return Int(x ^ y); }); }
+  friend Mask operator~(Mask a) { return lanewise(a, a, [](Int x, Int) { return Int(~x); }); }
+#endif
+  Mask& operator|=(Mask b) { return *this = *this | b; }
+  Mask& operator&=(Mask b) { return *this = *this & b; }
+};
+
+template <typename T, std::size_t N>
+struct Pack {
+#ifdef RTP_SIMD_VECTORS
+  using Native = typename VectorOf<T, N>::type;
+#else
+  using Native = std::array<T, N>;
+#endif
+  using MaskType = Mask<T, N>;
+  static constexpr std::size_t kLanes = N;
+  Native v;
+
+  Pack() = default;  // lanes undefined, as a scalar's; Pack{} is all zero
+  constexpr explicit Pack(Native n) : v(n) {}
+  // every lane x (implicit, so that scalars mix with packs in expressions)
+  constexpr Pack(T x) : v(fill(x)) {}
+  // lane by lane
+  template <typename... A>
+    requires(sizeof...(A) == N && N > 1)
+  constexpr Pack(A... a) : v{T(a)...} {}
+
+  static constexpr Native fill(T x) {
+    return [&]<std::size_t... I>(std::index_sequence<I...>) {
+      return Native{((void)I, x)...};
+    }(std::make_index_sequence<N>{});
+  }
+  T operator[](std::size_t i) const { return v[i]; }
+  void set(std::size_t i, T x) { v[i] = x; }
+
+#ifdef RTP_SIMD_VECTORS
+  friend Pack operator+(Pack a, Pack b) { return Pack(a.v + b.v); }
+  friend Pack operator-(Pack a, Pack b) { return Pack(a.v - b.v); }
+  friend Pack operator*(Pack a, Pack b) { return Pack(a.v * b.v); }
+  friend Pack operator/(Pack a, Pack b) { return Pack(a.v / b.v); }
+  friend Pack operator-(Pack a) { return Pack(-a.v); }
+  friend MaskType operator<(Pack a, Pack b) { return MaskType(a.v < b.v); }
+  friend MaskType operator<=(Pack a, Pack b) { return MaskType(a.v <= b.v); }
+  friend MaskType operator>(Pack a, Pack b) { return MaskType(a.v > b.v); }
+  friend MaskType operator>=(Pack a, Pack b) { return MaskType(a.v >= b.v); }
+  friend MaskType operator==(Pack a, Pack b) { return MaskType(a.v == b.v); }
+  friend MaskType operator!=(Pack a, Pack b) { return MaskType(a.v != b.v); }
+#else
+  template <typename F>
+  static Pack lanewise(Pack a, Pack b, F f) {
+    Pack r;
+    for (std::size_t i = 0; i < N; ++i) r.v[i] = f(a.v[i], b.v[i]);
+    return r;
+  }
+  template <typename F>
+  static MaskType compare(Pack a, Pack b, F f) {
+    MaskType r;
+    for (std::size_t i = 0; i < N; ++i) r.v[i] = f(a.v[i], b.v[i]) ? -1 : 0;
+    return r;
+  }
+  friend Pack operator+(Pack a, Pack b) { return lanewise(a, b, [](T x, T y) { return x + y; }); }
+  friend Pack operator-(Pack a, Pack b) { return lanewise(a, b, [](T x, T y) { return x - y; }); }
+  friend Pack operator*(Pack a, Pack b) { return lanewise(a, b, [](T x, T y) { return x * y; }); }
+  friend Pack operator/(Pack a, Pack b) { return lanewise(a, b, [](T x, T y) { return x / y; }); }
+  friend Pack operator-(Pack a) { return lanewise(a, a, [](T x, T) { return -x; }); }
+  friend MaskType operator<(Pack a, Pack b) { return compare(a, b, [](T x, T y) { return x < y; }); }
+  friend MaskType operator<=(Pack a, Pack b) { return compare(a, b, [](T x, T y) { return x <= y; }); }
+  friend MaskType operator>(Pack a, Pack b) { return compare(a, b, [](T x, T y) { return x > y; }); }
+  friend MaskType operator>=(Pack a, Pack b) { return compare(a, b, [](T x, T y) { return x >= y; }); }
+  friend MaskType operator==(Pack a, Pack b) { return compare(a, b, [](T x, T y) { return x == y; }); }
+  friend MaskType operator!=(Pack a, Pack b) { return compare(a, b, [](T x, T y) { return x != y; }); }
+#endif
+};
+
+// ---- the lane types ----
+
+using Double4 = Pack<double, 4>;
+using Mask4 = Mask<double, 4>;
+using Double8 = Pack<double, 8>;
+using Mask8 = Mask<double, 8>;
+// floats in the widest register the build targets (the broad phase's sweep; the lane count
+// changes no result, only how many boxes one comparison covers)
+#if defined(RTP_SIMD_VECTORS) && defined(__AVX512F__)
+inline constexpr std::size_t kNativeFloats = 16;
+#elif defined(RTP_SIMD_VECTORS) && defined(__AVX__)
+inline constexpr std::size_t kNativeFloats = 8;
+#else
+inline constexpr std::size_t kNativeFloats = 4;
+#endif
+using FloatN = Pack<float, kNativeFloats>;
+using MaskN = Mask<float, kNativeFloats>;
+
+// ---- operations on packs ----
+
+// N lanes from p (any alignment)
+template <typename T, std::size_t N>
+Pack<T, N> load_lanes(const T* p) {
+  Pack<T, N> x;
+  std::memcpy(&x.v, p, sizeof x.v);
+  return x;
+}
+inline Double4 load4(const double* p) { return load_lanes<double, 4>(p); }
+inline Double8 load8(const double* p) { return load_lanes<double, 8>(p); }
+inline FloatN load_floats(const float* p) { return load_lanes<float, kNativeFloats>(p); }
+
+// a where m is set, b elsewhere
+// (the type follows the mask: scalars may stand for either pack)
+template <typename T, std::size_t N>
+Pack<T, N> select(Mask<T, N> m, std::type_identity_t<Pack<T, N>> a,
+                  std::type_identity_t<Pack<T, N>> b) {
+#ifdef RTP_SIMD_VECTORS
+  return Pack<T, N>(m.v ? a.v : b.v);
+#else
+  Pack<T, N> r;
+  for (std::size_t i = 0; i < N; ++i) r.v[i] = m.v[i] ? a.v[i] : b.v[i];
+  return r;
+#endif
+}
+
+// the lanes' bits as integers and back
+template <typename T, std::size_t N>
+Mask<T, N> bits_of(Pack<T, N> x) {
+  Mask<T, N> r;
+  static_assert(sizeof r.v == sizeof x.v);
+  std::memcpy(&r.v, &x.v, sizeof r.v);
+  return r;
+}
+template <typename T, std::size_t N>
+Pack<T, N> from_bits(Mask<T, N> m) {
+  Pack<T, N> r;
+  std::memcpy(&r.v, &m.v, sizeof r.v);
+  return r;
+}
+
+// |x| by clearing the sign bits (one instruction, where a compare and a select take three)
+template <typename T, std::size_t N>
+Pack<T, N> abs(Pack<T, N> x) {
+  using Int = LaneInt<T>;
+  constexpr Int kMagnitude = std::numeric_limits<Int>::max();
+#ifdef RTP_SIMD_VECTORS
+  return from_bits(Mask<T, N>(bits_of(x).v & kMagnitude));
+#else
+  Mask<T, N> m = bits_of(x);
+  for (std::size_t i = 0; i < N; ++i) m.v[i] &= kMagnitude;
+  return from_bits(m);
+#endif
+}
+
+// −x where m is set, by the sign bit (a compiler branches on a scalar condition's ?:)
+template <typename T, std::size_t N>
+Pack<T, N> flip_where(Pack<T, N> x, Mask<T, N> m) {
+  using Int = LaneInt<T>;
+  constexpr Int kSign = std::numeric_limits<Int>::min();
+  return from_bits(bits_of(x) ^ (m & Mask<T, N>(Mask<T, N>::fill(kSign))));
+}
+
+// the lane-wise least and largest: a < b ? a : b and a > b ? a : b, NaNs and zeros included
+// (what vminpd and vmaxpd compute, but GCC keeps the compare and the select of the generic form)
+template <typename T, std::size_t N>
+Pack<T, N> min(Pack<T, N> a, Pack<T, N> b) {
+#if defined(RTP_SIMD_VECTORS) && defined(__AVX__)
+  if constexpr (std::is_same_v<T, double> && N == 4)
+    return Pack<T, N>(__builtin_ia32_minpd256(a.v, b.v));
+#endif
+  return select(a < b, a, b);
+}
+template <typename T, std::size_t N>
+Pack<T, N> max(Pack<T, N> a, Pack<T, N> b) {
+#if defined(RTP_SIMD_VECTORS) && defined(__AVX__)
+  if constexpr (std::is_same_v<T, double> && N == 4)
+    return Pack<T, N>(__builtin_ia32_maxpd256(a.v, b.v));
+#endif
+  return select(a > b, a, b);
+}
+
+// lanes rearranged: lane i of the result is lane I_i of x
+template <std::size_t... I, typename T, std::size_t N>
+Pack<T, N> shuffle(Pack<T, N> x) {
+  static_assert(sizeof...(I) == N);
+#ifdef RTP_SIMD_VECTORS
+  return Pack<T, N>(__builtin_shuffle(x.v, typename Mask<T, N>::Native{I...}));
+#else
+  return Pack<T, N>{x.v[I]...};
+#endif
+}
+// lanes from two packs: I < N picks lane I of x, I ≥ N lane I − N of y
+template <std::size_t... I, typename T, std::size_t N>
+Pack<T, N> shuffle(Pack<T, N> x, Pack<T, N> y) {
+  static_assert(sizeof...(I) == N);
+#ifdef RTP_SIMD_VECTORS
+  return Pack<T, N>(__builtin_shuffle(x.v, y.v, typename Mask<T, N>::Native{I...}));
+#else
+  return Pack<T, N>{(I < N ? x.v[I % N] : y.v[I % N])...};
+#endif
+}
+
+// the largest lane
+template <typename T, std::size_t N>
+T largest_lane(Pack<T, N> x) {
+  T largest = x[0];
+  for (std::size_t i = 1; i < N; ++i) largest = std::max(largest, x[i]);
+  return largest;
+}
+inline double largest_lane(Double4 x) {
+  return std::max(std::max(x[0], x[1]), std::max(x[2], x[3]));
+}
+
+// bit i set where lane i is (one vmovmskpd or vmovmskps where the build has it, not one
+// extraction per lane)
+template <typename T, std::size_t N>
+unsigned lane_bits(Mask<T, N> m) {
+#if defined(RTP_SIMD_VECTORS) && defined(__AVX__)
+  if constexpr (std::is_same_v<T, double> && N == 4)
+    return unsigned(__builtin_ia32_movmskpd256(from_bits(m).v));
+  if constexpr (std::is_same_v<T, float> && N == 8)
+    return unsigned(_mm256_movemask_ps(from_bits(m).v));
+#endif
+#if defined(RTP_SIMD_VECTORS) && defined(__AVX512F__)
+  if constexpr (std::is_same_v<T, float> && N == 16)
+    return unsigned(_mm512_cmplt_epi32_mask(__m512i(m.v), _mm512_setzero_si512()));
+#endif
+#if defined(RTP_SIMD_VECTORS) && defined(__SSE__)
+  if constexpr (std::is_same_v<T, float> && N == 4)
+    return unsigned(_mm_movemask_ps(from_bits(m).v));
+#endif
+  if constexpr (N == 8 && sizeof(T) == 8) {
+    // two halves of four
+    Mask<T, 4> half[2];
+    std::memcpy(half, &m.v, sizeof half);
+    return lane_bits(half[0]) | lane_bits(half[1]) << 4;
+  } else {
+    unsigned bits = 0;
+    for (std::size_t i = 0; i < N; ++i) bits |= unsigned(m.v[i] & 1) << i;
+    return bits;
+  }
+}
+template <typename T, std::size_t N>
+int lane_count(Mask<T, N> m) {
+  return std::popcount(lane_bits(m));
+}
+template <typename T, std::size_t N>
+bool any_of(Mask<T, N> m) {
+  return lane_bits(m) != 0;
+}
+template <typename T, std::size_t N>
+bool all_of(Mask<T, N> m) {
+  return lane_bits(m) == (N == 32 ? ~0u : (1u << N) - 1u);
+}
+
+// ---- 16 floats for the particle kernels ----
+
+#ifdef RTP_SIMD_AVX512_KERNELS
+using Mask16 = __mmask16;
+struct Float16 {
+  __m512 v;
+};
+#define RTP_F16 RTP_SIMD_TARGET_AVX512 inline
+// The unmasked forms of min, max, rsqrt14 and rcp14 fill a register from an "undefined" one, which
+// GCC 12 reports as maybe uninitialised at every use (GCC bug 105593); the zero-masked forms under
+// a full mask compile to the same instructions.
+inline constexpr Mask16 kAll16 = 0xFFFF;
+RTP_F16 Float16 splat16(float x) { return {_mm512_set1_ps(x)}; }
+RTP_F16 Float16 zero16() { return {_mm512_setzero_ps()}; }
+// the lanes of m from p, zero elsewhere; the lanes of m to p
+RTP_F16 Float16 load16(Mask16 m, const float* p) { return {_mm512_maskz_loadu_ps(m, p)}; }
+RTP_F16 void store16(float* p, Mask16 m, Float16 x) { _mm512_mask_storeu_ps(p, m, x.v); }
+RTP_F16 Float16 add(Float16 a, Float16 b) { return {_mm512_add_ps(a.v, b.v)}; }
+RTP_F16 Float16 sub(Float16 a, Float16 b) { return {_mm512_sub_ps(a.v, b.v)}; }
+RTP_F16 Float16 mul(Float16 a, Float16 b) { return {_mm512_mul_ps(a.v, b.v)}; }
+// a b + c, −(a b) + c and a b − c, each rounded once
+RTP_F16 Float16 fmadd(Float16 a, Float16 b, Float16 c) { return {_mm512_fmadd_ps(a.v, b.v, c.v)}; }
+RTP_F16 Float16 fnmadd(Float16 a, Float16 b, Float16 c) { return {_mm512_fnmadd_ps(a.v, b.v, c.v)}; }
+RTP_F16 Float16 fmsub(Float16 a, Float16 b, Float16 c) { return {_mm512_fmsub_ps(a.v, b.v, c.v)}; }
+RTP_F16 Float16 min(Float16 a, Float16 b) { return {_mm512_maskz_min_ps(kAll16, a.v, b.v)}; }
+RTP_F16 Float16 max(Float16 a, Float16 b) { return {_mm512_maskz_max_ps(kAll16, a.v, b.v)}; }
+// 1/√x and 1/x within a relative 2⁻¹⁴ (the core's estimates)
+RTP_F16 Float16 rsqrt_estimate(Float16 a) { return {_mm512_maskz_rsqrt14_ps(kAll16, a.v)}; }
+RTP_F16 Float16 reciprocal_estimate(Float16 a) { return {_mm512_maskz_rcp14_ps(kAll16, a.v)}; }
+RTP_F16 Mask16 less(Float16 a, Float16 b) { return _mm512_cmp_ps_mask(a.v, b.v, _CMP_LT_OQ); }
+RTP_F16 Mask16 greater(Float16 a, Float16 b) { return _mm512_cmp_ps_mask(a.v, b.v, _CMP_GT_OQ); }
+// a where m is set, b elsewhere; a where m is set, 0 elsewhere
+RTP_F16 Float16 select(Mask16 m, Float16 a, Float16 b) { return {_mm512_mask_mov_ps(b.v, m, a.v)}; }
+RTP_F16 Float16 select_or_zero(Mask16 m, Float16 a) { return {_mm512_maskz_mov_ps(m, a.v)}; }
+#undef RTP_F16
+
+// whether the running core has AVX-512F: the particle kernels' run-time dispatch
+inline bool core_has_avx512() { return __builtin_cpu_supports("avx512f"); }
+#else
+using Mask16 = std::uint16_t;
+struct Float16 {
+  std::array<float, 16> v;
+};
+inline constexpr Mask16 kAll16 = 0xFFFF;
+template <typename F>
+Float16 lanewise16(F f) {
+  Float16 r;
+  for (std::size_t i = 0; i < 16; ++i) r.v[i] = f(i);
+  return r;
+}
+template <typename F>
+Mask16 compare16(F f) {
+  unsigned bits = 0;
+  for (std::size_t i = 0; i < 16; ++i) bits |= unsigned(f(i)) << i;
+  return Mask16(bits);
+}
+inline bool lane(Mask16 m, std::size_t i) { return (m >> i) & 1u; }
+inline Float16 splat16(float x) { return lanewise16([&](std::size_t) { return x; }); }
+inline Float16 zero16() { return splat16(0.0f); }
+inline Float16 load16(Mask16 m, const float* p) {
+  return lanewise16([&](std::size_t i) { return lane(m, i) ? p[i] : 0.0f; });
+}
+inline void store16(float* p, Mask16 m, Float16 x) {
+  for (std::size_t i = 0; i < 16; ++i)
+    if (lane(m, i)) p[i] = x.v[i];
+}
+inline Float16 add(Float16 a, Float16 b) { return lanewise16([&](std::size_t i) { return a.v[i] + b.v[i]; }); }
+inline Float16 sub(Float16 a, Float16 b) { return lanewise16([&](std::size_t i) { return a.v[i] - b.v[i]; }); }
+inline Float16 mul(Float16 a, Float16 b) { return lanewise16([&](std::size_t i) { return a.v[i] * b.v[i]; }); }
+inline Float16 fmadd(Float16 a, Float16 b, Float16 c) {
+  return lanewise16([&](std::size_t i) { return std::fma(a.v[i], b.v[i], c.v[i]); });
+}
+inline Float16 fnmadd(Float16 a, Float16 b, Float16 c) {
+  return lanewise16([&](std::size_t i) { return std::fma(-a.v[i], b.v[i], c.v[i]); });
+}
+inline Float16 fmsub(Float16 a, Float16 b, Float16 c) {
+  return lanewise16([&](std::size_t i) { return std::fma(a.v[i], b.v[i], -c.v[i]); });
+}
+inline Float16 min(Float16 a, Float16 b) {
+  return lanewise16([&](std::size_t i) { return a.v[i] < b.v[i] ? a.v[i] : b.v[i]; });
+}
+inline Float16 max(Float16 a, Float16 b) {
+  return lanewise16([&](std::size_t i) { return a.v[i] > b.v[i] ? a.v[i] : b.v[i]; });
+}
+// exact where the vector forms estimate (see the top of the file)
+inline Float16 rsqrt_estimate(Float16 a) {
+  return lanewise16([&](std::size_t i) { return 1.0f / std::sqrt(a.v[i]); });
+}
+inline Float16 reciprocal_estimate(Float16 a) {
+  return lanewise16([&](std::size_t i) { return 1.0f / a.v[i]; });
+}
+inline Mask16 less(Float16 a, Float16 b) { return compare16([&](std::size_t i) { return a.v[i] < b.v[i]; }); }
+inline Mask16 greater(Float16 a, Float16 b) { return compare16([&](std::size_t i) { return a.v[i] > b.v[i]; }); }
+inline Float16 select(Mask16 m, Float16 a, Float16 b) {
+  return lanewise16([&](std::size_t i) { return lane(m, i) ? a.v[i] : b.v[i]; });
+}
+inline Float16 select_or_zero(Mask16 m, Float16 a) { return select(m, a, zero16()); }
+
+inline bool core_has_avx512() { return false; }
+#endif
+
+// the lanes of a 16-lane group starting at j that are below n: all but in a last, partial group
+inline Mask16 lanes_below(std::size_t n, std::size_t j) {
+  return static_cast<Mask16>(n - j >= 16 ? 0xFFFFu : (1u << (n - j)) - 1u);
+}
+
+}  // namespace rtp::simd
