@@ -53,7 +53,8 @@ void dump_narrowphase(std::FILE* out) {
           NarrowphaseRegime::NearlyParallel}) {
       if (regime == NarrowphaseRegime::NearlyParallel && kind != NarrowphaseShapes::BoxBox)
         continue;
-      const physbench::NarrowphaseSet set = physbench::make_narrowphase_set(kind, regime, 1024, 2026);
+      const physbench::NarrowphaseSet set =
+          physbench::make_narrowphase_set(kind, regime, 1024, 2026);
       std::fprintf(out, "narrowphase %s\n", set.name().c_str());
       for (const physbench::NarrowphasePair& pair : set.pairs) {
         const rtp::Shape& a = set.shapes[pair.shape_a];
@@ -86,15 +87,13 @@ void dump_broadphase(std::FILE* out) {
     std::size_t count;
     bool planar;
   };
-  const Case cases[] = {{BroadphaseMotion::Coherent, 1000, false},
-                        {BroadphaseMotion::Coherent, 10000, false},
-                        {BroadphaseMotion::Reshuffled, 2000, false},
-                        {BroadphaseMotion::Line, 10000, false},
-                        {BroadphaseMotion::AllOverlapping, 300, false},
-                        {BroadphaseMotion::Coherent, 10000, true}};
-  for (const rtp::BroadPhaseKind kind : {rtp::BroadPhaseKind::SeedSap,
-                                         rtp::BroadPhaseKind::IncrementalSap,
-                                         rtp::BroadPhaseKind::BoxPruning})
+  const Case cases[] = {
+      {BroadphaseMotion::Coherent, 1000, false},      {BroadphaseMotion::Coherent, 10000, false},
+      {BroadphaseMotion::Reshuffled, 2000, false},    {BroadphaseMotion::Line, 10000, false},
+      {BroadphaseMotion::AllOverlapping, 300, false}, {BroadphaseMotion::Coherent, 10000, true}};
+  for (const rtp::BroadPhaseKind kind :
+       {rtp::BroadPhaseKind::SeedSap, rtp::BroadPhaseKind::IncrementalSap,
+        rtp::BroadPhaseKind::BoxPruning})
     for (const Case& c : cases) {
       if (kind != rtp::BroadPhaseKind::BoxPruning && c.motion == BroadphaseMotion::Line) continue;
       physbench::BroadphaseScene scene;

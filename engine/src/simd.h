@@ -101,10 +101,18 @@ struct Mask {
     for (std::size_t i = 0; i < N; ++i) r.v[i] = f(a.v[i], b.v[i]);
     return r;
   }
-  friend Mask operator&(Mask a, Mask b) { return lanewise(a, b, [](Int x, Int y) { return Int(x & y); }); }
-  friend Mask operator|(Mask a, Mask b) { return lanewise(a, b, [](Int x, Int y) { return Int(x | y); }); }
-  friend Mask operator^(Mask a, Mask b) { return lanewise(a, b, [](Int x, Int y) { return Int(x ^ y); }); }
-  friend Mask operator~(Mask a) { return lanewise(a, a, [](Int x, Int) { return Int(~x); }); }
+  friend Mask operator&(Mask a, Mask b) {
+    return lanewise(a, b, [](Int x, Int y) { return Int(x & y); });
+  }
+  friend Mask operator|(Mask a, Mask b) {
+    return lanewise(a, b, [](Int x, Int y) { return Int(x | y); });
+  }
+  friend Mask operator^(Mask a, Mask b) {
+    return lanewise(a, b, [](Int x, Int y) { return Int(x ^ y); });
+  }
+  friend Mask operator~(Mask a) {
+    return lanewise(a, a, [](Int x, Int) { return Int(~x); });
+  }
 #endif
   Mask& operator|=(Mask b) { return *this = *this | b; }
   Mask& operator&=(Mask b) { return *this = *this & b; }
@@ -163,17 +171,39 @@ struct Pack {
     for (std::size_t i = 0; i < N; ++i) r.v[i] = f(a.v[i], b.v[i]) ? -1 : 0;
     return r;
   }
-  friend Pack operator+(Pack a, Pack b) { return lanewise(a, b, [](T x, T y) { return x + y; }); }
-  friend Pack operator-(Pack a, Pack b) { return lanewise(a, b, [](T x, T y) { return x - y; }); }
-  friend Pack operator*(Pack a, Pack b) { return lanewise(a, b, [](T x, T y) { return x * y; }); }
-  friend Pack operator/(Pack a, Pack b) { return lanewise(a, b, [](T x, T y) { return x / y; }); }
-  friend Pack operator-(Pack a) { return lanewise(a, a, [](T x, T) { return -x; }); }
-  friend MaskType operator<(Pack a, Pack b) { return compare(a, b, [](T x, T y) { return x < y; }); }
-  friend MaskType operator<=(Pack a, Pack b) { return compare(a, b, [](T x, T y) { return x <= y; }); }
-  friend MaskType operator>(Pack a, Pack b) { return compare(a, b, [](T x, T y) { return x > y; }); }
-  friend MaskType operator>=(Pack a, Pack b) { return compare(a, b, [](T x, T y) { return x >= y; }); }
-  friend MaskType operator==(Pack a, Pack b) { return compare(a, b, [](T x, T y) { return x == y; }); }
-  friend MaskType operator!=(Pack a, Pack b) { return compare(a, b, [](T x, T y) { return x != y; }); }
+  friend Pack operator+(Pack a, Pack b) {
+    return lanewise(a, b, [](T x, T y) { return x + y; });
+  }
+  friend Pack operator-(Pack a, Pack b) {
+    return lanewise(a, b, [](T x, T y) { return x - y; });
+  }
+  friend Pack operator*(Pack a, Pack b) {
+    return lanewise(a, b, [](T x, T y) { return x * y; });
+  }
+  friend Pack operator/(Pack a, Pack b) {
+    return lanewise(a, b, [](T x, T y) { return x / y; });
+  }
+  friend Pack operator-(Pack a) {
+    return lanewise(a, a, [](T x, T) { return -x; });
+  }
+  friend MaskType operator<(Pack a, Pack b) {
+    return compare(a, b, [](T x, T y) { return x < y; });
+  }
+  friend MaskType operator<=(Pack a, Pack b) {
+    return compare(a, b, [](T x, T y) { return x <= y; });
+  }
+  friend MaskType operator>(Pack a, Pack b) {
+    return compare(a, b, [](T x, T y) { return x > y; });
+  }
+  friend MaskType operator>=(Pack a, Pack b) {
+    return compare(a, b, [](T x, T y) { return x >= y; });
+  }
+  friend MaskType operator==(Pack a, Pack b) {
+    return compare(a, b, [](T x, T y) { return x == y; });
+  }
+  friend MaskType operator!=(Pack a, Pack b) {
+    return compare(a, b, [](T x, T y) { return x != y; });
+  }
 #endif
 };
 
@@ -374,7 +404,9 @@ RTP_F16 Float16 sub(Float16 a, Float16 b) { return {_mm512_sub_ps(a.v, b.v)}; }
 RTP_F16 Float16 mul(Float16 a, Float16 b) { return {_mm512_mul_ps(a.v, b.v)}; }
 // a b + c, −(a b) + c and a b − c, each rounded once
 RTP_F16 Float16 fmadd(Float16 a, Float16 b, Float16 c) { return {_mm512_fmadd_ps(a.v, b.v, c.v)}; }
-RTP_F16 Float16 fnmadd(Float16 a, Float16 b, Float16 c) { return {_mm512_fnmadd_ps(a.v, b.v, c.v)}; }
+RTP_F16 Float16 fnmadd(Float16 a, Float16 b, Float16 c) {
+  return {_mm512_fnmadd_ps(a.v, b.v, c.v)};
+}
 RTP_F16 Float16 fmsub(Float16 a, Float16 b, Float16 c) { return {_mm512_fmsub_ps(a.v, b.v, c.v)}; }
 RTP_F16 Float16 min(Float16 a, Float16 b) { return {_mm512_maskz_min_ps(kAll16, a.v, b.v)}; }
 RTP_F16 Float16 max(Float16 a, Float16 b) { return {_mm512_maskz_max_ps(kAll16, a.v, b.v)}; }
@@ -409,7 +441,9 @@ Mask16 compare16(F f) {
   return Mask16(bits);
 }
 inline bool lane(Mask16 m, std::size_t i) { return (m >> i) & 1u; }
-inline Float16 splat16(float x) { return lanewise16([&](std::size_t) { return x; }); }
+inline Float16 splat16(float x) {
+  return lanewise16([&](std::size_t) { return x; });
+}
 inline Float16 zero16() { return splat16(0.0f); }
 inline Float16 load16(Mask16 m, const float* p) {
   return lanewise16([&](std::size_t i) { return lane(m, i) ? p[i] : 0.0f; });
@@ -418,9 +452,15 @@ inline void store16(float* p, Mask16 m, Float16 x) {
   for (std::size_t i = 0; i < 16; ++i)
     if (lane(m, i)) p[i] = x.v[i];
 }
-inline Float16 add(Float16 a, Float16 b) { return lanewise16([&](std::size_t i) { return a.v[i] + b.v[i]; }); }
-inline Float16 sub(Float16 a, Float16 b) { return lanewise16([&](std::size_t i) { return a.v[i] - b.v[i]; }); }
-inline Float16 mul(Float16 a, Float16 b) { return lanewise16([&](std::size_t i) { return a.v[i] * b.v[i]; }); }
+inline Float16 add(Float16 a, Float16 b) {
+  return lanewise16([&](std::size_t i) { return a.v[i] + b.v[i]; });
+}
+inline Float16 sub(Float16 a, Float16 b) {
+  return lanewise16([&](std::size_t i) { return a.v[i] - b.v[i]; });
+}
+inline Float16 mul(Float16 a, Float16 b) {
+  return lanewise16([&](std::size_t i) { return a.v[i] * b.v[i]; });
+}
 inline Float16 fmadd(Float16 a, Float16 b, Float16 c) {
   return lanewise16([&](std::size_t i) { return std::fma(a.v[i], b.v[i], c.v[i]); });
 }
@@ -443,8 +483,12 @@ inline Float16 rsqrt_estimate(Float16 a) {
 inline Float16 reciprocal_estimate(Float16 a) {
   return lanewise16([&](std::size_t i) { return 1.0f / a.v[i]; });
 }
-inline Mask16 less(Float16 a, Float16 b) { return compare16([&](std::size_t i) { return a.v[i] < b.v[i]; }); }
-inline Mask16 greater(Float16 a, Float16 b) { return compare16([&](std::size_t i) { return a.v[i] > b.v[i]; }); }
+inline Mask16 less(Float16 a, Float16 b) {
+  return compare16([&](std::size_t i) { return a.v[i] < b.v[i]; });
+}
+inline Mask16 greater(Float16 a, Float16 b) {
+  return compare16([&](std::size_t i) { return a.v[i] > b.v[i]; });
+}
 inline Float16 select(Mask16 m, Float16 a, Float16 b) {
   return lanewise16([&](std::size_t i) { return lane(m, i) ? a.v[i] : b.v[i]; });
 }

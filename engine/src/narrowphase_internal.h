@@ -1,0 +1,114 @@
+// What the narrow phase's files share. The narrow phase is one file per shape family, as MuJoCo's
+// engine_collision_{box,primitive,convex,driver}.c: narrowphase.cpp (the dispatch table),
+// narrowphase_clip.cpp (clipping a hull face to a manifold), narrowphase_triangle.cpp (lab 4.1),
+// narrowphase_round.cpp (spheres and planes), narrowphase_box.cpp (two boxes, in closed form) and
+// narrowphase_hull.cpp (two hulls, by the Gauss map). The design and its sources are in
+// rtp/collision.h.
+#pragma once
+
+#include <algorithm>
+#include <array>
+#include <cmath>
+#include <cstdint>
+#include <limits>
+
+#include "rtp/collision.h"
+
+namespace rtp::detail {
+
+// an edge axis replaces the best face axis only when it is shallower by this fraction of the
+// depth plus this length: faces give the steadier manifold (Gregorius, GDC 2013, uses 5 %)
+inline constexpr double kEdgeRelativeTolerance = 0.02;
+inline constexpr double kEdgeAbsoluteTolerance = 1e-4;  // m
+// two edges whose unit directions' cross product is shorter than this are parallel: their axis
+// is numerically meaningless and the face axes cover them (Ericson §4.4.1)
+inline constexpr double kParallelSine = 1e-5;
+// the second shape's face is a duplicate of the first's when their normals are this close
+inline constexpr double kDuplicateCosine = 1.0 - 1e-9;
+
+inline constexpr double kInfinity = std::numeric_limits<double>::infinity();
+
+// the separation an edge axis must exceed to replace the best face axis
+inline double edge_threshold(double face_separation) {
+  return face_separation * (1.0 - kEdgeRelativeTolerance) + kEdgeAbsoluteTolerance;
+}
+inline bool edge_axis_wins(double edge_separation, double face_separation) {
+  return edge_separation > edge_threshold(face_separation);
+}
+
+// which four of n > 4 points to keep: the deepest, the farthest from it, the one making the
+// largest triangle with those two, and the one adding the most area outside that triangle.
+// position(i) is a point in any vector type; area(p, q, r) the signed area of pqr about the normal.
+template <typename Depth, typename Position, typename Area>
+std::array<std::size_t, 4> choose_four(std::size_t count, Depth depth, Position position,
+                                       Area area) {
+  std::array<std::size_t, 4> chosen{};
+  for (std::size_t i = 1; i < count; ++i)
+    if (depth(i) > depth(chosen[0])) chosen[0] = i;
+  const auto p0 = position(chosen[0]);
+  double best = -1.0;
+  for (std::size_t i = 0; i < count; ++i)
+    if (double d = (position(i) - p0).squaredNorm(); d > best) best = d, chosen[1] = i;
+  const auto p1 = position(chosen[1]);
+  best = -1.0;
+  for (std::size_t i = 0; i < count; ++i)
+    if (double a = std::abs(area(p0, p1, position(i))); a > best) best = a, chosen[2] = i;
+  const auto p2 = position(chosen[2]);
+  const double orientation = area(p0, p1, p2) >= 0.0 ? 1.0 : -1.0;
+  best = -std::numeric_limits<double>::infinity();
+  chosen[3] = chosen[0];
+  for (std::size_t i = 0; i < count; ++i) {
+    if (i == chosen[0] || i == chosen[1] || i == chosen[2]) continue;
+    const auto q = position(i);
+    // the area q adds: the largest triangle it makes outside one of the three edges
+    const double added =
+        -orientation * std::min({area(p0, p1, q), area(p1, p2, q), area(p2, p0, q)});
+    if (added > best) best = added, chosen[3] = i;
+  }
+  return chosen;
+}
+
+// keeps four of n > 4 contact points (choose_four in the world)
+template <std::size_t Capacity>
+void reduce_to_four(std::array<ContactPoint, Capacity>& points, std::size_t& count,
+                    const Vec3& normal) {
+  const std::array<std::size_t, 4> chosen = choose_four(
+      count, [&](std::size_t i) { return points[i].depth; },
+      [&](std::size_t i) -> const Vec3& { return points[i].point; },
+      [&](const Vec3& p, const Vec3& q, const Vec3& r) {
+        return (q - p).cross(r - p).dot(normal);
+      });
+  std::array<ContactPoint, 4> kept;
+  for (int k = 0; k < 4; ++k) kept[k] = points[chosen[k]];
+  std::copy(kept.begin(), kept.end(), points.begin());
+  count = 4;
+}
+
+// a manifold of one point, for the round shapes and the planes
+inline bool single_contact(const Vec3& normal, double depth, const Vec3& point, Manifold& out) {
+  out.normal = normal;
+  out.depth = depth;
+  out.count = 1;
+  out.points[0] = {point, depth, ContactFeature{}};
+  out.axes_tested = 0;
+  return true;
+}
+
+inline bool no_contact(Manifold& out) {
+  out.count = 0;
+  return false;
+}
+
+// ---- clipping (narrowphase_clip.cpp) ----
+
+// the face-contact manifold when `reference_face` of the reference hull is the separating axis
+void hull_face_manifold(const ConvexHull& reference_hull, const Pose& reference_pose,
+                        std::uint32_t reference_face, const ConvexHull& incident_hull,
+                        const Pose& incident_pose, bool flipped, double depth, Manifold& out);
+
+// one edge–edge contact point midway between the edges' closest points
+void edge_contact(const Vec3& tail_a, const Vec3& edge_a, const Vec3& tail_b, const Vec3& edge_b,
+                  const Vec3& normal, double depth, std::uint16_t feature_a,
+                  std::uint16_t feature_b, Manifold& out);
+
+}  // namespace rtp::detail
