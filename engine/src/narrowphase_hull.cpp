@@ -24,25 +24,16 @@ constexpr Double4 kInfinity4 = Double4(kInfinity);
 struct Extent {
   double min, max;
 };
-// a convex polyhedron has at most 2V − 4 faces
-constexpr std::size_t kMaxHullFaces = 2 * kMaxHullVertices - 4;
 
-// up to Capacity points (or directions) as structure of arrays, read four or eight to a vector;
-// the count is rounded up to a multiple of eight with copies of the first (which change no least
-// or largest projection)
-template <std::size_t Capacity>
-struct PointLanes {
-  static constexpr std::size_t kLanes = (Capacity + 7) / 8 * 8;
-  std::array<double, kLanes> x, y, z;
+// points (or directions) as structure of arrays, read four or eight to a vector: a hull's own
+// columns, or a pair's (PointLanes); the count is rounded up to a multiple of eight with copies of
+// the first (which change no least or largest projection)
+struct LaneView {
+  const double *x = nullptr, *y = nullptr, *z = nullptr;
   std::size_t count = 0, padded = 0;
-  template <typename Point>
-  void fill(std::size_t n, Point point) {  // point(i) → Vec3
-    count = n, padded = (n + 7) / 8 * 8;
-    for (std::size_t i = 0; i < padded; ++i) {
-      const Vec3 p = point(i < n ? i : 0);
-      x[i] = p.x(), y[i] = p.y(), z[i] = p.z();
-    }
-  }
+  LaneView() = default;
+  explicit LaneView(const PointColumns& c)
+      : x(c.x.data()), y(c.y.data()), z(c.z.data()), count(c.count), padded(c.x.size()) {}
   Vec3 at(std::size_t i) const { return {x[i], y[i], z[i]}; }
   Double4 dot(std::size_t i, const Vec3& d) const {  // lanes i … i + 3
     return load4(&x[i]) * d.x() + load4(&y[i]) * d.y() + load4(&z[i]) * d.z();
@@ -64,6 +55,25 @@ struct PointLanes {
   }
 };
 
+// up to Capacity points that depend on the pair (B's edges' arc ends in A's frame), in columns of
+// its own
+template <std::size_t Capacity>
+struct PointLanes : LaneView {
+  static constexpr std::size_t kLanes = (Capacity + 7) / 8 * 8;
+  std::array<double, kLanes> xs, ys, zs;
+  PointLanes() = default;
+  PointLanes(const PointLanes&) = delete;  // the view points into this object
+  template <typename Point>
+  void fill(std::size_t n, Point point) {  // point(i) → Vec3
+    x = xs.data(), y = ys.data(), z = zs.data();
+    count = n, padded = (n + 7) / 8 * 8;
+    for (std::size_t i = 0; i < padded; ++i) {
+      const Vec3 p = point(i < n ? i : 0);
+      xs[i] = p.x(), ys[i] = p.y(), zs[i] = p.z();
+    }
+  }
+};
+
 }  // namespace
 
 bool collide_hulls(const Shape& a, const Pose& pose_a, const Shape& b, const Pose& pose_b,
@@ -81,10 +91,8 @@ bool collide_hulls(const Shape& a, const Pose& pose_a, const Shape& b, const Pos
   double best_face = -std::numeric_limits<double>::infinity();
   std::uint32_t best_face_index = 0;
   bool best_face_on_b = false;
-  // the projections run over the vertices four at a time (A's copy is made only if A's faces
-  // find no separating axis: most separated pairs end there)
-  PointLanes<kMaxHullVertices> body_b;
-  body_b.fill(hull_b.vertices.size(), [&](std::size_t i) { return hull_b.vertices[i]; });
+  // the projections run over the hulls' own columns, four vertices at a time
+  const LaneView body_b(hull_b.vertex_columns);
   auto consider = [&](double separation, std::uint32_t face, bool on_b) {
     if (separation > best_face)
       best_face = separation, best_face_index = face, best_face_on_b = on_b;
@@ -106,11 +114,7 @@ bool collide_hulls(const Shape& a, const Pose& pose_a, const Shape& b, const Pos
       return no_contact(out);
     }
   }
-  PointLanes<kMaxHullVertices> body_a;
-  body_a.fill(hull_a.vertices.size(), [&](std::size_t i) { return hull_a.vertices[i]; });
-  PointLanes<kMaxHullFaces> normals_a;
-  normals_a.fill(hull_a.unique_face_normals.size(),
-                 [&](std::size_t i) { return hull_a.unique_face_normals[i]; });
+  const LaneView body_a(hull_a.vertex_columns), normals_a(hull_a.normal_columns);
   for (std::size_t k = 0; k < hull_b.unique_face_normals.size(); ++k) {
     const Vec3 u = rotation * hull_b.unique_face_normals[k];  // A's frame
     auto [plus, minus] = hull_b.unique_normal_faces[k];
