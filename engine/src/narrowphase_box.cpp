@@ -9,28 +9,21 @@
 #include <limits>
 
 #include "narrowphase_internal.h"
-#include "simd.h"
 
 namespace rtp {
 using namespace detail;
 namespace {
 
-using simd::Double4;
-using simd::Double8;
-using simd::load4;
-using simd::load8;
-using simd::Mask4;
-constexpr Double4 kInfinity4 = Double4(kInfinity);
 // lanes 0, 1, 2 ← 1, 2, 0; lane 3 stays
 inline Double4 rotate4(Double4 x) { return simd::shuffle<1, 2, 0, 3>(x); }
 // lanes 0, 1, 2, 3 ← 1, 2, 3, 0
 inline Double4 next4(Double4 x) { return simd::shuffle<1, 2, 3, 0>(x); }
-// the three rows of a column-major 3×3 matrix (lane 3 zero) from two unaligned loads and shuffles,
-// where element-wise loads take three loads and two inserts a row
+// the three rows of a column-major 3×3 matrix (lane 3 zero), from two loads of the whole matrix
+// and shuffles rather than nine element loads (docs/narrowphase.md, code generation)
 inline void rows_of(const Mat3& m, Double4 rows[3]) {
   static_assert(sizeof(Mat3) == 9 * sizeof(double));
-  const Double4 low = load4(m.data()),
-                high = load4(m.data() + 4);  // m00 m10 m20 m01, m11 m21 m02 m12
+  const Double4 low = load4(m.data());       // m00 m10 m20 m01
+  const Double4 high = load4(m.data() + 4);  // m11 m21 m02 m12
   constexpr Mask4 kThree = {-1, -1, -1, 0};
   rows[0] = simd::select(kThree, simd::shuffle<0, 3, 6, 0>(low, high), 0.0);
   rows[1] = simd::select(kThree, simd::shuffle<1, 4, 7, 0>(low, high), 0.0);
@@ -170,7 +163,8 @@ bool collide_boxes(const Shape& a, const Pose& pose_a, const Shape& b, const Pos
     // the square of the parallel threshold on a tested axis
     const Double4 r = mid_a - mid_b, r_along_b = b_j * r;
     const double cosine = b_j[i], r_a = r[i], r_b = r_along_b[0] + r_along_b[1] + r_along_b[2];
-    // (the clamps by min and max and the last step selected: std::clamp and an if branch)
+    // (clamped by min and max and the last step selected, not branched on: which clamp binds is
+    // as good as random)
     const double alpha_free =
         std::min(std::max((cosine * r_b - r_a) / (1.0 - cosine * cosine), -ha[i]), ha[i]);
     const double beta_free = cosine * alpha_free + r_b;
@@ -205,7 +199,7 @@ bool collide_boxes(const Shape& a, const Pose& pose_a, const Shape& b, const Pos
   // incident axis below: they are selected, not branched on.
   const bool flipped = best_face_axis >= 3;
   const Pose* const poses[2] = {&pose_a, &pose_b};
-  const Pose& reference_pose = *poses[flipped];  // (by index: GCC branches on a ?: of references)
+  const Pose& reference_pose = *poses[flipped];  // (by index: a ?: of references is a branch)
   const Mask4 flip = flipped;
   const Double4 reference_half4 = simd::select(flip, hb4, ha4);
   const Double4 incident_half4 = simd::select(flip, ha4, hb4);
@@ -337,7 +331,7 @@ bool collide_boxes(const Shape& a, const Pose& pose_a, const Shape& b, const Pos
     ContactPoint& p = out.points[k];
     p.point = reference_pose.position + reference_pose.rotation * local;
     p.depth = depth_of(candidate);
-    // by tables, not ?: chains (GCC branches on those, and the group is as good as random)
+    // by tables, not ?: chains, which compile to branches, and the group is as good as random
     constexpr std::uint8_t kSide[6] = {0, 0, 1, 2, 3, 0};
     constexpr ContactType kType[6] = {ContactType::FaceVertex, ContactType::FaceClip,
                                       ContactType::FaceClip,   ContactType::FaceClip,

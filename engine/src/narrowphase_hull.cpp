@@ -8,17 +8,10 @@
 #include <limits>
 
 #include "narrowphase_internal.h"
-#include "simd.h"
 
 namespace rtp {
 using namespace detail;
 namespace {
-
-using simd::Double4;
-using simd::Double8;
-using simd::load4;
-using simd::load8;
-constexpr Double4 kInfinity4 = Double4(kInfinity);
 
 // the extent of a hull's vertices along a direction of its own frame
 struct Extent {

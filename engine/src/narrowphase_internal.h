@@ -13,6 +13,7 @@
 #include <limits>
 
 #include "rtp/collision.h"
+#include "simd.h"
 
 namespace rtp::detail {
 
@@ -27,6 +28,14 @@ inline constexpr double kParallelSine = 1e-5;
 inline constexpr double kDuplicateCosine = 1.0 - 1e-9;
 
 inline constexpr double kInfinity = std::numeric_limits<double>::infinity();
+
+// the lanes the box and hull paths compute in (simd.h)
+using simd::Double4;
+using simd::Double8;
+using simd::load4;
+using simd::load8;
+using simd::Mask4;
+inline constexpr Double4 kInfinity4 = Double4(kInfinity);
 
 // the separation an edge axis must exceed to replace the best face axis
 inline double edge_threshold(double face_separation) {

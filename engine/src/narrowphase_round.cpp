@@ -13,6 +13,22 @@ using namespace detail;
 // the vertices of a hull below a plane (hull against plane)
 constexpr std::size_t kPlaneContacts = kMaxHullVertices;
 
+namespace {
+
+// the contact of a sphere (the first shape) with a solid whose surface point closest to the
+// sphere's centre, the outward normal there and the centre's signed distance from it are known in
+// the solid's frame; the manifold's normal runs from the sphere to the solid
+bool sphere_contact(double radius, const Pose& sphere_pose, const Pose& solid_pose,
+                    const Vec3& normal_in_solid, const Vec3& surface_in_solid, double distance,
+                    Manifold& out) {
+  const Vec3 normal = -(solid_pose.rotation * normal_in_solid);
+  const Vec3 surface_b = solid_pose.position + solid_pose.rotation * surface_in_solid;
+  const Vec3 surface_a = sphere_pose.position + radius * normal;
+  return single_contact(normal, radius - distance, 0.5 * (surface_a + surface_b), out);
+}
+
+}  // namespace
+
 bool collide_spheres(const Shape& a, const Pose& pose_a, const Shape& b, const Pose& pose_b,
                      Manifold& out) {
   const Vec3 d = pose_b.position - pose_a.position;
@@ -51,11 +67,7 @@ bool collide_sphere_box(const Shape& a, const Pose& pose_a, const Shape& b, cons
     surface_in_box = centre;
     surface_in_box[axis] = normal_in_box[axis] * b.half_extents[axis];
   }
-  // the manifold's normal runs from the sphere (first) to the box
-  const Vec3 normal = -(pose_b.rotation * normal_in_box);
-  const Vec3 surface_b = pose_b.position + pose_b.rotation * surface_in_box;
-  const Vec3 surface_a = pose_a.position + a.radius * normal;
-  return single_contact(normal, a.radius - distance, 0.5 * (surface_a + surface_b), out);
+  return sphere_contact(a.radius, pose_a, pose_b, normal_in_box, surface_in_box, distance, out);
 }
 
 bool collide_sphere_hull(const Shape& a, const Pose& pose_a, const Shape& b, const Pose& pose_b,
@@ -98,10 +110,7 @@ bool collide_sphere_hull(const Shape& a, const Pose& pose_a, const Shape& b, con
     normal_in_hull = distance > 0.0 ? Vec3((centre - surface_in_hull) / distance)
                                     : hull.faces[largest_face].normal;
   }
-  const Vec3 normal = -(pose_b.rotation * normal_in_hull);
-  const Vec3 surface_b = pose_b.position + pose_b.rotation * surface_in_hull;
-  const Vec3 surface_a = pose_a.position + a.radius * normal;
-  return single_contact(normal, a.radius - distance, 0.5 * (surface_a + surface_b), out);
+  return sphere_contact(a.radius, pose_a, pose_b, normal_in_hull, surface_in_hull, distance, out);
 }
 
 bool collide_sphere_plane(const Shape& a, const Pose& pose_a, const Shape& b, const Pose& pose_b,

@@ -31,6 +31,7 @@
 #include <cmath>
 #include <cstdint>
 #include <cstring>
+#include <functional>
 #include <limits>
 #include <type_traits>
 #include <utility>
@@ -63,6 +64,24 @@ struct VectorOf {
 };
 #endif
 
+// f on the lanes of a and b into an R (a Pack, or a Mask: comparisons give all ones where true):
+// one vector operation, or, as the scalar fallback, one lane at a time
+template <typename R, typename A, typename F>
+R each_lane(const A& a, const A& b, F f) {
+#ifdef RTP_SIMD_VECTORS
+  return R(f(a.v, b.v));
+#else
+  R r;
+  for (std::size_t i = 0; i < r.v.size(); ++i) {
+    if constexpr (std::is_same_v<decltype(f(a.v[i], b.v[i])), bool>)
+      r.v[i] = f(a.v[i], b.v[i]) ? -1 : 0;
+    else
+      r.v[i] = f(a.v[i], b.v[i]);
+  }
+  return r;
+#endif
+}
+
 template <typename T, std::size_t N>
 struct Mask {
   using Int = LaneInt<T>;
@@ -89,31 +108,12 @@ struct Mask {
   }
   bool operator[](std::size_t i) const { return v[i] != 0; }
 
-#ifdef RTP_SIMD_VECTORS
-  friend Mask operator&(Mask a, Mask b) { return Mask(a.v & b.v); }
-  friend Mask operator|(Mask a, Mask b) { return Mask(a.v | b.v); }
-  friend Mask operator^(Mask a, Mask b) { return Mask(a.v ^ b.v); }
-  friend Mask operator~(Mask a) { return Mask(~a.v); }
-#else
-  template <typename F>
-  static Mask lanewise(Mask a, Mask b, F f) {
-    Mask r;
-    for (std::size_t i = 0; i < N; ++i) r.v[i] = f(a.v[i], b.v[i]);
-    return r;
-  }
-  friend Mask operator&(Mask a, Mask b) {
-    return lanewise(a, b, [](Int x, Int y) { return Int(x & y); });
-  }
-  friend Mask operator|(Mask a, Mask b) {
-    return lanewise(a, b, [](Int x, Int y) { return Int(x | y); });
-  }
-  friend Mask operator^(Mask a, Mask b) {
-    return lanewise(a, b, [](Int x, Int y) { return Int(x ^ y); });
-  }
+  friend Mask operator&(Mask a, Mask b) { return each_lane<Mask>(a, b, std::bit_and<>()); }
+  friend Mask operator|(Mask a, Mask b) { return each_lane<Mask>(a, b, std::bit_or<>()); }
+  friend Mask operator^(Mask a, Mask b) { return each_lane<Mask>(a, b, std::bit_xor<>()); }
   friend Mask operator~(Mask a) {
-    return lanewise(a, a, [](Int x, Int) { return Int(~x); });
+    return each_lane<Mask>(a, a, [](auto x, auto) { return ~x; });
   }
-#endif
   Mask& operator|=(Mask b) { return *this = *this | b; }
   Mask& operator&=(Mask b) { return *this = *this & b; }
 };
@@ -146,65 +146,28 @@ struct Pack {
   T operator[](std::size_t i) const { return v[i]; }
   void set(std::size_t i, T x) { v[i] = x; }
 
-#ifdef RTP_SIMD_VECTORS
-  friend Pack operator+(Pack a, Pack b) { return Pack(a.v + b.v); }
-  friend Pack operator-(Pack a, Pack b) { return Pack(a.v - b.v); }
-  friend Pack operator*(Pack a, Pack b) { return Pack(a.v * b.v); }
-  friend Pack operator/(Pack a, Pack b) { return Pack(a.v / b.v); }
-  friend Pack operator-(Pack a) { return Pack(-a.v); }
-  friend MaskType operator<(Pack a, Pack b) { return MaskType(a.v < b.v); }
-  friend MaskType operator<=(Pack a, Pack b) { return MaskType(a.v <= b.v); }
-  friend MaskType operator>(Pack a, Pack b) { return MaskType(a.v > b.v); }
-  friend MaskType operator>=(Pack a, Pack b) { return MaskType(a.v >= b.v); }
-  friend MaskType operator==(Pack a, Pack b) { return MaskType(a.v == b.v); }
-  friend MaskType operator!=(Pack a, Pack b) { return MaskType(a.v != b.v); }
-#else
-  template <typename F>
-  static Pack lanewise(Pack a, Pack b, F f) {
-    Pack r;
-    for (std::size_t i = 0; i < N; ++i) r.v[i] = f(a.v[i], b.v[i]);
-    return r;
-  }
-  template <typename F>
-  static MaskType compare(Pack a, Pack b, F f) {
-    MaskType r;
-    for (std::size_t i = 0; i < N; ++i) r.v[i] = f(a.v[i], b.v[i]) ? -1 : 0;
-    return r;
-  }
-  friend Pack operator+(Pack a, Pack b) {
-    return lanewise(a, b, [](T x, T y) { return x + y; });
-  }
-  friend Pack operator-(Pack a, Pack b) {
-    return lanewise(a, b, [](T x, T y) { return x - y; });
-  }
-  friend Pack operator*(Pack a, Pack b) {
-    return lanewise(a, b, [](T x, T y) { return x * y; });
-  }
-  friend Pack operator/(Pack a, Pack b) {
-    return lanewise(a, b, [](T x, T y) { return x / y; });
-  }
+  friend Pack operator+(Pack a, Pack b) { return each_lane<Pack>(a, b, std::plus<>()); }
+  friend Pack operator-(Pack a, Pack b) { return each_lane<Pack>(a, b, std::minus<>()); }
+  friend Pack operator*(Pack a, Pack b) { return each_lane<Pack>(a, b, std::multiplies<>()); }
+  friend Pack operator/(Pack a, Pack b) { return each_lane<Pack>(a, b, std::divides<>()); }
   friend Pack operator-(Pack a) {
-    return lanewise(a, a, [](T x, T) { return -x; });
+    return each_lane<Pack>(a, a, [](auto x, auto) { return -x; });
   }
-  friend MaskType operator<(Pack a, Pack b) {
-    return compare(a, b, [](T x, T y) { return x < y; });
-  }
+  // comparisons: all ones where true
+  friend MaskType operator<(Pack a, Pack b) { return each_lane<MaskType>(a, b, std::less<>()); }
   friend MaskType operator<=(Pack a, Pack b) {
-    return compare(a, b, [](T x, T y) { return x <= y; });
+    return each_lane<MaskType>(a, b, std::less_equal<>());
   }
-  friend MaskType operator>(Pack a, Pack b) {
-    return compare(a, b, [](T x, T y) { return x > y; });
-  }
+  friend MaskType operator>(Pack a, Pack b) { return each_lane<MaskType>(a, b, std::greater<>()); }
   friend MaskType operator>=(Pack a, Pack b) {
-    return compare(a, b, [](T x, T y) { return x >= y; });
+    return each_lane<MaskType>(a, b, std::greater_equal<>());
   }
   friend MaskType operator==(Pack a, Pack b) {
-    return compare(a, b, [](T x, T y) { return x == y; });
+    return each_lane<MaskType>(a, b, std::equal_to<>());
   }
   friend MaskType operator!=(Pack a, Pack b) {
-    return compare(a, b, [](T x, T y) { return x != y; });
+    return each_lane<MaskType>(a, b, std::not_equal_to<>());
   }
-#endif
 };
 
 // ---- the lane types ----
@@ -267,7 +230,7 @@ Pack<T, N> from_bits(Mask<T, N> m) {
   return r;
 }
 
-// |x| by clearing the sign bits (one instruction, where a compare and a select take three)
+// |x| by clearing the sign bits: no compare and select
 template <typename T, std::size_t N>
 Pack<T, N> abs(Pack<T, N> x) {
   using Int = LaneInt<T>;
@@ -289,23 +252,26 @@ Pack<T, N> flip_where(Pack<T, N> x, Mask<T, N> m) {
   return from_bits(bits_of(x) ^ (m & Mask<T, N>(Mask<T, N>::fill(kSign))));
 }
 
-// the lane-wise least and largest: a < b ? a : b and a > b ? a : b, NaNs and zeros included
-// (what vminpd and vmaxpd compute, but GCC keeps the compare and the select of the generic form)
+// the lane-wise least and largest: a < b ? a : b and a > b ? a : b, NaNs and zeros included, by
+// the one instruction that computes exactly that where there is one (docs/narrowphase.md, code
+// generation)
+template <bool Least, typename T, std::size_t N>
+Pack<T, N> extreme(Pack<T, N> a, Pack<T, N> b) {
+#if defined(RTP_SIMD_VECTORS) && defined(__AVX__)
+  if constexpr (std::is_same_v<T, double> && N == 4 && Least)
+    return Pack<T, N>(__builtin_ia32_minpd256(a.v, b.v));
+  if constexpr (std::is_same_v<T, double> && N == 4 && !Least)
+    return Pack<T, N>(__builtin_ia32_maxpd256(a.v, b.v));
+#endif
+  return select(Least ? a < b : a > b, a, b);
+}
 template <typename T, std::size_t N>
 Pack<T, N> min(Pack<T, N> a, Pack<T, N> b) {
-#if defined(RTP_SIMD_VECTORS) && defined(__AVX__)
-  if constexpr (std::is_same_v<T, double> && N == 4)
-    return Pack<T, N>(__builtin_ia32_minpd256(a.v, b.v));
-#endif
-  return select(a < b, a, b);
+  return extreme<true>(a, b);
 }
 template <typename T, std::size_t N>
 Pack<T, N> max(Pack<T, N> a, Pack<T, N> b) {
-#if defined(RTP_SIMD_VECTORS) && defined(__AVX__)
-  if constexpr (std::is_same_v<T, double> && N == 4)
-    return Pack<T, N>(__builtin_ia32_maxpd256(a.v, b.v));
-#endif
-  return select(a > b, a, b);
+  return extreme<false>(a, b);
 }
 
 // lanes rearranged: lane i of the result is lane I_i of x
@@ -340,8 +306,8 @@ inline double largest_lane(Double4 x) {
   return std::max(std::max(x[0], x[1]), std::max(x[2], x[3]));
 }
 
-// bit i set where lane i is (one vmovmskpd or vmovmskps where the build has it, not one
-// extraction per lane)
+// bit i set where lane i is: by the instruction that gathers the sign bits where the build has
+// one, not lane by lane
 template <typename T, std::size_t N>
 unsigned lane_bits(Mask<T, N> m) {
 #if defined(RTP_SIMD_VECTORS) && defined(__AVX__)
