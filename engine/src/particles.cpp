@@ -284,8 +284,8 @@ void midpoint_finish(std::size_t n, float dt, float* __restrict x, float* __rest
 // τ = depth / vₙ ago (straight-line estimate). It is bounced as if at the crossing: its normal
 // speed at impact, vₙ + gₙτ with gₙ the pull of gravity into the plane, is reversed and scaled by
 // the restitution, then it climbs against gravity for τ. Reflecting the end-of-step speed instead
-// hands every bounce the (1 + e) gₙ τ it gained below the plane: apexes came out 7 % high at
-// dt = 1/120. Its tangential velocity loses the friction fraction; it never ends below the plane.
+// hands every bounce the (1 + e) gₙ τ it gained below the plane, and the apexes come out high
+// (docs/particles.md). Its tangential velocity loses the friction fraction; it never ends below the plane.
 // Written as selects, not branches, so it vectorises.
 void collide(std::size_t n, float nx, float ny, float nz, float offset, float gravity_into_plane,
              float restitution, float keep_tangential, float* __restrict x, float* __restrict y,
