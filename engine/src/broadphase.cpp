@@ -2,8 +2,8 @@
 
 #include <algorithm>
 #include <bit>
-#include <cmath>
 #include <boost/sort/spreadsort/float_sort.hpp>
+#include <cmath>
 #include <limits>
 #include <stdexcept>
 #include <string>
@@ -397,11 +397,11 @@ class BoxPruning final : public ProxyStore {
   // Buckets: slabs across y, each box in every slab its y interval touches, so a sweep on x
   // meets only the boxes near it in y as well. Slabs are three times the mean box height (a box
   // then sits in about 1.33 of them: taller slabs give each sweep more boxes, shorter ones put
-  // each box in more slabs; docs/broadphase.md has the measurements) and at most kMaxSlabs. A pair is reported
-  // only in the slab of the larger of its two min y — one slab, which both boxes are in — so
-  // never twice. The slab of a y value is monotonic in y and clamped to the slabs, so that holds
-  // for boxes outside the range the slabs were laid out for, too: a kept layout is never wrong,
-  // only slower.
+  // each box in more slabs; docs/broadphase.md has the measurements) and at most kMaxSlabs. A pair
+  // is reported only in the slab of the larger of its two min y — one slab, which both boxes are in
+  // — so never twice. The slab of a y value is monotonic in y and clamped to the slabs, so that
+  // holds for boxes outside the range the slabs were laid out for, too: a kept layout is never
+  // wrong, only slower.
   struct Layout {
     float low_y = 0.0f, high_y = 0.0f;  // the least and the largest min y
     std::size_t slabs = 1;
@@ -560,7 +560,7 @@ class BoxPruning final : public ProxyStore {
   // boxes starting at +∞ so the sweep needs no scalar tail. begin_columns makes room for that
   // many members in all; append_columns writes the next slab.
   void begin_columns(std::size_t members) {
-    const std::size_t total = members + members_.size() * Lanes::kLanes;
+    const std::size_t total = members + members_.size() * simd::kNativeFloats;
     for (auto* column : {&min_x_, &max_x_, &min_y_, &max_y_, &min_z_, &max_z_, &home_})
       if (column->size() < total) column->resize(total);
     if (ids_.size() < total) ids_.resize(total);
@@ -581,7 +581,7 @@ class BoxPruning final : public ProxyStore {
       ids_[i] = id;
       ++i;
     }
-    const std::size_t end = i + Lanes::kLanes;
+    const std::size_t end = i + simd::kNativeFloats;
     std::fill(min_x_.begin() + std::ptrdiff_t(i), min_x_.begin() + std::ptrdiff_t(end),
               std::numeric_limits<float>::infinity());
     first_.push_back(end);
@@ -590,19 +590,19 @@ class BoxPruning final : public ProxyStore {
   // in each slab, each box against the boxes after it that start before it ends on x
   void sweep() {
     for (std::size_t s = 0; s < members_.size(); ++s) {
-      const Lanes this_slab = Lanes(float(s));
+      const Lanes this_slab = simd::splat<Lanes>(float(s));
       const std::size_t end = first_[s] + members_[s].size();
       for (std::size_t i = first_[s]; i < end; ++i) {
         const float end_x = max_x_[i], lo_y = min_y_[i], hi_y = max_y_[i], lo_z = min_z_[i],
                     hi_z = max_z_[i], home = home_[i];
-        for (std::size_t j = i + 1;; j += Lanes::kLanes) {
+        for (std::size_t j = i + 1;; j += simd::kNativeFloats) {
           const simd::MaskN on_x = simd::load_floats(&min_x_[j]) <= end_x;
           if (!simd::any_of(on_x)) break;
           const simd::MaskN hit =
               on_x & (simd::load_floats(&min_y_[j]) <= hi_y) &
               (simd::load_floats(&max_y_[j]) >= lo_y) & (simd::load_floats(&min_z_[j]) <= hi_z) &
               (simd::load_floats(&max_z_[j]) >= lo_z) &
-              (simd::max(simd::load_floats(&home_[j]), Lanes(home)) == this_slab);
+              (simd::max(simd::load_floats(&home_[j]), simd::splat<Lanes>(home)) == this_slab);
           // the hits as bits, then one pass per set bit: usually one, and no branch per lane
           for (unsigned bits = simd::lane_bits(hit); bits != 0; bits &= bits - 1)
             pairs_.push_back(ordered(ids_[i], ids_[j + std::size_t(std::countr_zero(bits))]));
@@ -618,10 +618,10 @@ class BoxPruning final : public ProxyStore {
   // at most this many slabs: beyond it the per-slab padding and bookkeeping outweigh the gain
   static constexpr std::size_t kMaxSlabs = 256;
   Layout layout_;
-  std::vector<std::vector<Keyed>> members_;  // each slab's boxes with their min x, in x order
-  std::vector<SlabRange> ranges_;              // each box's slabs (by handle)
-  std::vector<std::vector<Keyed>> arrivals_;   // boxes entering each slab this update
-  std::vector<Keyed> keyed_;                   // scratch: one slab (or every box) with its keys
+  std::vector<std::vector<Keyed>> members_;   // each slab's boxes with their min x, in x order
+  std::vector<SlabRange> ranges_;             // each box's slabs (by handle)
+  std::vector<std::vector<Keyed>> arrivals_;  // boxes entering each slab this update
+  std::vector<Keyed> keyed_;                  // scratch: one slab (or every box) with its keys
   // the slabs' members as columns, each slab in x order; home = the slab of the box's min y
   // each slab's first entry, and one past the last slab's padding
   std::vector<std::size_t> first_;

@@ -25,10 +25,10 @@ inline void rows_of(const Mat3& m, Double4 rows[3]) {
   const Double4 low = load4(m.data());       // m00 m10 m20 m01
   const Double4 high = load4(m.data() + 4);  // m11 m21 m02 m12
   constexpr Mask4 kThree = {-1, -1, -1, 0};
-  rows[0] = simd::select(kThree, simd::shuffle<0, 3, 6, 0>(low, high), 0.0);
-  rows[1] = simd::select(kThree, simd::shuffle<1, 4, 7, 0>(low, high), 0.0);
+  rows[0] = simd::select(kThree, simd::shuffle<0, 3, 6, 0>(low, high), Double4{});
+  rows[1] = simd::select(kThree, simd::shuffle<1, 4, 7, 0>(low, high), Double4{});
   rows[2] = simd::shuffle<2, 5, 0, 0>(low, high);
-  rows[2].set(2, m(2, 2)), rows[2].set(3, 0.0);
+  rows[2][2] = m(2, 2), rows[2][3] = 0.0;
 }
 // the columns of a 3×3 matrix held as rows in lanes 0–2 (lane 3 zero), by shuffles
 inline void transpose3(const Double4 rows[3], Double4 columns[3]) {
@@ -109,7 +109,7 @@ bool collide_boxes(const Shape& a, const Pose& pose_a, const Shape& b, const Pos
     const Double4 length_squared = row[i1] * row[i1] + row[i2] * row[i2];
     // (the division starts here, not after the gap)
     const Double4 inverse_length_squared =
-        1.0 / simd::select(length_squared >= kSine2, length_squared, 1.0);
+        1.0 / simd::select(length_squared >= kSine2, length_squared, Double4{1, 1, 1, 1});
     const Double4 least_a = simd::min(abs_row[i1], abs_row[i2]);
     // |c(i, j1)| and |c(i, j2)|
     const Double4 c_next = rotate4(abs_row[i]), c_after = rotate4(c_next);
@@ -143,19 +143,20 @@ bool collide_boxes(const Shape& a, const Pose& pose_a, const Shape& b, const Pos
   auto edge_manifold = [&] {
     const int i = best_edge_i, j = best_edge_j;
     constexpr Mask4 kLane[3] = {{-1, 0, 0, 0}, {0, -1, 0, 0}, {0, 0, -1, 0}};
-    const Double4 a_i = simd::select(kLane[i], 1.0, 0.0), b_j = column[j];
+    const Double4 a_i = simd::select(kLane[i], Double4{1, 1, 1, 1}, Double4{}), b_j = column[j];
     // a_i × b_j, turned to run from A towards B
     Double4 normal = rotate4(a_i) * rotate4(rotate4(b_j)) - rotate4(rotate4(a_i)) * rotate4(b_j);
     const Double4 normal_t = normal * t4;
-    normal = flip_where(normal, Double4(normal_t[0] + normal_t[1] + normal_t[2]) < 0.0);
+    normal = flip_where(normal, Double4{} + (normal_t[0] + normal_t[1] + normal_t[2]) < 0.0);
     // the edges' midpoints: A's at ±ha_k on its two other axes by the normal's signs there, B's at
     // ∓hb_k by the signs of the normal in B's frame
     const Mask4 up_a = normal >= 0.0;
-    const Double4 mid_a = simd::select(kThreeLanes & ~kLane[i], simd::select(up_a, ha4, -ha4), 0.0);
+    const Double4 mid_a =
+        simd::select(kThreeLanes & ~kLane[i], simd::select(up_a, ha4, -ha4), Double4{});
     const Double4 normal_in_b = normal[0] * row[0] + normal[1] * row[1] + normal[2] * row[2];
     const Mask4 up_b = normal_in_b < 0.0;
     const Double4 mid_b_in_b =
-        simd::select(kThreeLanes & ~kLane[j], simd::select(up_b, hb4, -hb4), 0.0);
+        simd::select(kThreeLanes & ~kLane[j], simd::select(up_b, hb4, -hb4), Double4{});
     const Double4 mid_b =
         t4 + mid_b_in_b[0] * column[0] + mid_b_in_b[1] * column[1] + mid_b_in_b[2] * column[2];
     // the closest points of the edges mid_a + α a_i, |α| ≤ ha_i, and mid_b + β b_j, |β| ≤ hb_j:
@@ -200,7 +201,7 @@ bool collide_boxes(const Shape& a, const Pose& pose_a, const Shape& b, const Pos
   const bool flipped = best_face_axis >= 3;
   const Pose* const poses[2] = {&pose_a, &pose_b};
   const Pose& reference_pose = *poses[flipped];  // (by index: a ?: of references is a branch)
-  const Mask4 flip = flipped;
+  const Mask4 flip = simd::splat<Mask4>(-std::int64_t(flipped));
   const Double4 reference_half4 = simd::select(flip, hb4, ha4);
   const Double4 incident_half4 = simd::select(flip, ha4, hb4);
   // the incident box's axes and centre in the reference frame: c's columns and t when A holds
@@ -268,8 +269,8 @@ bool collide_boxes(const Shape& a, const Pose& pose_a, const Shape& b, const Pos
     const Double4 f = (across - limit) * (along_u ? inverse_du : inverse_dv);
     Double4& x = cu[1 + side];
     Double4& y = cv[1 + side];
-    x = along_u ? Double4(limit) : u - f * du;
-    y = along_u ? v - f * dv : Double4(limit);
+    x = along_u ? Double4{limit, limit, limit, limit} : u - f * du;
+    y = along_u ? v - f * dv : Double4{limit, limit, limit, limit};
     cw[1 + side] = w + f * (w_next - w);
     inside[1 + side] = crosses & (along_u ? simd::abs(y) <= hv : simd::abs(x) <= hu);
   }

@@ -1,12 +1,14 @@
 // Two convex hulls: the separating axis test over the face normals of both and the edge pairs that
 // make a face of the Minkowski difference (their arcs cross on the Gauss map: Gregorius, GDC 2013),
-// over structure-of-arrays copies several lanes at a time; the manifold by clipping.
+// over columns of lanes, several at a time (each hull's own, made with it, and B's arc ends for the
+// pair); the manifold by clipping (narrowphase_clip.h).
 #include <algorithm>
 #include <array>
 #include <bit>
 #include <cmath>
 #include <limits>
 
+#include "narrowphase_clip.h"
 #include "narrowphase_internal.h"
 
 namespace rtp {

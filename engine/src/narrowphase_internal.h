@@ -1,9 +1,15 @@
 // What the narrow phase's files share. The narrow phase is one file per shape family, as MuJoCo's
 // engine_collision_{box,primitive,convex,driver}.c: narrowphase.cpp (the dispatch table),
-// narrowphase_clip.cpp (clipping a hull face to a manifold), narrowphase_triangle.cpp (lab 4.1),
+// narrowphase_clip.h (clipping a hull face to a manifold), narrowphase_triangle.cpp (lab 4.1),
 // narrowphase_round.cpp (spheres and planes), narrowphase_box.cpp (two boxes, in closed form) and
 // narrowphase_hull.cpp (two hulls, by the Gauss map). The design and its sources are in
 // rtp/collision.h.
+//
+// Everything here has internal linkage (an unnamed namespace), so each file gets its own copy, as
+// it had when the narrow phase was one file. That is for the native build: with FMA contraction
+// on (GCC's default), which products fuse into a multiply-add depends on what is inlined where,
+// and shared out-of-line copies changed the last bits of contact points. Internal copies keep
+// every result the same bit for bit (bench/dump_outputs).
 #pragma once
 
 #include <algorithm>
@@ -16,6 +22,7 @@
 #include "simd.h"
 
 namespace rtp::detail {
+namespace {
 
 // an edge axis replaces the best face axis only when it is shallower by this fraction of the
 // depth plus this length: faces give the steadier manifold (Gregorius, GDC 2013, uses 5 %)
@@ -32,10 +39,14 @@ inline constexpr double kInfinity = std::numeric_limits<double>::infinity();
 // the lanes the box and hull paths compute in (simd.h)
 using simd::Double4;
 using simd::Double8;
+using simd::flip_where;
+using simd::lane_bits;
+using simd::lane_count;
+using simd::largest_lane;
 using simd::load4;
 using simd::load8;
 using simd::Mask4;
-inline constexpr Double4 kInfinity4 = Double4(kInfinity);
+inline constexpr Double4 kInfinity4 = simd::splat<Double4>(kInfinity);
 
 // the separation an edge axis must exceed to replace the best face axis
 inline double edge_threshold(double face_separation) {
@@ -108,16 +119,5 @@ inline bool no_contact(Manifold& out) {
   return false;
 }
 
-// ---- clipping (narrowphase_clip.cpp) ----
-
-// the face-contact manifold when `reference_face` of the reference hull is the separating axis
-void hull_face_manifold(const ConvexHull& reference_hull, const Pose& reference_pose,
-                        std::uint32_t reference_face, const ConvexHull& incident_hull,
-                        const Pose& incident_pose, bool flipped, double depth, Manifold& out);
-
-// one edge–edge contact point midway between the edges' closest points
-void edge_contact(const Vec3& tail_a, const Vec3& edge_a, const Vec3& tail_b, const Vec3& edge_b,
-                  const Vec3& normal, double depth, std::uint16_t feature_a,
-                  std::uint16_t feature_b, Manifold& out);
-
+}  // namespace
 }  // namespace rtp::detail

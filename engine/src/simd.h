@@ -3,10 +3,15 @@
 // This is the only file that knows instruction sets: no other source has an instruction-set #if,
 // a target attribute or an intrinsic. Two kinds of type:
 //
-//   Pack<T, N>, Mask<T, N>  N lanes of T in GCC's vector extension (one register, or several
-//                           halves on a narrower core: the compiler splits them), and a mask of
-//                           the same shape whose lanes are all ones or zero. The narrow phase's
-//                           4 and 8 doubles and the broad phase's native-width floats.
+//   Pack<T, N>, Mask<T, N>  N lanes of T, and a mask of the same shape whose lanes are all ones
+//                           or zero: the narrow phase's 4 and 8 doubles and the broad phase's
+//                           native-width floats. With SIMD these are GCC's vector-extension types
+//                           themselves (one register, or several halves on a narrower core: the
+//                           compiler splits them), so +, −, ×, ÷, comparisons and &, |, ^, ~ are
+//                           the compiler's own and an expression keeps its order of evaluation
+//                           (an overloaded operator's operands may be evaluated in either order,
+//                           which changes which product a multiply-add fuses where FMA is on).
+//                           Without SIMD they are structs of arrays with the same operators.
 //   Float16, Mask16         16 floats in one AVX-512 register and a 16-bit lane mask, for the
 //                           particle kernels, which run on cores found at run time to have
 //                           AVX-512F in a build that may target less: their operations carry the
@@ -22,7 +27,7 @@
 // exact 1/√x and 1/x so that the code still builds and reads the same.
 //
 // Modelled on Box2D v3's b2FloatW (a lane type per instruction set, each operation written once
-// per set with a scalar version) and Jolt's Vec4 (operators on a wrapped register).
+// per set with a scalar version) and Jolt's Vec4 (a register with operators).
 #pragma once
 
 #include <algorithm>
@@ -62,57 +67,33 @@ template <typename T, std::size_t N>
 struct VectorOf {
   using type [[gnu::vector_size(N * sizeof(T))]] = T;
 };
-#endif
-
-// f on the lanes of a and b into an R (a Pack, or a Mask: comparisons give all ones where true):
-// one vector operation, or, as the scalar fallback, one lane at a time
-template <typename R, typename A, typename F>
-R each_lane(const A& a, const A& b, F f) {
-#ifdef RTP_SIMD_VECTORS
-  return R(f(a.v, b.v));
+template <typename T, std::size_t N>
+using Pack = typename VectorOf<T, N>::type;
+template <typename T, std::size_t N>
+using Mask = typename VectorOf<LaneInt<T>, N>::type;  // −1 (all bits) where true, 0 where false
 #else
-  R r;
-  for (std::size_t i = 0; i < r.v.size(); ++i) {
-    if constexpr (std::is_same_v<decltype(f(a.v[i], b.v[i])), bool>)
-      r.v[i] = f(a.v[i], b.v[i]) ? -1 : 0;
-    else
-      r.v[i] = f(a.v[i], b.v[i]);
-  }
-  return r;
-#endif
-}
-
+// the scalar fallback: N lanes in an array, each operator a loop over them
 template <typename T, std::size_t N>
 struct Mask {
   using Int = LaneInt<T>;
-#ifdef RTP_SIMD_VECTORS
-  using Native = typename VectorOf<Int, N>::type;
-#else
-  using Native = std::array<Int, N>;
-#endif
-  Native v;  // −1 (all bits) where true, 0 where false
-
+  std::array<Int, N> v;  // −1 (all bits) where true, 0 where false
   Mask() = default;
-  constexpr explicit Mask(Native n) : v(n) {}
-  // every lane b
-  constexpr Mask(bool b) : v(fill(b ? Int(-1) : Int(0))) {}
-  // lane by lane
   template <typename... B>
-    requires(sizeof...(B) == N && N > 1)
-  constexpr Mask(B... b) : v{Int(b ? -1 : 0)...} {}
-
-  static constexpr Native fill(Int x) {
-    return [&]<std::size_t... I>(std::index_sequence<I...>) {
-      return Native{((void)I, x)...};
-    }(std::make_index_sequence<N>{});
+    requires(sizeof...(B) == N)
+  constexpr Mask(B... b) : v{Int(b)...} {}
+  Int operator[](std::size_t i) const { return v[i]; }
+  Int& operator[](std::size_t i) { return v[i]; }
+  template <typename F>
+  static Mask each(const Mask& a, const Mask& b, F f) {
+    Mask r;
+    for (std::size_t i = 0; i < N; ++i) r.v[i] = Int(f(a.v[i], b.v[i]));
+    return r;
   }
-  bool operator[](std::size_t i) const { return v[i] != 0; }
-
-  friend Mask operator&(Mask a, Mask b) { return each_lane<Mask>(a, b, std::bit_and<>()); }
-  friend Mask operator|(Mask a, Mask b) { return each_lane<Mask>(a, b, std::bit_or<>()); }
-  friend Mask operator^(Mask a, Mask b) { return each_lane<Mask>(a, b, std::bit_xor<>()); }
+  friend Mask operator&(Mask a, Mask b) { return each(a, b, std::bit_and<>()); }
+  friend Mask operator|(Mask a, Mask b) { return each(a, b, std::bit_or<>()); }
+  friend Mask operator^(Mask a, Mask b) { return each(a, b, std::bit_xor<>()); }
   friend Mask operator~(Mask a) {
-    return each_lane<Mask>(a, a, [](auto x, auto) { return ~x; });
+    return each(a, a, [](Int x, Int) { return ~x; });
   }
   Mask& operator|=(Mask b) { return *this = *this | b; }
   Mask& operator&=(Mask b) { return *this = *this & b; }
@@ -120,55 +101,51 @@ struct Mask {
 
 template <typename T, std::size_t N>
 struct Pack {
-#ifdef RTP_SIMD_VECTORS
-  using Native = typename VectorOf<T, N>::type;
-#else
-  using Native = std::array<T, N>;
-#endif
   using MaskType = Mask<T, N>;
-  static constexpr std::size_t kLanes = N;
-  Native v;
-
-  Pack() = default;  // lanes undefined, as a scalar's; Pack{} is all zero
-  constexpr explicit Pack(Native n) : v(n) {}
-  // every lane x (implicit, so that scalars mix with packs in expressions)
-  constexpr Pack(T x) : v(fill(x)) {}
-  // lane by lane
+  std::array<T, N> v;
+  Pack() = default;                         // lanes undefined, as a scalar's; Pack{} is all zero
+  constexpr Pack(T x) : v{} { v.fill(x); }  // every lane x, so that scalars mix with packs
   template <typename... A>
     requires(sizeof...(A) == N && N > 1)
   constexpr Pack(A... a) : v{T(a)...} {}
-
-  static constexpr Native fill(T x) {
-    return [&]<std::size_t... I>(std::index_sequence<I...>) {
-      return Native{((void)I, x)...};
-    }(std::make_index_sequence<N>{});
-  }
   T operator[](std::size_t i) const { return v[i]; }
-  void set(std::size_t i, T x) { v[i] = x; }
-
-  friend Pack operator+(Pack a, Pack b) { return each_lane<Pack>(a, b, std::plus<>()); }
-  friend Pack operator-(Pack a, Pack b) { return each_lane<Pack>(a, b, std::minus<>()); }
-  friend Pack operator*(Pack a, Pack b) { return each_lane<Pack>(a, b, std::multiplies<>()); }
-  friend Pack operator/(Pack a, Pack b) { return each_lane<Pack>(a, b, std::divides<>()); }
+  T& operator[](std::size_t i) { return v[i]; }
+  template <typename R, typename F>
+  static R each(const Pack& a, const Pack& b, F f) {
+    R r;
+    for (std::size_t i = 0; i < N; ++i) {
+      if constexpr (std::is_same_v<R, MaskType>)
+        r.v[i] = f(a.v[i], b.v[i]) ? -1 : 0;
+      else
+        r.v[i] = f(a.v[i], b.v[i]);
+    }
+    return r;
+  }
+  friend Pack operator+(Pack a, Pack b) { return each<Pack>(a, b, std::plus<>()); }
+  friend Pack operator-(Pack a, Pack b) { return each<Pack>(a, b, std::minus<>()); }
+  friend Pack operator*(Pack a, Pack b) { return each<Pack>(a, b, std::multiplies<>()); }
+  friend Pack operator/(Pack a, Pack b) { return each<Pack>(a, b, std::divides<>()); }
   friend Pack operator-(Pack a) {
-    return each_lane<Pack>(a, a, [](auto x, auto) { return -x; });
+    return each<Pack>(a, a, [](T x, T) { return -x; });
   }
-  // comparisons: all ones where true
-  friend MaskType operator<(Pack a, Pack b) { return each_lane<MaskType>(a, b, std::less<>()); }
-  friend MaskType operator<=(Pack a, Pack b) {
-    return each_lane<MaskType>(a, b, std::less_equal<>());
-  }
-  friend MaskType operator>(Pack a, Pack b) { return each_lane<MaskType>(a, b, std::greater<>()); }
+  friend MaskType operator<(Pack a, Pack b) { return each<MaskType>(a, b, std::less<>()); }
+  friend MaskType operator<=(Pack a, Pack b) { return each<MaskType>(a, b, std::less_equal<>()); }
+  friend MaskType operator>(Pack a, Pack b) { return each<MaskType>(a, b, std::greater<>()); }
   friend MaskType operator>=(Pack a, Pack b) {
-    return each_lane<MaskType>(a, b, std::greater_equal<>());
+    return each<MaskType>(a, b, std::greater_equal<>());
   }
-  friend MaskType operator==(Pack a, Pack b) {
-    return each_lane<MaskType>(a, b, std::equal_to<>());
-  }
-  friend MaskType operator!=(Pack a, Pack b) {
-    return each_lane<MaskType>(a, b, std::not_equal_to<>());
-  }
+  friend MaskType operator==(Pack a, Pack b) { return each<MaskType>(a, b, std::equal_to<>()); }
+  friend MaskType operator!=(Pack a, Pack b) { return each<MaskType>(a, b, std::not_equal_to<>()); }
 };
+#endif
+
+// a pack's lane type, lane count and mask type
+template <typename V>
+using LaneOf = std::remove_cvref_t<decltype(std::declval<V&>()[0])>;
+template <typename V>
+inline constexpr std::size_t kLanesOf = sizeof(V) / sizeof(LaneOf<V>);
+template <typename V>
+using MaskOf = decltype(std::declval<V>() < std::declval<V>());
 
 // ---- the lane types ----
 
@@ -188,164 +165,162 @@ inline constexpr std::size_t kNativeFloats = 4;
 using FloatN = Pack<float, kNativeFloats>;
 using MaskN = Mask<float, kNativeFloats>;
 
-// ---- operations on packs ----
+// ---- operations on packs and masks ----
 
-// N lanes from p (any alignment)
-template <typename T, std::size_t N>
-Pack<T, N> load_lanes(const T* p) {
-  Pack<T, N> x;
-  std::memcpy(&x.v, p, sizeof x.v);
+// every lane x
+template <typename V>
+constexpr V splat(LaneOf<V> x) {
+  return [&]<std::size_t... I>(std::index_sequence<I...>) {
+    return V{((void)I, x)...};
+  }(std::make_index_sequence<kLanesOf<V>>{});
+}
+
+// the lanes from p (any alignment)
+template <typename V>
+V load(const LaneOf<V>* p) {
+  V x;
+  std::memcpy(&x, p, sizeof x);
   return x;
 }
-inline Double4 load4(const double* p) { return load_lanes<double, 4>(p); }
-inline Double8 load8(const double* p) { return load_lanes<double, 8>(p); }
-inline FloatN load_floats(const float* p) { return load_lanes<float, kNativeFloats>(p); }
+inline Double4 load4(const double* p) { return load<Double4>(p); }
+inline Double8 load8(const double* p) { return load<Double8>(p); }
+inline FloatN load_floats(const float* p) { return load<FloatN>(p); }
 
 // a where m is set, b elsewhere
-// (the type follows the mask: scalars may stand for either pack)
-template <typename T, std::size_t N>
-Pack<T, N> select(Mask<T, N> m, std::type_identity_t<Pack<T, N>> a,
-                  std::type_identity_t<Pack<T, N>> b) {
+template <typename M, typename V>
+V select(M m, V a, V b) {
 #ifdef RTP_SIMD_VECTORS
-  return Pack<T, N>(m.v ? a.v : b.v);
+  return m ? a : b;
 #else
-  Pack<T, N> r;
-  for (std::size_t i = 0; i < N; ++i) r.v[i] = m.v[i] ? a.v[i] : b.v[i];
+  V r;
+  for (std::size_t i = 0; i < kLanesOf<V>; ++i) r[i] = m[i] ? a[i] : b[i];
   return r;
 #endif
 }
 
-// the lanes' bits as integers and back
-template <typename T, std::size_t N>
-Mask<T, N> bits_of(Pack<T, N> x) {
-  Mask<T, N> r;
-  static_assert(sizeof r.v == sizeof x.v);
-  std::memcpy(&r.v, &x.v, sizeof r.v);
+// the lanes' bits reinterpreted: a pack as its mask type and back
+template <typename To, typename From>
+To bits_as(From x) {
+  static_assert(sizeof(To) == sizeof(From));
+#ifdef RTP_SIMD_VECTORS
+  return reinterpret_cast<To>(x);
+#else
+  To r;
+  std::memcpy(&r, &x, sizeof r);
   return r;
-}
-template <typename T, std::size_t N>
-Pack<T, N> from_bits(Mask<T, N> m) {
-  Pack<T, N> r;
-  std::memcpy(&r.v, &m.v, sizeof r.v);
-  return r;
+#endif
 }
 
 // |x| by clearing the sign bits: no compare and select
-template <typename T, std::size_t N>
-Pack<T, N> abs(Pack<T, N> x) {
-  using Int = LaneInt<T>;
-  constexpr Int kMagnitude = std::numeric_limits<Int>::max();
-#ifdef RTP_SIMD_VECTORS
-  return from_bits(Mask<T, N>(bits_of(x).v & kMagnitude));
-#else
-  Mask<T, N> m = bits_of(x);
-  for (std::size_t i = 0; i < N; ++i) m.v[i] &= kMagnitude;
-  return from_bits(m);
-#endif
+template <typename V>
+V abs(V x) {
+  using M = MaskOf<V>;
+  const M magnitude = splat<M>(std::numeric_limits<LaneOf<M>>::max());
+  return bits_as<V>(bits_as<M>(x) & magnitude);
 }
 
 // −x where m is set, by the sign bit (a compiler branches on a scalar condition's ?:)
-template <typename T, std::size_t N>
-Pack<T, N> flip_where(Pack<T, N> x, Mask<T, N> m) {
-  using Int = LaneInt<T>;
-  constexpr Int kSign = std::numeric_limits<Int>::min();
-  return from_bits(bits_of(x) ^ (m & Mask<T, N>(Mask<T, N>::fill(kSign))));
+template <typename V>
+V flip_where(V x, MaskOf<V> m) {
+  using M = MaskOf<V>;
+  const M sign = splat<M>(std::numeric_limits<LaneOf<M>>::min());
+  return bits_as<V>(bits_as<M>(x) ^ (m & sign));
 }
 
 // the lane-wise least and largest: a < b ? a : b and a > b ? a : b, NaNs and zeros included, by
 // the one instruction that computes exactly that where there is one (docs/narrowphase.md, code
 // generation)
-template <bool Least, typename T, std::size_t N>
-Pack<T, N> extreme(Pack<T, N> a, Pack<T, N> b) {
+template <bool Least, typename V>
+V extreme(V a, V b) {
 #if defined(RTP_SIMD_VECTORS) && defined(__AVX__)
-  if constexpr (std::is_same_v<T, double> && N == 4 && Least)
-    return Pack<T, N>(__builtin_ia32_minpd256(a.v, b.v));
-  if constexpr (std::is_same_v<T, double> && N == 4 && !Least)
-    return Pack<T, N>(__builtin_ia32_maxpd256(a.v, b.v));
+  if constexpr (std::is_same_v<V, Double4> && Least) return __builtin_ia32_minpd256(a, b);
+  if constexpr (std::is_same_v<V, Double4> && !Least) return __builtin_ia32_maxpd256(a, b);
 #endif
   return select(Least ? a < b : a > b, a, b);
 }
-template <typename T, std::size_t N>
-Pack<T, N> min(Pack<T, N> a, Pack<T, N> b) {
+template <typename V>
+V min(V a, V b) {
   return extreme<true>(a, b);
 }
-template <typename T, std::size_t N>
-Pack<T, N> max(Pack<T, N> a, Pack<T, N> b) {
+template <typename V>
+V max(V a, V b) {
   return extreme<false>(a, b);
 }
 
 // lanes rearranged: lane i of the result is lane I_i of x
-template <std::size_t... I, typename T, std::size_t N>
-Pack<T, N> shuffle(Pack<T, N> x) {
-  static_assert(sizeof...(I) == N);
+template <std::size_t... I, typename V>
+V shuffle(V x) {
+  static_assert(sizeof...(I) == kLanesOf<V>);
 #ifdef RTP_SIMD_VECTORS
-  return Pack<T, N>(__builtin_shuffle(x.v, typename Mask<T, N>::Native{I...}));
+  return __builtin_shuffle(x, MaskOf<V>{I...});
 #else
-  return Pack<T, N>{x.v[I]...};
+  return V{x[I]...};
 #endif
 }
 // lanes from two packs: I < N picks lane I of x, I ≥ N lane I − N of y
-template <std::size_t... I, typename T, std::size_t N>
-Pack<T, N> shuffle(Pack<T, N> x, Pack<T, N> y) {
+template <std::size_t... I, typename V>
+V shuffle(V x, V y) {
+  constexpr std::size_t N = kLanesOf<V>;
   static_assert(sizeof...(I) == N);
 #ifdef RTP_SIMD_VECTORS
-  return Pack<T, N>(__builtin_shuffle(x.v, y.v, typename Mask<T, N>::Native{I...}));
+  return __builtin_shuffle(x, y, MaskOf<V>{I...});
 #else
-  return Pack<T, N>{(I < N ? x.v[I % N] : y.v[I % N])...};
+  return V{(I < N ? x[I % N] : y[I % N])...};
 #endif
 }
 
 // the largest lane
-template <typename T, std::size_t N>
-T largest_lane(Pack<T, N> x) {
-  T largest = x[0];
-  for (std::size_t i = 1; i < N; ++i) largest = std::max(largest, x[i]);
-  return largest;
-}
-inline double largest_lane(Double4 x) {
-  return std::max(std::max(x[0], x[1]), std::max(x[2], x[3]));
+template <typename V>
+LaneOf<V> largest_lane(V x) {
+  if constexpr (kLanesOf<V> == 4) {
+    return std::max(std::max(x[0], x[1]), std::max(x[2], x[3]));
+  } else {
+    LaneOf<V> largest = x[0];
+    for (std::size_t i = 1; i < kLanesOf<V>; ++i) largest = std::max(largest, x[i]);
+    return largest;
+  }
 }
 
 // bit i set where lane i is: by the instruction that gathers the sign bits where the build has
 // one, not lane by lane
-template <typename T, std::size_t N>
-unsigned lane_bits(Mask<T, N> m) {
+template <typename M>
+unsigned lane_bits(M m) {
+  constexpr std::size_t N = kLanesOf<M>, width = sizeof(LaneOf<M>);
 #if defined(RTP_SIMD_VECTORS) && defined(__AVX__)
-  if constexpr (std::is_same_v<T, double> && N == 4)
-    return unsigned(__builtin_ia32_movmskpd256(from_bits(m).v));
-  if constexpr (std::is_same_v<T, float> && N == 8)
-    return unsigned(_mm256_movemask_ps(from_bits(m).v));
+  if constexpr (width == 8 && N == 4)
+    return unsigned(__builtin_ia32_movmskpd256(bits_as<Double4>(m)));
+  if constexpr (width == 4 && N == 8)
+    return unsigned(_mm256_movemask_ps(bits_as<Pack<float, 8>>(m)));
 #endif
 #if defined(RTP_SIMD_VECTORS) && defined(__AVX512F__)
-  if constexpr (std::is_same_v<T, float> && N == 16)
-    return unsigned(_mm512_cmplt_epi32_mask(__m512i(m.v), _mm512_setzero_si512()));
+  if constexpr (width == 4 && N == 16)
+    return unsigned(_mm512_cmplt_epi32_mask(__m512i(m), _mm512_setzero_si512()));
 #endif
 #if defined(RTP_SIMD_VECTORS) && defined(__SSE__)
-  if constexpr (std::is_same_v<T, float> && N == 4)
-    return unsigned(_mm_movemask_ps(from_bits(m).v));
+  if constexpr (width == 4 && N == 4) return unsigned(_mm_movemask_ps(bits_as<Pack<float, 4>>(m)));
 #endif
-  if constexpr (N == 8 && sizeof(T) == 8) {
+  if constexpr (width == 8 && N == 8) {
     // two halves of four
-    Mask<T, 4> half[2];
-    std::memcpy(half, &m.v, sizeof half);
+    Mask4 half[2];
+    std::memcpy(half, &m, sizeof half);
     return lane_bits(half[0]) | lane_bits(half[1]) << 4;
   } else {
     unsigned bits = 0;
-    for (std::size_t i = 0; i < N; ++i) bits |= unsigned(m.v[i] & 1) << i;
+    for (std::size_t i = 0; i < N; ++i) bits |= unsigned(m[i] & 1) << i;
     return bits;
   }
 }
-template <typename T, std::size_t N>
-int lane_count(Mask<T, N> m) {
+template <typename M>
+int lane_count(M m) {
   return std::popcount(lane_bits(m));
 }
-template <typename T, std::size_t N>
-bool any_of(Mask<T, N> m) {
+template <typename M>
+bool any_of(M m) {
   return lane_bits(m) != 0;
 }
-template <typename T, std::size_t N>
-bool all_of(Mask<T, N> m) {
-  return lane_bits(m) == (N == 32 ? ~0u : (1u << N) - 1u);
+template <typename M>
+bool all_of(M m) {
+  return lane_bits(m) == (1u << kLanesOf<M>)-1u;
 }
 
 // ---- 16 floats for the particle kernels ----

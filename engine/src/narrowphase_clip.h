@@ -1,6 +1,12 @@
 // Clipping a hull face to a manifold (the seed's choice): the incident face against the reference
 // face's side planes (Sutherland–Hodgman), and the edge–edge point. Two boxes clip by candidates in
-// their own frame instead (narrowphase_box.cpp).
+// their own frame instead (narrowphase_box.cpp), so the hull path is the only user.
+//
+// A header, included by narrowphase_hull.cpp alone, with internal linkage (as
+// narrowphase_internal.h explains): the compiler inlines the clip into collide_hulls as it did when
+// the narrow phase was one file, which keeps the native build's results bit for bit.
+#pragma once
+
 #include <algorithm>
 #include <array>
 #include <cstdint>
@@ -173,8 +179,6 @@ std::uint32_t incident_face_for(const ConvexHull& hull, const Pose& pose,
   return best;
 }
 
-}  // namespace
-
 // the face-contact manifold when `reference_face` of the reference hull is the separating axis
 void hull_face_manifold(const ConvexHull& reference_hull, const Pose& reference_pose,
                         std::uint32_t reference_face, const ConvexHull& incident_hull,
@@ -201,4 +205,5 @@ void edge_contact(const Vec3& tail_a, const Vec3& edge_a, const Vec3& tail_b, co
   out.points[0].feature = {feature_a, feature_b, 0, 0, ContactType::EdgeEdge, 0};
 }
 
+}  // namespace
 }  // namespace rtp::detail
