@@ -1,13 +1,15 @@
 #!/usr/bin/env bash
-# Runs every test: installs what is missing, then builds and runs CTest twice — the release
-# preset, and the debug preset with AddressSanitizer + UndefinedBehaviorSanitizer (GoogleTest
-# unit, validation and harness tests, and the report builder's pytest suite).
+# Runs every test: installs what is missing, then builds and runs CTest three times — the release
+# preset; the release-nosimd preset, which builds only the engine's tests with RTP_DISABLE_SIMD
+# (engine/src/simd.h's scalar fallbacks) and runs those; and the debug preset with
+# AddressSanitizer + UndefinedBehaviorSanitizer (GoogleTest unit, validation and harness tests, and
+# the report builder's pytest suite).
 #   ./test.sh               everything
 #   ./test.sh --quick       release only, no sanitizer pass
 #   ./test.sh -R Gates      only tests whose name matches (other arguments go to ctest)
 set -euo pipefail
 cd "$(dirname "$0")"
-presets=(release debug)
+presets=(release release-nosimd debug)
 if [ "${1:-}" = "--quick" ]; then
   presets=(release)
   shift

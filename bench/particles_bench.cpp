@@ -8,11 +8,13 @@
 #include <benchmark/benchmark.h>
 #include <rtp/particles.h>
 
-#include "paired.h"
-
 #include <chrono>
 #include <map>
 #include <vector>
+
+#include "paired.h"
+#include "physbench/particle_driver.h"
+#include "physbench/scenarios.h"
 
 namespace {
 
@@ -36,23 +38,10 @@ void Triad(benchmark::State& state) {
   state.counters["threads"] = threads;
 }
 
+// the particles-attractors scene (validation/src/scenarios.cpp), as rtp's definition
 rtp::ParticleSystemDef attractor_mode(std::size_t count, int threads) {
-  // the particles-attractors scene (validation/src/scenarios.cpp) as rtp's definition
-  rtp::ParticleSystemDef def;
-  def.count = count;
-  def.spawn_min = rtp::Vec3(-3, 2, -3);
-  def.spawn_max = rtp::Vec3(3, 5, 3);
-  def.velocity_min = rtp::Vec3(-1, -1, -1);
-  def.velocity_max = rtp::Vec3(1, 1, 1);
-  def.drag = 0.1;
-  def.attractors = {
-      {rtp::Vec3(-2, 3, 0), 20.0}, {rtp::Vec3(2, 3, 1), 15.0}, {rtp::Vec3(0, 4, -2), -10.0}};
-  def.softening = 0.2;
-  def.planes = {{rtp::Vec3::Zero(), rtp::Vec3(0.25, 1.0, 0.0).normalized()},
-                {rtp::Vec3::Zero(), rtp::Vec3(-0.25, 1.0, 0.1).normalized()},
-                {rtp::Vec3::Zero(), rtp::Vec3(0.0, 1.0, -0.25).normalized()}};
-  def.restitution = 0.6;
-  def.friction = 0.1;
+  rtp::ParticleSystemDef def =
+      physbench::particle_system_def(physbench::particles_attractors_scene(long(count)));
   def.integrator = rtp::ParticleIntegrator::Midpoint;
   def.threads = threads;
   return def;

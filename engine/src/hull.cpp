@@ -27,7 +27,18 @@ void add_unique_direction(std::vector<Vec3>& directions, const Vec3& v) {
   directions.push_back(v);
 }
 
-// edges (each once, with the faces either side), unique directions, unique normals, centre;
+void fill_columns(const std::vector<Vec3>& points, PointColumns& columns) {
+  const std::size_t n = points.size(), padded = (n + 7) / 8 * 8;
+  columns.count = n;
+  for (auto* column : {&columns.x, &columns.y, &columns.z}) column->resize(padded);
+  for (std::size_t i = 0; i < padded; ++i) {
+    const Vec3& p = points[i < n ? i : 0];
+    columns.x[i] = p.x(), columns.y[i] = p.y(), columns.z[i] = p.z();
+  }
+}
+
+// edges (each once, with the faces either side), unique directions, unique normals, centre,
+// the columns of the vertices and unique normals;
 // throws when the faces do not close into a polyhedron
 void finish_topology(ConvexHull& hull) {
   hull.centre = Vec3::Zero();
@@ -71,6 +82,8 @@ void finish_topology(ConvexHull& hull) {
           hull.faces[f].normal.cross(hull.unique_face_normals[k]).norm() < kDirectionTolerance)
         hull.unique_normal_faces[k][cosine > 0.0 ? 0 : 1] = f;
     }
+  fill_columns(hull.vertices, hull.vertex_columns);
+  fill_columns(hull.unique_face_normals, hull.normal_columns);
 }
 
 // frees qhull's memory however the computation ended

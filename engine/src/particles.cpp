@@ -4,10 +4,7 @@
 #include <cmath>
 #include <stdexcept>
 
-#if defined(__x86_64__) && defined(__GNUC__)
-#include <immintrin.h>
-#define RTP_PARTICLES_AVX512 1
-#endif
+#include "simd.h"
 
 namespace rtp {
 
@@ -22,12 +19,6 @@ double unit_random(std::uint64_t seed, std::uint64_t index, std::uint64_t salt) 
   z ^= z >> 31;
   return static_cast<double>(z >> 11) * (1.0 / 9007199254740992.0);
 }
-
-#ifdef RTP_PARTICLES_AVX512
-bool core_has_avx512() { return __builtin_cpu_supports("avx512f"); }
-#else
-bool core_has_avx512() { return false; }
-#endif
 
 }  // namespace
 
@@ -69,7 +60,8 @@ ParticleSystem::ParticleSystem(const ParticleSystemDef& def) : def_(def) {
     if (std::abs(p.normal.norm() - 1.0) > 1e-6)
       throw std::invalid_argument("rtp: particle plane normal must be unit");
   if (def_.softening <= 0.0) throw std::invalid_argument("rtp: particle softening must be > 0");
-  avx512_ = def_.kernels == ParticleKernels::Best && core_has_avx512();
+  // the one run-time dispatch: the AVX-512 kernels where the core has AVX-512F
+  avx512_ = def_.kernels == ParticleKernels::Best && simd::core_has_avx512();
   for (const Attractor& a : def_.attractors)
     attractors_.push_back({float(a.position.x()), float(a.position.y()), float(a.position.z()),
                            float(a.strength)});
@@ -122,88 +114,57 @@ struct Block {
   alignas(64) float x[kBlock], y[kBlock], z[kBlock];
 };
 
-#ifdef RTP_PARTICLES_AVX512
 // The AVX-512 kernels, for cores that have it (chosen at run time, so a portable build uses them
 // too): 16 particles per register, and 1/√r² at each attractor and the bounce's 1/vₙ by the
 // core's 14-bit estimates and one Newton step each (relative error ≤ 1.5 (2⁻¹⁴)² and (2⁻¹⁴)²,
-// under float rounding): five operations for 1/√r² where the portable reciprocal_sqrt takes
-// fourteen, and three multiply-adds for 1/vₙ where the portable loop divides. In cache, the update
-// is bound by the number of vector operations (docs/particles.md).
-//
-// The unmasked forms of these four fill a register from an "undefined" one, which GCC 12 reports
-// as maybe uninitialised at every use (GCC bug 105593); the zero-masked forms under a full mask
-// compile to the same instructions.
-constexpr __mmask16 kAll = 0xFFFF;
-__attribute__((target("avx512f"))) inline __m512 min16(__m512 a, __m512 b) {
-  return _mm512_maskz_min_ps(kAll, a, b);
-}
-__attribute__((target("avx512f"))) inline __m512 max16(__m512 a, __m512 b) {
-  return _mm512_maskz_max_ps(kAll, a, b);
-}
-__attribute__((target("avx512f"))) inline __m512 rsqrt16(__m512 a) {
-  return _mm512_maskz_rsqrt14_ps(kAll, a);
-}
-__attribute__((target("avx512f"))) inline __m512 rcp16(__m512 a) {
-  return _mm512_maskz_rcp14_ps(kAll, a);
-}
-// the lanes of a 16-particle group that exist: all but in a block's last, partial group
-inline __mmask16 lanes(std::size_t n, std::size_t j) {
-  return static_cast<__mmask16>(n - j >= 16 ? 0xFFFFu : (1u << (n - j)) - 1u);
-}
+// under float rounding), where the portable loops take reciprocal_sqrt and divide: fewer vector
+// operations, which is what bounds the update in cache (docs/particles.md).
+using simd::Float16;
+using simd::Mask16;
 
 // a = g + drag (wind − v) + Σ attractors for n particles; wx is null when the scene has no drag
 // (no wind is kept then). The attractors are summed in registers.
-__attribute__((target("avx512f"))) void accelerate_avx512(
+RTP_SIMD_TARGET_AVX512 void accelerate_avx512(
     std::size_t n, const float* px, const float* py, const float* pz, const float* vx,
     const float* vy, const float* vz, const float* wx, const float* wy, const float* wz,
     const std::array<float, 3>& gravity, float drag, const std::array<float, 4>* attractors,
     std::size_t count, float eps2, float* ax, float* ay, float* az) {
-  const __m512 half = _mm512_set1_ps(0.5f), three_halves = _mm512_set1_ps(1.5f),
-               softening = _mm512_set1_ps(eps2), k = _mm512_set1_ps(drag),
-               gx = _mm512_set1_ps(gravity[0]), gy = _mm512_set1_ps(gravity[1]),
-               gz = _mm512_set1_ps(gravity[2]);
+  using namespace simd;
+  const Float16 half = splat16(0.5f), three_halves = splat16(1.5f), softening = splat16(eps2),
+                k = splat16(drag), gx = splat16(gravity[0]), gy = splat16(gravity[1]),
+                gz = splat16(gravity[2]);
   for (std::size_t j = 0; j < n; j += 16) {
-    const __mmask16 m = lanes(n, j);
-    const __m512 x = _mm512_maskz_loadu_ps(m, px + j), y = _mm512_maskz_loadu_ps(m, py + j),
-                 z = _mm512_maskz_loadu_ps(m, pz + j);
-    __m512 sx = _mm512_maskz_loadu_ps(m, vx + j), sy = _mm512_maskz_loadu_ps(m, vy + j),
-           sz = _mm512_maskz_loadu_ps(m, vz + j);
+    const Mask16 m = lanes_below(n, j);
+    const Float16 x = load16(m, px + j), y = load16(m, py + j), z = load16(m, pz + j);
+    Float16 sx = load16(m, vx + j), sy = load16(m, vy + j), sz = load16(m, vz + j);
     if (wx) {
-      sx = _mm512_sub_ps(_mm512_maskz_loadu_ps(m, wx + j), sx);
-      sy = _mm512_sub_ps(_mm512_maskz_loadu_ps(m, wy + j), sy);
-      sz = _mm512_sub_ps(_mm512_maskz_loadu_ps(m, wz + j), sz);
-      sx = _mm512_fmadd_ps(k, sx, gx);
-      sy = _mm512_fmadd_ps(k, sy, gy);
-      sz = _mm512_fmadd_ps(k, sz, gz);
+      sx = fmadd(k, sub(load16(m, wx + j), sx), gx);
+      sy = fmadd(k, sub(load16(m, wy + j), sy), gy);
+      sz = fmadd(k, sub(load16(m, wz + j), sz), gz);
     } else {
-      sx = _mm512_fnmadd_ps(k, sx, gx);
-      sy = _mm512_fnmadd_ps(k, sy, gy);
-      sz = _mm512_fnmadd_ps(k, sz, gz);
+      sx = fnmadd(k, sx, gx);
+      sy = fnmadd(k, sy, gy);
+      sz = fnmadd(k, sz, gz);
     }
     for (std::size_t i = 0; i < count; ++i) {
       const std::array<float, 4>& a = attractors[i];
-      const __m512 rx = _mm512_sub_ps(_mm512_set1_ps(a[0]), x);
-      const __m512 ry = _mm512_sub_ps(_mm512_set1_ps(a[1]), y);
-      const __m512 rz = _mm512_sub_ps(_mm512_set1_ps(a[2]), z);
-      const __m512 r2 =
-          _mm512_fmadd_ps(rx, rx, _mm512_fmadd_ps(ry, ry, _mm512_fmadd_ps(rz, rz, softening)));
+      const Float16 rx = sub(splat16(a[0]), x), ry = sub(splat16(a[1]), y),
+                    rz = sub(splat16(a[2]), z);
+      const Float16 r2 = fmadd(rx, rx, fmadd(ry, ry, fmadd(rz, rz, softening)));
       // y ← y (3/2 − r² y²/2) from the estimate
-      const __m512 guess = rsqrt16(r2);
-      const __m512 half_r2_guess = _mm512_mul_ps(_mm512_mul_ps(half, r2), guess);
-      const __m512 inverse =
-          _mm512_mul_ps(guess, _mm512_fnmadd_ps(half_r2_guess, guess, three_halves));
-      const __m512 scale = _mm512_mul_ps(_mm512_mul_ps(_mm512_set1_ps(a[3]), inverse),
-                                         _mm512_mul_ps(inverse, inverse));
-      sx = _mm512_fmadd_ps(scale, rx, sx);
-      sy = _mm512_fmadd_ps(scale, ry, sy);
-      sz = _mm512_fmadd_ps(scale, rz, sz);
+      const Float16 guess = rsqrt_estimate(r2);
+      const Float16 half_r2_guess = mul(mul(half, r2), guess);
+      const Float16 inverse = mul(guess, fnmadd(half_r2_guess, guess, three_halves));
+      const Float16 scale = mul(mul(splat16(a[3]), inverse), mul(inverse, inverse));
+      sx = fmadd(scale, rx, sx);
+      sy = fmadd(scale, ry, sy);
+      sz = fmadd(scale, rz, sz);
     }
-    _mm512_mask_storeu_ps(ax + j, m, sx);
-    _mm512_mask_storeu_ps(ay + j, m, sy);
-    _mm512_mask_storeu_ps(az + j, m, sz);
+    store16(ax + j, m, sx);
+    store16(ay + j, m, sy);
+    store16(az + j, m, sz);
   }
 }
-#endif
 
 }  // namespace
 
@@ -217,7 +178,6 @@ void ParticleSystem::accelerate(std::size_t first, std::size_t n, const float* _
               gz = float(def_.gravity.z());
   const float drag = static_cast<float>(def_.drag);
   const float eps2 = static_cast<float>(def_.softening * def_.softening);
-#ifdef RTP_PARTICLES_AVX512
   if (avx512_) {
     const bool wind = !wx_.empty();
     accelerate_avx512(n, px, py, pz, vx, vy, vz, wind ? wx_.data() + first : nullptr,
@@ -226,7 +186,6 @@ void ParticleSystem::accelerate(std::size_t first, std::size_t n, const float* _
                       az);
     return;
   }
-#endif
   if (!wx_.empty()) {
     const float* __restrict wx = wx_.data() + first;
     const float* __restrict wy = wy_.data() + first;
@@ -325,8 +284,8 @@ void midpoint_finish(std::size_t n, float dt, float* __restrict x, float* __rest
 // τ = depth / vₙ ago (straight-line estimate). It is bounced as if at the crossing: its normal
 // speed at impact, vₙ + gₙτ with gₙ the pull of gravity into the plane, is reversed and scaled by
 // the restitution, then it climbs against gravity for τ. Reflecting the end-of-step speed instead
-// hands every bounce the (1 + e) gₙ τ it gained below the plane: apexes came out 7 % high at
-// dt = 1/120. Its tangential velocity loses the friction fraction; it never ends below the plane.
+// hands every bounce the (1 + e) gₙ τ it gained below the plane, and the apexes come out high
+// (docs/particles.md). Its tangential velocity loses the friction fraction; it never ends below the plane.
 // Written as selects, not branches, so it vectorises.
 void collide(std::size_t n, float nx, float ny, float nz, float offset, float gravity_into_plane,
              float restitution, float keep_tangential, float* __restrict x, float* __restrict y,
@@ -356,60 +315,49 @@ void collide(std::size_t n, float nx, float ny, float nz, float offset, float gr
   }
 }
 
-#ifdef RTP_PARTICLES_AVX512
 // collide() with AVX-512: the same arithmetic, 1/vₙ from the estimate and r ← r (2 − vₙ r)
-__attribute__((target("avx512f"))) void collide_avx512(
-    std::size_t n, float nx, float ny, float nz, float offset, float gravity_into_plane,
-    float restitution, float keep_tangential, float* x, float* y, float* z, float* vx, float* vy,
-    float* vz) {
-  const __m512 n_x = _mm512_set1_ps(nx), n_y = _mm512_set1_ps(ny), n_z = _mm512_set1_ps(nz),
-               plane = _mm512_set1_ps(offset), gn = _mm512_set1_ps(gravity_into_plane),
-               half_gn = _mm512_set1_ps(0.5f * gravity_into_plane),
-               minus_e = _mm512_set1_ps(-restitution), keep_t = _mm512_set1_ps(keep_tangential),
-               zero = _mm512_setzero_ps(), one = _mm512_set1_ps(1.0f), two = _mm512_set1_ps(2.0f);
+RTP_SIMD_TARGET_AVX512 void collide_avx512(std::size_t n, float nx, float ny, float nz,
+                                           float offset, float gravity_into_plane,
+                                           float restitution, float keep_tangential, float* x,
+                                           float* y, float* z, float* vx, float* vy, float* vz) {
+  using namespace simd;
+  const Float16 n_x = splat16(nx), n_y = splat16(ny), n_z = splat16(nz), plane = splat16(offset),
+                gn = splat16(gravity_into_plane), half_gn = splat16(0.5f * gravity_into_plane),
+                minus_e = splat16(-restitution), keep_t = splat16(keep_tangential),
+                zero = zero16(), one = splat16(1.0f), two = splat16(2.0f);
   for (std::size_t j = 0; j < n; j += 16) {
-    const __mmask16 m = lanes(n, j);
-    const __m512 px = _mm512_maskz_loadu_ps(m, x + j), py = _mm512_maskz_loadu_ps(m, y + j),
-                 pz = _mm512_maskz_loadu_ps(m, z + j), ux = _mm512_maskz_loadu_ps(m, vx + j),
-                 uy = _mm512_maskz_loadu_ps(m, vy + j), uz = _mm512_maskz_loadu_ps(m, vz + j);
-    const __m512 depth =
-        _mm512_fmadd_ps(px, n_x, _mm512_fmadd_ps(py, n_y, _mm512_fmsub_ps(pz, n_z, plane)));
-    const __m512 vn = _mm512_fmadd_ps(ux, n_x, _mm512_fmadd_ps(uy, n_y, _mm512_mul_ps(uz, n_z)));
-    const __mmask16 hit = _mm512_mask_cmp_ps_mask(_mm512_cmp_ps_mask(depth, zero, _CMP_LT_OQ),
-                                                  vn, zero, _CMP_LT_OQ);
-    const __m512 guess = rcp16(vn);
-    const __m512 reciprocal = _mm512_mul_ps(guess, _mm512_fnmadd_ps(vn, guess, two));
-    const __m512 tau = _mm512_maskz_mul_ps(hit, depth, reciprocal);
-    const __m512 impact = min16(_mm512_fmadd_ps(gn, tau, vn), zero);
-    const __m512 rise = _mm512_mul_ps(minus_e, impact);
-    const __m512 height = max16(_mm512_mul_ps(tau, _mm512_fnmadd_ps(half_gn, tau, rise)), zero);
-    const __m512 climb = _mm512_fnmadd_ps(gn, tau, rise);
-    const __m512 after = _mm512_mask_mov_ps(max16(climb, zero),
-                                            _mm512_cmp_ps_mask(height, zero, _CMP_GT_OQ), climb);
-    const __m512 lift = _mm512_mask_sub_ps(max16(_mm512_sub_ps(zero, depth), zero), hit,
-                                           height, depth);
-    const __m512 keep = _mm512_mask_mov_ps(one, hit, keep_t);
-    const __m512 normal = _mm512_maskz_mov_ps(hit, _mm512_fnmadd_ps(keep_t, vn, after));
-    _mm512_mask_storeu_ps(x + j, m, _mm512_fmadd_ps(lift, n_x, px));
-    _mm512_mask_storeu_ps(y + j, m, _mm512_fmadd_ps(lift, n_y, py));
-    _mm512_mask_storeu_ps(z + j, m, _mm512_fmadd_ps(lift, n_z, pz));
-    _mm512_mask_storeu_ps(vx + j, m, _mm512_fmadd_ps(normal, n_x, _mm512_mul_ps(keep, ux)));
-    _mm512_mask_storeu_ps(vy + j, m, _mm512_fmadd_ps(normal, n_y, _mm512_mul_ps(keep, uy)));
-    _mm512_mask_storeu_ps(vz + j, m, _mm512_fmadd_ps(normal, n_z, _mm512_mul_ps(keep, uz)));
+    const Mask16 m = lanes_below(n, j);
+    const Float16 px = load16(m, x + j), py = load16(m, y + j), pz = load16(m, z + j),
+                  ux = load16(m, vx + j), uy = load16(m, vy + j), uz = load16(m, vz + j);
+    const Float16 depth = fmadd(px, n_x, fmadd(py, n_y, fmsub(pz, n_z, plane)));
+    const Float16 vn = fmadd(ux, n_x, fmadd(uy, n_y, mul(uz, n_z)));
+    const Mask16 hit = less(depth, zero) & less(vn, zero);
+    const Float16 guess = reciprocal_estimate(vn);
+    const Float16 reciprocal = mul(guess, fnmadd(vn, guess, two));
+    const Float16 tau = select_or_zero(hit, mul(depth, reciprocal));
+    const Float16 impact = min(fmadd(gn, tau, vn), zero);
+    const Float16 rise = mul(minus_e, impact);
+    const Float16 height = max(mul(tau, fnmadd(half_gn, tau, rise)), zero);
+    const Float16 climb = fnmadd(gn, tau, rise);
+    const Float16 after = select(greater(height, zero), climb, max(climb, zero));
+    const Float16 lift = select(hit, sub(height, depth), max(sub(zero, depth), zero));
+    const Float16 keep = select(hit, keep_t, one);
+    const Float16 normal = select_or_zero(hit, fnmadd(keep_t, vn, after));
+    store16(x + j, m, fmadd(lift, n_x, px));
+    store16(y + j, m, fmadd(lift, n_y, py));
+    store16(z + j, m, fmadd(lift, n_z, pz));
+    store16(vx + j, m, fmadd(normal, n_x, mul(keep, ux)));
+    store16(vy + j, m, fmadd(normal, n_y, mul(keep, uy)));
+    store16(vz + j, m, fmadd(normal, n_z, mul(keep, uz)));
   }
 }
-#endif
 
 }  // namespace
 
 void ParticleSystem::update_range(std::size_t begin, std::size_t end, float dt) {
   const float restitution = static_cast<float>(def_.restitution);
   const float keep_tangential = static_cast<float>(1.0 - def_.friction);
-#ifdef RTP_PARTICLES_AVX512
   const auto collide_block = avx512_ ? collide_avx512 : collide;
-#else
-  const auto collide_block = collide;
-#endif
   Block a, stage_p, stage_v;
   for (std::size_t first = begin; first < end; first += kBlock) {
     const std::size_t n = std::min(kBlock, end - first);

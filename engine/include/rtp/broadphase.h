@@ -36,6 +36,7 @@ namespace rtp {
 struct Aabb {
   std::array<float, 3> min{}, max{};
 };
+static_assert(sizeof(Aabb) == 24);
 
 // closed intervals on all three axes: touching boxes overlap
 inline bool overlaps(const Aabb& a, const Aabb& b) {

@@ -89,6 +89,14 @@ struct HullEdge {
   std::uint32_t left = 0, right = 0;  // the faces either side
 };
 
+// points (or directions) as structure of arrays, padded to a multiple of eight with copies of the
+// first (which change no least or largest projection): the layout the separating axis test reads
+// four or eight lanes at a time
+struct PointColumns {
+  std::vector<double> x, y, z;  // count rounded up to eight entries each
+  std::size_t count = 0;        // the points
+};
+
 struct ConvexHull {
   std::vector<Vec3> vertices;  // body frame (m)
   std::vector<HullFace> faces;
@@ -100,6 +108,9 @@ struct ConvexHull {
   // (kNoFace where the hull has none): one projection of the other shape serves both
   std::vector<std::array<std::uint32_t, 2>> unique_normal_faces;
   Vec3 centre = Vec3::Zero();  // the mean of the vertices: an interior point
+  // the vertices and the unique face normals again as columns, made once with the hull
+  // (make_box_hull, make_convex_hull) so that no pair of hulls has to copy them
+  PointColumns vertex_columns, normal_columns;
 };
 
 inline constexpr std::uint32_t kNoFace = ~std::uint32_t{0};

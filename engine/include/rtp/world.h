@@ -50,13 +50,15 @@ struct BodyDef {
   double restitution = 0.0;  // a pair uses max(ea, eb)
 };
 
-// the primary state the integrators advance (104 bytes: 13 doubles)
+// the primary state the integrators advance (112 bytes: 13 doubles and the padding that keeps the
+// quaternion 16-byte aligned; 128 where AVX has Eigen align it to 32)
 struct BodyState {
   Vec3 position;          // centre of mass, world (m)
   Vec3 linear_momentum;   // world (kg m/s)
   Quat orientation;       // body to world, unit
   Vec3 angular_momentum;  // about the centre of mass, world (kg m²/s)
 };
+static_assert(sizeof(BodyState) == (alignof(Quat) > 16 ? 128 : 112));
 
 // the time derivative of a BodyState
 struct BodyRate {

@@ -1,0 +1,446 @@
+// rtp's SIMD vocabulary: the lane types the engine computes in, and the few operations on them.
+//
+// This is the only file that knows instruction sets: no other source has an instruction-set #if,
+// a target attribute or an intrinsic. Two kinds of type:
+//
+//   Pack<T, N>, Mask<T, N>  N lanes of T, and a mask of the same shape whose lanes are all ones
+//                           or zero: the narrow phase's 4 and 8 doubles and the broad phase's
+//                           native-width floats. With SIMD these are GCC's vector-extension types
+//                           themselves (one register, or several halves on a narrower core: the
+//                           compiler splits them), so +, −, ×, ÷, comparisons and &, |, ^, ~ are
+//                           the compiler's own and an expression keeps its order of evaluation
+//                           (an overloaded operator's operands may be evaluated in either order,
+//                           which changes which product a multiply-add fuses where FMA is on).
+//                           Without SIMD they are structs of arrays with the same operators.
+//   Float16, Mask16         16 floats in one AVX-512 register and a 16-bit lane mask, for the
+//                           particle kernels, which run on cores found at run time to have
+//                           AVX-512F in a build that may target less: their operations carry the
+//                           target attribute (RTP_SIMD_TARGET_AVX512 marks the kernels that use
+//                           them), and core_has_avx512() is the one run-time check.
+//
+// Every operation has a scalar fallback, a loop over the lanes computing the same thing lane by
+// lane. The CMake option RTP_DISABLE_SIMD defines RTP_DISABLE_SIMD and builds the engine on the
+// fallbacks alone: no vector type, no intrinsic (the compiler may still vectorise plain loops).
+// Results are the same bit for bit, lane for lane — the lane arithmetic is IEEE either way — except
+// the AVX-512 estimates (rsqrt14, rcp14), which have no scalar twin; the particle kernels that use
+// them are never chosen without SIMD (core_has_avx512() is false), and their fallbacks compute
+// exact 1/√x and 1/x so that the code still builds and reads the same.
+//
+// Modelled on Box2D v3's b2FloatW (a lane type per instruction set, each operation written once
+// per set with a scalar version) and Jolt's Vec4 (a register with operators).
+#pragma once
+
+#include <algorithm>
+#include <array>
+#include <bit>
+#include <cmath>
+#include <cstdint>
+#include <cstring>
+#include <functional>
+#include <limits>
+#include <type_traits>
+#include <utility>
+
+#if !defined(RTP_DISABLE_SIMD) && defined(__GNUC__)
+#define RTP_SIMD_VECTORS 1  // GCC's vector extension (GCC and Clang)
+#if defined(__x86_64__)
+#include <immintrin.h>
+#define RTP_SIMD_AVX512_KERNELS 1  // the particle kernels' Float16 is an AVX-512 register
+#endif
+#endif
+
+#ifdef RTP_SIMD_AVX512_KERNELS
+#define RTP_SIMD_TARGET_AVX512 __attribute__((target("avx512f")))
+#else
+#define RTP_SIMD_TARGET_AVX512
+#endif
+
+namespace rtp::simd {
+
+// the integer of a lane's width: what a mask lane holds
+template <typename T>
+using LaneInt = std::conditional_t<sizeof(T) == 8, std::int64_t, std::int32_t>;
+
+#ifdef RTP_SIMD_VECTORS
+// N lanes of T in the vector extension (the attribute, written so, may depend on the template)
+template <typename T, std::size_t N>
+struct VectorOf {
+  using type [[gnu::vector_size(N * sizeof(T))]] = T;
+};
+template <typename T, std::size_t N>
+using Pack = typename VectorOf<T, N>::type;
+template <typename T, std::size_t N>
+using Mask = typename VectorOf<LaneInt<T>, N>::type;  // −1 (all bits) where true, 0 where false
+#else
+// the scalar fallback: N lanes in an array, each operator a loop over them
+template <typename T, std::size_t N>
+struct Mask {
+  using Int = LaneInt<T>;
+  std::array<Int, N> v;  // −1 (all bits) where true, 0 where false
+  Mask() = default;
+  template <typename... B>
+    requires(sizeof...(B) == N)
+  constexpr Mask(B... b) : v{Int(b)...} {}
+  Int operator[](std::size_t i) const { return v[i]; }
+  Int& operator[](std::size_t i) { return v[i]; }
+  template <typename F>
+  static Mask each(const Mask& a, const Mask& b, F f) {
+    Mask r;
+    for (std::size_t i = 0; i < N; ++i) r.v[i] = Int(f(a.v[i], b.v[i]));
+    return r;
+  }
+  friend Mask operator&(Mask a, Mask b) { return each(a, b, std::bit_and<>()); }
+  friend Mask operator|(Mask a, Mask b) { return each(a, b, std::bit_or<>()); }
+  friend Mask operator^(Mask a, Mask b) { return each(a, b, std::bit_xor<>()); }
+  friend Mask operator~(Mask a) {
+    return each(a, a, [](Int x, Int) { return ~x; });
+  }
+  Mask& operator|=(Mask b) { return *this = *this | b; }
+  Mask& operator&=(Mask b) { return *this = *this & b; }
+};
+
+template <typename T, std::size_t N>
+struct Pack {
+  using MaskType = Mask<T, N>;
+  std::array<T, N> v;
+  Pack() = default;                         // lanes undefined, as a scalar's; Pack{} is all zero
+  constexpr Pack(T x) : v{} { v.fill(x); }  // every lane x, so that scalars mix with packs
+  template <typename... A>
+    requires(sizeof...(A) == N && N > 1)
+  constexpr Pack(A... a) : v{T(a)...} {}
+  T operator[](std::size_t i) const { return v[i]; }
+  T& operator[](std::size_t i) { return v[i]; }
+  template <typename R, typename F>
+  static R each(const Pack& a, const Pack& b, F f) {
+    R r;
+    for (std::size_t i = 0; i < N; ++i) {
+      if constexpr (std::is_same_v<R, MaskType>)
+        r.v[i] = f(a.v[i], b.v[i]) ? -1 : 0;
+      else
+        r.v[i] = f(a.v[i], b.v[i]);
+    }
+    return r;
+  }
+  friend Pack operator+(Pack a, Pack b) { return each<Pack>(a, b, std::plus<>()); }
+  friend Pack operator-(Pack a, Pack b) { return each<Pack>(a, b, std::minus<>()); }
+  friend Pack operator*(Pack a, Pack b) { return each<Pack>(a, b, std::multiplies<>()); }
+  friend Pack operator/(Pack a, Pack b) { return each<Pack>(a, b, std::divides<>()); }
+  friend Pack operator-(Pack a) {
+    return each<Pack>(a, a, [](T x, T) { return -x; });
+  }
+  friend MaskType operator<(Pack a, Pack b) { return each<MaskType>(a, b, std::less<>()); }
+  friend MaskType operator<=(Pack a, Pack b) { return each<MaskType>(a, b, std::less_equal<>()); }
+  friend MaskType operator>(Pack a, Pack b) { return each<MaskType>(a, b, std::greater<>()); }
+  friend MaskType operator>=(Pack a, Pack b) {
+    return each<MaskType>(a, b, std::greater_equal<>());
+  }
+  friend MaskType operator==(Pack a, Pack b) { return each<MaskType>(a, b, std::equal_to<>()); }
+  friend MaskType operator!=(Pack a, Pack b) { return each<MaskType>(a, b, std::not_equal_to<>()); }
+};
+#endif
+
+// a pack's lane type, lane count and mask type
+template <typename V>
+using LaneOf = std::remove_cvref_t<decltype(std::declval<V&>()[0])>;
+template <typename V>
+inline constexpr std::size_t kLanesOf = sizeof(V) / sizeof(LaneOf<V>);
+template <typename V>
+using MaskOf = decltype(std::declval<V>() < std::declval<V>());
+
+// ---- the lane types ----
+
+using Double4 = Pack<double, 4>;
+using Mask4 = Mask<double, 4>;
+using Double8 = Pack<double, 8>;
+using Mask8 = Mask<double, 8>;
+// floats in the widest register the build targets (the broad phase's sweep; the lane count
+// changes no result, only how many boxes one comparison covers)
+#if defined(RTP_SIMD_VECTORS) && defined(__AVX512F__)
+inline constexpr std::size_t kNativeFloats = 16;
+#elif defined(RTP_SIMD_VECTORS) && defined(__AVX__)
+inline constexpr std::size_t kNativeFloats = 8;
+#else
+inline constexpr std::size_t kNativeFloats = 4;
+#endif
+using FloatN = Pack<float, kNativeFloats>;
+using MaskN = Mask<float, kNativeFloats>;
+
+// ---- operations on packs and masks ----
+
+// every lane x
+template <typename V>
+constexpr V splat(LaneOf<V> x) {
+  return [&]<std::size_t... I>(std::index_sequence<I...>) {
+    return V{((void)I, x)...};
+  }(std::make_index_sequence<kLanesOf<V>>{});
+}
+
+// the lanes from p (any alignment)
+template <typename V>
+V load(const LaneOf<V>* p) {
+  V x;
+  std::memcpy(&x, p, sizeof x);
+  return x;
+}
+inline Double4 load4(const double* p) { return load<Double4>(p); }
+inline Double8 load8(const double* p) { return load<Double8>(p); }
+inline FloatN load_floats(const float* p) { return load<FloatN>(p); }
+
+// a where m is set, b elsewhere
+template <typename M, typename V>
+V select(M m, V a, V b) {
+#ifdef RTP_SIMD_VECTORS
+  return m ? a : b;
+#else
+  V r;
+  for (std::size_t i = 0; i < kLanesOf<V>; ++i) r[i] = m[i] ? a[i] : b[i];
+  return r;
+#endif
+}
+
+// the lanes' bits reinterpreted: a pack as its mask type and back
+template <typename To, typename From>
+To bits_as(From x) {
+  static_assert(sizeof(To) == sizeof(From));
+#ifdef RTP_SIMD_VECTORS
+  return reinterpret_cast<To>(x);
+#else
+  To r;
+  std::memcpy(&r, &x, sizeof r);
+  return r;
+#endif
+}
+
+// |x| by clearing the sign bits: no compare and select
+template <typename V>
+V abs(V x) {
+  using M = MaskOf<V>;
+  const M magnitude = splat<M>(std::numeric_limits<LaneOf<M>>::max());
+  return bits_as<V>(bits_as<M>(x) & magnitude);
+}
+
+// −x where m is set, by the sign bit (a compiler branches on a scalar condition's ?:)
+template <typename V>
+V flip_where(V x, MaskOf<V> m) {
+  using M = MaskOf<V>;
+  const M sign = splat<M>(std::numeric_limits<LaneOf<M>>::min());
+  return bits_as<V>(bits_as<M>(x) ^ (m & sign));
+}
+
+// the lane-wise least and largest: a < b ? a : b and a > b ? a : b, NaNs and zeros included, by
+// the one instruction that computes exactly that where there is one (docs/narrowphase.md, code
+// generation)
+template <bool Least, typename V>
+V extreme(V a, V b) {
+#if defined(RTP_SIMD_VECTORS) && defined(__AVX__)
+  if constexpr (std::is_same_v<V, Double4> && Least) return __builtin_ia32_minpd256(a, b);
+  if constexpr (std::is_same_v<V, Double4> && !Least) return __builtin_ia32_maxpd256(a, b);
+#endif
+  return select(Least ? a < b : a > b, a, b);
+}
+template <typename V>
+V min(V a, V b) {
+  return extreme<true>(a, b);
+}
+template <typename V>
+V max(V a, V b) {
+  return extreme<false>(a, b);
+}
+
+// lanes rearranged: lane i of the result is lane I_i of x
+template <std::size_t... I, typename V>
+V shuffle(V x) {
+  static_assert(sizeof...(I) == kLanesOf<V>);
+#ifdef RTP_SIMD_VECTORS
+  return __builtin_shuffle(x, MaskOf<V>{I...});
+#else
+  return V{x[I]...};
+#endif
+}
+// lanes from two packs: I < N picks lane I of x, I ≥ N lane I − N of y
+template <std::size_t... I, typename V>
+V shuffle(V x, V y) {
+  constexpr std::size_t N = kLanesOf<V>;
+  static_assert(sizeof...(I) == N);
+#ifdef RTP_SIMD_VECTORS
+  return __builtin_shuffle(x, y, MaskOf<V>{I...});
+#else
+  return V{(I < N ? x[I % N] : y[I % N])...};
+#endif
+}
+
+// the largest lane
+template <typename V>
+LaneOf<V> largest_lane(V x) {
+  if constexpr (kLanesOf<V> == 4) {
+    return std::max(std::max(x[0], x[1]), std::max(x[2], x[3]));
+  } else {
+    LaneOf<V> largest = x[0];
+    for (std::size_t i = 1; i < kLanesOf<V>; ++i) largest = std::max(largest, x[i]);
+    return largest;
+  }
+}
+
+// bit i set where lane i is: by the instruction that gathers the sign bits where the build has
+// one, not lane by lane
+template <typename M>
+unsigned lane_bits(M m) {
+  constexpr std::size_t N = kLanesOf<M>, width = sizeof(LaneOf<M>);
+#if defined(RTP_SIMD_VECTORS) && defined(__AVX__)
+  if constexpr (width == 8 && N == 4)
+    return unsigned(__builtin_ia32_movmskpd256(bits_as<Double4>(m)));
+  if constexpr (width == 4 && N == 8)
+    return unsigned(_mm256_movemask_ps(bits_as<Pack<float, 8>>(m)));
+#endif
+#if defined(RTP_SIMD_VECTORS) && defined(__AVX512F__)
+  if constexpr (width == 4 && N == 16)
+    return unsigned(_mm512_cmplt_epi32_mask(__m512i(m), _mm512_setzero_si512()));
+#endif
+#if defined(RTP_SIMD_VECTORS) && defined(__SSE__)
+  if constexpr (width == 4 && N == 4) return unsigned(_mm_movemask_ps(bits_as<Pack<float, 4>>(m)));
+#endif
+  if constexpr (width == 8 && N == 8) {
+    // two halves of four
+    Mask4 half[2];
+    std::memcpy(half, &m, sizeof half);
+    return lane_bits(half[0]) | lane_bits(half[1]) << 4;
+  } else {
+    unsigned bits = 0;
+    for (std::size_t i = 0; i < N; ++i) bits |= unsigned(m[i] & 1) << i;
+    return bits;
+  }
+}
+template <typename M>
+int lane_count(M m) {
+  return std::popcount(lane_bits(m));
+}
+template <typename M>
+bool any_of(M m) {
+  return lane_bits(m) != 0;
+}
+template <typename M>
+bool all_of(M m) {
+  return lane_bits(m) == (1u << kLanesOf<M>)-1u;
+}
+
+// ---- 16 floats for the particle kernels ----
+
+#ifdef RTP_SIMD_AVX512_KERNELS
+using Mask16 = __mmask16;
+struct Float16 {
+  __m512 v;
+};
+#define RTP_F16 RTP_SIMD_TARGET_AVX512 inline
+// The unmasked forms of min, max, rsqrt14 and rcp14 fill a register from an "undefined" one, which
+// GCC 12 reports as maybe uninitialised at every use (GCC bug 105593); the zero-masked forms under
+// a full mask compile to the same instructions.
+inline constexpr Mask16 kAll16 = 0xFFFF;
+RTP_F16 Float16 splat16(float x) { return {_mm512_set1_ps(x)}; }
+RTP_F16 Float16 zero16() { return {_mm512_setzero_ps()}; }
+// the lanes of m from p, zero elsewhere; the lanes of m to p
+RTP_F16 Float16 load16(Mask16 m, const float* p) { return {_mm512_maskz_loadu_ps(m, p)}; }
+RTP_F16 void store16(float* p, Mask16 m, Float16 x) { _mm512_mask_storeu_ps(p, m, x.v); }
+RTP_F16 Float16 add(Float16 a, Float16 b) { return {_mm512_add_ps(a.v, b.v)}; }
+RTP_F16 Float16 sub(Float16 a, Float16 b) { return {_mm512_sub_ps(a.v, b.v)}; }
+RTP_F16 Float16 mul(Float16 a, Float16 b) { return {_mm512_mul_ps(a.v, b.v)}; }
+// a b + c, −(a b) + c and a b − c, each rounded once
+RTP_F16 Float16 fmadd(Float16 a, Float16 b, Float16 c) { return {_mm512_fmadd_ps(a.v, b.v, c.v)}; }
+RTP_F16 Float16 fnmadd(Float16 a, Float16 b, Float16 c) {
+  return {_mm512_fnmadd_ps(a.v, b.v, c.v)};
+}
+RTP_F16 Float16 fmsub(Float16 a, Float16 b, Float16 c) { return {_mm512_fmsub_ps(a.v, b.v, c.v)}; }
+RTP_F16 Float16 min(Float16 a, Float16 b) { return {_mm512_maskz_min_ps(kAll16, a.v, b.v)}; }
+RTP_F16 Float16 max(Float16 a, Float16 b) { return {_mm512_maskz_max_ps(kAll16, a.v, b.v)}; }
+// 1/√x and 1/x within a relative 2⁻¹⁴ (the core's estimates)
+RTP_F16 Float16 rsqrt_estimate(Float16 a) { return {_mm512_maskz_rsqrt14_ps(kAll16, a.v)}; }
+RTP_F16 Float16 reciprocal_estimate(Float16 a) { return {_mm512_maskz_rcp14_ps(kAll16, a.v)}; }
+RTP_F16 Mask16 less(Float16 a, Float16 b) { return _mm512_cmp_ps_mask(a.v, b.v, _CMP_LT_OQ); }
+RTP_F16 Mask16 greater(Float16 a, Float16 b) { return _mm512_cmp_ps_mask(a.v, b.v, _CMP_GT_OQ); }
+// a where m is set, b elsewhere; a where m is set, 0 elsewhere
+RTP_F16 Float16 select(Mask16 m, Float16 a, Float16 b) { return {_mm512_mask_mov_ps(b.v, m, a.v)}; }
+RTP_F16 Float16 select_or_zero(Mask16 m, Float16 a) { return {_mm512_maskz_mov_ps(m, a.v)}; }
+#undef RTP_F16
+
+// whether the running core has AVX-512F: the particle kernels' run-time dispatch
+inline bool core_has_avx512() { return __builtin_cpu_supports("avx512f"); }
+#else
+using Mask16 = std::uint16_t;
+struct Float16 {
+  std::array<float, 16> v;
+};
+inline constexpr Mask16 kAll16 = 0xFFFF;
+template <typename F>
+Float16 lanewise16(F f) {
+  Float16 r;
+  for (std::size_t i = 0; i < 16; ++i) r.v[i] = f(i);
+  return r;
+}
+template <typename F>
+Mask16 compare16(F f) {
+  unsigned bits = 0;
+  for (std::size_t i = 0; i < 16; ++i) bits |= unsigned(f(i)) << i;
+  return Mask16(bits);
+}
+inline bool lane(Mask16 m, std::size_t i) { return (m >> i) & 1u; }
+inline Float16 splat16(float x) {
+  return lanewise16([&](std::size_t) { return x; });
+}
+inline Float16 zero16() { return splat16(0.0f); }
+inline Float16 load16(Mask16 m, const float* p) {
+  return lanewise16([&](std::size_t i) { return lane(m, i) ? p[i] : 0.0f; });
+}
+inline void store16(float* p, Mask16 m, Float16 x) {
+  for (std::size_t i = 0; i < 16; ++i)
+    if (lane(m, i)) p[i] = x.v[i];
+}
+inline Float16 add(Float16 a, Float16 b) {
+  return lanewise16([&](std::size_t i) { return a.v[i] + b.v[i]; });
+}
+inline Float16 sub(Float16 a, Float16 b) {
+  return lanewise16([&](std::size_t i) { return a.v[i] - b.v[i]; });
+}
+inline Float16 mul(Float16 a, Float16 b) {
+  return lanewise16([&](std::size_t i) { return a.v[i] * b.v[i]; });
+}
+inline Float16 fmadd(Float16 a, Float16 b, Float16 c) {
+  return lanewise16([&](std::size_t i) { return std::fma(a.v[i], b.v[i], c.v[i]); });
+}
+inline Float16 fnmadd(Float16 a, Float16 b, Float16 c) {
+  return lanewise16([&](std::size_t i) { return std::fma(-a.v[i], b.v[i], c.v[i]); });
+}
+inline Float16 fmsub(Float16 a, Float16 b, Float16 c) {
+  return lanewise16([&](std::size_t i) { return std::fma(a.v[i], b.v[i], -c.v[i]); });
+}
+inline Float16 min(Float16 a, Float16 b) {
+  return lanewise16([&](std::size_t i) { return a.v[i] < b.v[i] ? a.v[i] : b.v[i]; });
+}
+inline Float16 max(Float16 a, Float16 b) {
+  return lanewise16([&](std::size_t i) { return a.v[i] > b.v[i] ? a.v[i] : b.v[i]; });
+}
+// exact where the vector forms estimate (see the top of the file)
+inline Float16 rsqrt_estimate(Float16 a) {
+  return lanewise16([&](std::size_t i) { return 1.0f / std::sqrt(a.v[i]); });
+}
+inline Float16 reciprocal_estimate(Float16 a) {
+  return lanewise16([&](std::size_t i) { return 1.0f / a.v[i]; });
+}
+inline Mask16 less(Float16 a, Float16 b) {
+  return compare16([&](std::size_t i) { return a.v[i] < b.v[i]; });
+}
+inline Mask16 greater(Float16 a, Float16 b) {
+  return compare16([&](std::size_t i) { return a.v[i] > b.v[i]; });
+}
+inline Float16 select(Mask16 m, Float16 a, Float16 b) {
+  return lanewise16([&](std::size_t i) { return lane(m, i) ? a.v[i] : b.v[i]; });
+}
+inline Float16 select_or_zero(Mask16 m, Float16 a) { return select(m, a, zero16()); }
+
+inline bool core_has_avx512() { return false; }
+#endif
+
+// the lanes of a 16-lane group starting at j that are below n: all but in a last, partial group
+inline Mask16 lanes_below(std::size_t n, std::size_t j) {
+  return static_cast<Mask16>(n - j >= 16 ? 0xFFFFu : (1u << (n - j)) - 1u);
+}
+
+}  // namespace rtp::simd
