@@ -224,7 +224,8 @@ bool collide_hulls(const Shape& a, const Pose& pose_a, const Shape& b, const Pos
       hull_face_manifold(hull_a, pose_a, best_face_index, hull_b, pose_b, false, -best_face, out);
     if (out.count > 0) return true;
   }
-  if (best_edge > -std::numeric_limits<double>::infinity()) {
+  if (best_edge > -std::numeric_limits<double>::infinity() &&
+      (edge_axis_wins(best_edge, best_face) || edge_may_stand_in(best_edge, best_face))) {
     const HullEdge& ea = hull_a.edges[best_edge_a];
     const HullEdge& eb = hull_b.edges[best_edge_b];
     const Vec3 tail_a = pose_a.position + pose_a.rotation * hull_a.vertices[ea.tail];

@@ -62,6 +62,12 @@ inline double edge_threshold(double face_separation) {
 inline bool edge_axis_wins(double edge_separation, double face_separation) {
   return edge_separation > edge_threshold(face_separation);
 }
+// whether an edge axis may stand in for a face whose clip came out empty: not much deeper than
+// the face (an axis of two nearly parallel edges, valid by the parallel test, can come out
+// metres deep on boxes a micrometre apart; its contact would be a fiction)
+inline bool edge_may_stand_in(double edge_separation, double face_separation) {
+  return edge_separation >= face_separation * (1.0 + kEdgeRelativeTolerance) - kEdgeAbsoluteTolerance;
+}
 
 // which four of n > 4 points to keep: the deepest (a corner among near-ties), the farthest from it, the one making the
 // largest triangle with those two, and the one adding the most area outside that triangle.

@@ -481,5 +481,27 @@ TEST(BoxClip, EqualStackedBoxesKeepOnePointAtEachCorner) {
   EXPECT_EQ(missing, 0);
 }
 
+// Two nearly aligned unit boxes of a pyramid, 10 µm apart along the upper box's own y axis
+// (2·10⁻⁵ rad from the lower one's, half a metre sideways): apart, on the box path as on the hull
+// path. The box path once skipped the upper box's face axes as duplicates of the lower's, found
+// them touching, clipped nothing, and stood in a contact 0.98 m deep along the axis of two nearly
+// parallel edges.
+TEST(SeparatingAxes, NearlyParallelBoxesApartAlongTheSecondBoxsAxisDoNotTouch) {
+  const Vec3 half(0.5, 0.5, 0.5);
+  const ConvexHull hull = make_box_hull(half);
+  const Pose a({5.515986, 6.494237, -0.006368},
+               Quat(0.9999992, -0.0007194, -0.0001775, 0.0010387).normalized());
+  const Pose b({6.020064, 7.495297, -0.007590},
+               Quat(0.9999992, -0.0007185, -0.0001750, 0.0010269).normalized());
+  Manifold m;
+  EXPECT_FALSE(collide(Shape::box(hull, half), a, Shape::box(hull, half), b, m));
+  EXPECT_FALSE(collide(Shape::convex(hull), a, Shape::convex(hull), b, m));
+  // pressed 1 mm together along the upper box's y axis they touch, and no deeper than that
+  const Pose pressed(b.position - 0.001 * b.rotation.col(1), Quat(b.rotation));
+  ASSERT_TRUE(collide(Shape::box(hull, half), a, Shape::box(hull, half), pressed, m));
+  EXPECT_LT(m.depth, 0.002);
+  EXPECT_GT(m.normal.y(), 0.99);
+}
+
 }  // namespace
 }  // namespace rtp
