@@ -123,7 +123,10 @@ TEST(ContactGates, HeavyOnLightHoldsAtTenToOne) {
 // the same scene twice gives bit-identical states, and so does the two-thread variant: a
 // colour's contacts share no dynamic body, so the threads cannot change the order of any sum
 TEST(ContactGates, RunsAreBitIdenticalAtAnyThreadCount) {
-  const Scene scene = pyramid_scene(10);
+  // 1,275 boxes: enough contacts per colour (and candidates) for the threads to share the work;
+  // a quarter of a second of it
+  Scene scene = pyramid_scene(50);
+  scene.duration = 0.25;
   const ContactRun first = run_rtp("soft-step", scene), again = run_rtp("soft-step", scene),
                    threaded = run_rtp("soft-step-2t", scene);
   const auto& a = first.run.trajectory.samples;
