@@ -38,21 +38,23 @@ void tangent_basis(const Vec3& n, Vec3 tangent[2]) {
   tangent[1] = n.cross(tangent[0]);
 }
 
-// a point of a hull pushed out from the centre by d: the hull of such points holds the hull
-// grown by at least d·(its inradius over circumradius) and at most d (exact for a sphere-like
-// hull; boxes take the exact path)
-std::vector<Vec3> grown_points(const std::vector<Vec3>& points, double d) {
-  Vec3 centre = Vec3::Zero();
-  for (const Vec3& p : points) centre += p;
-  centre /= double(points.size());
-  std::vector<Vec3> grown;
-  grown.reserve(points.size());
-  for (const Vec3& p : points) {
-    const Vec3 out = p - centre;
-    const double length = out.norm();
-    grown.push_back(length > 0.0 ? p + d * out / length : p);
+// the vertices of a hull whose every face plane moves out by d: each vertex moves to where its
+// faces' offset planes meet (least squares where more than three meet), so the separating axis
+// test on the grown hull measures the real hull's face distances plus d exactly
+std::vector<Vec3> offset_vertices(const ConvexHull& hull, double d) {
+  std::vector<std::vector<Vec3>> normals(hull.vertices.size());
+  for (const HullFace& face : hull.faces)
+    for (std::uint32_t k = 0; k < face.count; ++k)
+      normals[hull.face_vertices[face.first + k]].push_back(face.normal);
+  std::vector<Vec3> moved;
+  moved.reserve(hull.vertices.size());
+  for (std::size_t v = 0; v < hull.vertices.size(); ++v) {
+    Eigen::MatrixX3d rows(normals[v].size(), 3);
+    for (std::size_t k = 0; k < normals[v].size(); ++k) rows.row(Eigen::Index(k)) = normals[v][k];
+    const Eigen::VectorXd offsets = Eigen::VectorXd::Constant(rows.rows(), d);
+    moved.push_back(hull.vertices[v] + rows.colPivHouseholderQr().solve(offsets));
   }
-  return grown;
+  return moved;
 }
 
 }  // namespace
@@ -103,8 +105,8 @@ void ContactPipeline::add_body(BodyId id, const ShapeDef& def, double friction,
       break;
     }
     case BodyShape::Hull:
-      hulls_.push_back(
-          std::make_unique<ConvexHull>(make_convex_hull(grown_points(def.hull_points, grow))));
+      hulls_.push_back(std::make_unique<ConvexHull>(
+          make_convex_hull(offset_vertices(make_convex_hull(def.hull_points), grow))));
       data.shape = Shape::convex(*hulls_.back());
       break;
     case BodyShape::Plane:

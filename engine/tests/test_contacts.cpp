@@ -238,6 +238,37 @@ TEST(Contacts, ShapelessWorldKeepsItsIntegrator) {
   EXPECT_NEAR(world.state(body).position.y(), 5.0 - 0.5 * 9.81, 1e-12);
 }
 
+// a hull (a cube given as its eight corners: the hull path, not the box path) and a sphere rest
+// on the ground and on each other: nothing falls through, nothing drifts
+TEST(Contacts, HullsAndSpheresRestOnTheGround) {
+  World world = world_with(ContactSolver::SoftStep);
+  add_ground(world, 0.6);
+  BodyDef hull;
+  hull.position = Vec3(0.0, 0.5, 0.0);
+  hull.principal_inertia = Vec3::Constant(1.0 / 6.0);
+  hull.shape.kind = BodyShape::Hull;
+  for (int i = 0; i < 8; ++i)
+    hull.shape.hull_points.emplace_back(i & 1 ? 0.5 : -0.5, i & 2 ? 0.5 : -0.5, i & 4 ? 0.5 : -0.5);
+  hull.friction = 0.6;
+  const BodyId cube = world.add_body(hull);
+  BodyDef ball;
+  ball.position = Vec3(3.0, 0.5, 0.0);
+  ball.principal_inertia = Vec3::Constant(0.4 * 0.25);
+  ball.shape.kind = BodyShape::Sphere;
+  ball.shape.radius = 0.5;
+  ball.friction = 0.6;
+  const BodyId sphere = world.add_body(ball);
+  BodyDef on_top = hull;  // a second hull cube on the first
+  on_top.position = Vec3(0.0, 1.5, 0.0);
+  const BodyId upper = world.add_body(on_top);
+  for (int i = 0; i < 300; ++i) world.step(kDt);
+  EXPECT_NEAR(world.state(cube).position.y(), 0.5, 0.01);
+  EXPECT_NEAR(world.state(upper).position.y(), 1.5, 0.01);
+  EXPECT_NEAR(world.state(sphere).position.y(), 0.5, 0.01);
+  EXPECT_LT(std::hypot(world.state(upper).position.x(), world.state(upper).position.z()), 0.01);
+  EXPECT_LT(world.velocity(sphere).norm(), 1e-3);
+}
+
 TEST(Contacts, BadShapesAndMaterialsAreRefused) {
   World world = world_with(ContactSolver::SoftStep);
   BodyDef plane;
