@@ -58,6 +58,8 @@ std::optional<rtp::ContactSettings> contact_settings_for(const std::string& vari
     return std::nullopt;
   }
   settings.threads = threads_for(variant);
+  // the scene's meaning: impacts slower than this are inelastic (docs/scene-format.md)
+  settings.restitution_threshold = kRestitutionThreshold;
   return settings;
 }
 
@@ -189,7 +191,7 @@ EngineInfo rtp_engine_info() {
       }
       if (c.solver != rtp::ContactSolver::Seed)
         table.push_back({"restitution threshold", number(c.restitution_threshold) + " m/s",
-                         "slower approaches do not bounce"});
+                         "the scene's: slower impacts are inelastic (rtp's own default 1 m/s)"});
       return table;
     }
     const std::string base = base_variant(variant);
