@@ -245,23 +245,27 @@ class BoxPruning final : public ProxyStore {
 
   // in each slab, each box against the boxes after it that start before it ends on x
   void sweep() {
+    using simd::at_least, simd::at_most, simd::load_floats, simd::splat_floats;
     for (std::size_t s = 0; s < members_.size(); ++s) {
-      const Lanes this_slab = simd::splat<Lanes>(float(s));
+      const Lanes this_slab = splat_floats(float(s));
       const std::size_t end = first_[s] + members_[s].size();
       for (std::size_t i = first_[s]; i < end; ++i) {
         const float end_x = max_x_[i], lo_y = min_y_[i], hi_y = max_y_[i], lo_z = min_z_[i],
                     hi_z = max_z_[i], home = home_[i];
         for (std::size_t j = i + 1;; j += simd::kNativeFloats) {
-          const simd::MaskN on_x = simd::load_floats(&min_x_[j]) <= end_x;
+          const simd::MaskN on_x = at_most(load_floats(&min_x_[j]), splat_floats(end_x));
           if (!simd::any_of(on_x)) break;
           const simd::MaskN hit =
-              on_x & (simd::load_floats(&min_y_[j]) <= hi_y) &
-              (simd::load_floats(&max_y_[j]) >= lo_y) & (simd::load_floats(&min_z_[j]) <= hi_z) &
-              (simd::load_floats(&max_z_[j]) >= lo_z) &
-              (simd::max(simd::load_floats(&home_[j]), simd::splat<Lanes>(home)) == this_slab);
-          // the hits as bits, then one pass per set bit: usually one, and no branch per lane
-          for (unsigned bits = simd::lane_bits(hit); bits != 0; bits &= bits - 1)
-            pairs_.push_back(ordered(ids_[i], ids_[j + std::size_t(std::countr_zero(bits))]));
+              on_x & at_most(load_floats(&min_y_[j]), splat_floats(hi_y)) &
+              at_least(load_floats(&max_y_[j]), splat_floats(lo_y)) &
+              at_most(load_floats(&min_z_[j]), splat_floats(hi_z)) &
+              at_least(load_floats(&max_z_[j]), splat_floats(lo_z)) &
+              simd::equal(simd::max(load_floats(&home_[j]), splat_floats(home)), this_slab);
+          if (simd::any_of(hit)) {
+            // the hits as bits, then one pass per set bit: usually one, and no branch per lane
+            for (unsigned bits = simd::lane_bits(hit); bits != 0; bits &= bits - 1)
+              pairs_.push_back(ordered(ids_[i], ids_[j + std::size_t(std::countr_zero(bits))]));
+          }
           if (!simd::all_of(on_x)) break;  // sorted: the boxes after these start later still
         }
       }

@@ -20,29 +20,30 @@ struct Extent {
   double min, max;
 };
 
-// points (or directions) as structure of arrays, read four or eight to a vector: a hull's own
-// columns, or a pair's (PointLanes); the count is rounded up to a multiple of eight with copies of
-// the first (which change no least or largest projection)
-struct LaneView {
-  const double *x = nullptr, *y = nullptr, *z = nullptr;
-  std::size_t count = 0, padded = 0;
-  LaneView() = default;
-  explicit LaneView(const PointColumns& c)
-      : x(c.x.data()), y(c.y.data()), z(c.z.data()), count(c.count), padded(c.x.size()) {}
-  Vec3 at(std::size_t i) const { return {x[i], y[i], z[i]}; }
+// points (or directions) as structure of arrays, read four or eight to a vector; the count is
+// rounded up to a multiple of eight with copies of the first (which change no least or largest
+// projection). Columns gives x(), y(), z(), count and padded: a hull's own columns (HullColumns)
+// or arrays of the pair's own (PairColumns).
+template <typename Columns>
+struct Lanes : Columns {
+  using Columns::Columns;
+  Vec3 at(std::size_t i) const { return {this->x()[i], this->y()[i], this->z()[i]}; }
   Double4 dot(std::size_t i, const Vec3& d) const {  // lanes i … i + 3
-    return load4(&x[i]) * d.x() + load4(&y[i]) * d.y() + load4(&z[i]) * d.z();
+    return load4(this->x() + i) * d.x() + load4(this->y() + i) * d.y() +
+           load4(this->z() + i) * d.z();
   }
   Double8 dot8(std::size_t i, const Vec3& d) const {  // lanes i … i + 7
-    return load8(&x[i]) * d.x() + load8(&y[i]) * d.y() + load8(&z[i]) * d.z();
+    return load8(this->x() + i) * d.x() + load8(this->y() + i) * d.y() +
+           load8(this->z() + i) * d.z();
   }
   // the bits of lanes i … i + width − 1 that are below the count (none for lanes wholly past it)
   unsigned lanes_in_count(std::size_t i, std::size_t width = 4) const {
+    const std::size_t count = this->count;
     return i >= count ? 0u : count - i >= width ? (1u << width) - 1u : (1u << (count - i)) - 1u;
   }
   Extent extent_along(const Vec3& direction) const {
     Double4 least = kInfinity4, largest = -kInfinity4;
-    for (std::size_t i = 0; i < padded; i += 4) {
+    for (std::size_t i = 0; i < this->padded; i += 4) {
       const Double4 d = dot(i, direction);
       least = simd::min(least, d), largest = simd::max(largest, d);
     }
@@ -50,17 +51,29 @@ struct LaneView {
   }
 };
 
-// up to Capacity points that depend on the pair (B's edges' arc ends in A's frame), in columns of
-// its own
+// a hull's columns, made with the hull (ConvexHull::vertex_columns, normal_columns)
+struct HullColumns {
+  const double *xs, *ys, *zs;
+  std::size_t count, padded;
+  explicit HullColumns(const PointColumns& c)
+      : xs(c.x.data()), ys(c.y.data()), zs(c.z.data()), count(c.count), padded(c.x.size()) {}
+  const double* x() const { return xs; }
+  const double* y() const { return ys; }
+  const double* z() const { return zs; }
+};
+
+// up to Capacity points that depend on the pair (B's edges' arc ends in A's frame), in arrays on
+// the stack (their addresses known to the compiler, which the arc test's loop profits from)
 template <std::size_t Capacity>
-struct PointLanes : LaneView {
+struct PairColumns {
   static constexpr std::size_t kLanes = (Capacity + 7) / 8 * 8;
   std::array<double, kLanes> xs, ys, zs;
-  PointLanes() = default;
-  PointLanes(const PointLanes&) = delete;  // the view points into this object
+  std::size_t count = 0, padded = 0;
+  const double* x() const { return xs.data(); }
+  const double* y() const { return ys.data(); }
+  const double* z() const { return zs.data(); }
   template <typename Point>
   void fill(std::size_t n, Point point) {  // point(i) → Vec3
-    x = xs.data(), y = ys.data(), z = zs.data();
     count = n, padded = (n + 7) / 8 * 8;
     for (std::size_t i = 0; i < padded; ++i) {
       const Vec3 p = point(i < n ? i : 0);
@@ -68,6 +81,10 @@ struct PointLanes : LaneView {
     }
   }
 };
+
+using LaneView = Lanes<HullColumns>;
+template <std::size_t Capacity>
+using PointLanes = Lanes<PairColumns<Capacity>>;
 
 }  // namespace
 

@@ -162,8 +162,6 @@ inline constexpr std::size_t kNativeFloats = 8;
 #else
 inline constexpr std::size_t kNativeFloats = 4;
 #endif
-using FloatN = Pack<float, kNativeFloats>;
-using MaskN = Mask<float, kNativeFloats>;
 
 // ---- operations on packs and masks ----
 
@@ -184,7 +182,6 @@ V load(const LaneOf<V>* p) {
 }
 inline Double4 load4(const double* p) { return load<Double4>(p); }
 inline Double8 load8(const double* p) { return load<Double8>(p); }
-inline FloatN load_floats(const float* p) { return load<FloatN>(p); }
 
 // a where m is set, b elsewhere
 template <typename M, typename V>
@@ -292,10 +289,6 @@ unsigned lane_bits(M m) {
   if constexpr (width == 4 && N == 8)
     return unsigned(_mm256_movemask_ps(bits_as<Pack<float, 8>>(m)));
 #endif
-#if defined(RTP_SIMD_VECTORS) && defined(__AVX512F__)
-  if constexpr (width == 4 && N == 16)
-    return unsigned(_mm512_cmplt_epi32_mask(__m512i(m), _mm512_setzero_si512()));
-#endif
 #if defined(RTP_SIMD_VECTORS) && defined(__SSE__)
   if constexpr (width == 4 && N == 4) return unsigned(_mm_movemask_ps(bits_as<Pack<float, 4>>(m)));
 #endif
@@ -306,7 +299,7 @@ unsigned lane_bits(M m) {
     return lane_bits(half[0]) | lane_bits(half[1]) << 4;
   } else {
     unsigned bits = 0;
-    for (std::size_t i = 0; i < N; ++i) bits |= unsigned(m[i] & 1) << i;
+    for (std::size_t i = 0; i < N; ++i) bits |= unsigned(m[i] & (LaneOf<M>(1) << i));
     return bits;
   }
 }
@@ -322,6 +315,34 @@ template <typename M>
 bool all_of(M m) {
   return lane_bits(m) == (1u << kLanesOf<M>)-1u;
 }
+
+// ---- the broad phase's floats ----
+
+// FloatN and MaskN: kNativeFloats floats and a mask of them, compared by name (at_most, at_least,
+// equal) rather than by operator so that with AVX-512 the mask can be a mask register: compares,
+// ANDs and the final test then stay there, where a vector mask costs a conversion each way.
+#if defined(RTP_SIMD_VECTORS) && defined(__AVX512F__)
+using FloatN = __m512;
+using MaskN = __mmask16;
+inline FloatN load_floats(const float* p) { return _mm512_loadu_ps(p); }
+inline FloatN splat_floats(float x) { return _mm512_set1_ps(x); }
+inline MaskN at_most(FloatN a, FloatN b) { return _mm512_cmp_ps_mask(a, b, _CMP_LE_OQ); }
+inline MaskN at_least(FloatN a, FloatN b) { return _mm512_cmp_ps_mask(a, b, _CMP_GE_OQ); }
+inline MaskN equal(FloatN a, FloatN b) { return _mm512_cmp_ps_mask(a, b, _CMP_EQ_OQ); }
+// (the zero-masked form under a full mask: GCC bug 105593, below)
+inline FloatN max(FloatN a, FloatN b) { return _mm512_maskz_max_ps(0xFFFF, a, b); }
+inline unsigned lane_bits(MaskN m) { return m; }
+inline bool any_of(MaskN m) { return m != 0; }
+inline bool all_of(MaskN m) { return m == 0xFFFF; }
+#else
+using FloatN = Pack<float, kNativeFloats>;
+using MaskN = Mask<float, kNativeFloats>;
+inline FloatN load_floats(const float* p) { return load<FloatN>(p); }
+inline FloatN splat_floats(float x) { return splat<FloatN>(x); }
+inline MaskN at_most(FloatN a, FloatN b) { return a <= b; }
+inline MaskN at_least(FloatN a, FloatN b) { return a >= b; }
+inline MaskN equal(FloatN a, FloatN b) { return a == b; }
+#endif
 
 // ---- 16 floats for the particle kernels ----
 
