@@ -32,8 +32,8 @@ rtp::World& settled_world(int base, int threads) {
   auto& world = worlds[{base, threads}];
   if (!world) {
     const physbench::Scene scene = physbench::pyramid_scene(base);
-    world = std::make_unique<rtp::World>(
-        physbench::make_rtp_world(scene, rtp::Integrator::SemiImplicitEuler, settings_for(threads)));
+    world = std::make_unique<rtp::World>(physbench::make_rtp_world(
+        scene, rtp::Integrator::SemiImplicitEuler, settings_for(threads)));
     for (int i = 0; i < kSettleSteps; ++i) world->step(scene.dt);
   }
   return *world;

@@ -36,8 +36,8 @@ std::string base_variant(const std::string& variant) {
 }
 
 // The contact variants: rtp's default soft step, Box2D v3's own soft-step settings (4 substeps,
-// 30 Hz, damping ratio 10, one relax pass, 3 m/s push-out), sequential impulses, and the seed's lab 5; "-2t"
-// runs the narrow phase and each colour of the solve on two threads
+// 30 Hz, damping ratio 10, one relax pass, 3 m/s push-out), sequential impulses, and the seed's
+// lab 5; "-2t" runs the narrow phase and each colour of the solve on two threads
 std::optional<rtp::ContactSettings> contact_settings_for(const std::string& variant) {
   const std::string base = base_variant(variant);
   rtp::ContactSettings settings;
@@ -186,7 +186,8 @@ EngineInfo rtp_engine_info() {
       } else {
         table.push_back({"velocity iterations", std::to_string(c.velocity_iterations),
                          "as the peers' equal-iterations variants"});
-        table.push_back({"Baumgarte", number(c.baumgarte) + ", slop " + number(c.linear_slop) + " m",
+        table.push_back({"Baumgarte",
+                         number(c.baumgarte) + ", slop " + number(c.linear_slop) + " m",
                          "fraction of the penetration past the slop removed per step"});
       }
       if (c.solver != rtp::ContactSolver::Seed)

@@ -263,8 +263,8 @@ void ContactPipeline::solve(double h, bool bias) {
     // row: one pass over a face's four points lands the whole impulse on the first and spins the
     // body, where the converged answer pushes all four alike
     // the approach speed restitution reverses, for points that started the step touching: each
-    // one's last before it first pushed, all read before this manifold pushes at all (read one by one, the points after the first would
-    // see the first's push, and bounce unequally)
+    // one's last before it first pushed, all read before this manifold pushes at all (read one
+    // by one, the points after the first would see the first's push, and bounce unequally)
     for (std::uint8_t i = 0; i < c.count; ++i)
       if (c.points[i].max_normal_impulse == 0.0 && !c.points[i].starts_apart)
         c.points[i].approach_velocity = pair.velocity(c.points[i].normal, c.normal);

@@ -66,11 +66,13 @@ inline bool edge_axis_wins(double edge_separation, double face_separation) {
 // the face (an axis of two nearly parallel edges, valid by the parallel test, can come out
 // metres deep on boxes a micrometre apart; its contact would be a fiction)
 inline bool edge_may_stand_in(double edge_separation, double face_separation) {
-  return edge_separation >= face_separation * (1.0 + kEdgeRelativeTolerance) - kEdgeAbsoluteTolerance;
+  return edge_separation >=
+         face_separation * (1.0 + kEdgeRelativeTolerance) - kEdgeAbsoluteTolerance;
 }
 
-// which four of n > 4 points to keep: the deepest (a corner among near-ties), the farthest from it, the one making the
-// largest triangle with those two, and the one adding the most area outside that triangle.
+// which four of n > 4 points to keep: the deepest (a corner among near-ties), the farthest from
+// it, the one making the largest triangle with those two, and the one adding the most area
+// outside that triangle.
 // position(i) is a point in any vector type; area(p, q, r) the signed area of pqr about the normal.
 template <typename Depth, typename Position, typename Area>
 std::array<std::size_t, 4> choose_four(std::size_t count, Depth depth, Position position,

@@ -69,7 +69,8 @@ TEST(ContactGates, BounceApexesFollowTheRestitution) {
     // the first three: later ones carry the integration's ~1.5 % loss per bounce past 5 %
     const std::size_t judged = std::min<std::size_t>(3, r.contact.apex_relative_errors.size());
     for (std::size_t n = 0; n < judged; ++n)
-      EXPECT_LT(std::abs(r.contact.apex_relative_errors[n]), 0.05) << "e = " << e << ", apex " << n + 1;
+      EXPECT_LT(std::abs(r.contact.apex_relative_errors[n]), 0.05)
+          << "e = " << e << ", apex " << n + 1;
   }
 }
 
