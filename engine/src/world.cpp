@@ -31,6 +31,19 @@ Vec3 world_point(const BodyState& s, const Vec3& local_point) {
   return s.position + s.orientation.normalized() * local_point;
 }
 
+// Hooke plus damping along the line between the ends, on end a (N); a spring of zero length has
+// no direction and pulls along nothing
+Vec3 spring_force_on_a(const SpringDef& spring, const Vec3& point_a, const Vec3& velocity_a,
+                       const Vec3& point_b, const Vec3& velocity_b) {
+  const Vec3 delta = point_a - point_b;
+  const double length = delta.norm();
+  if (length <= 1e-12) return Vec3::Zero();
+  const Vec3 direction = delta / length;
+  const double extension_rate = direction.dot(velocity_a - velocity_b);
+  return -(spring.stiffness * (length - spring.rest_length) + spring.damping * extension_rate) *
+         direction;
+}
+
 }  // namespace
 
 World::World(Vec3 gravity, Integrator integrator, ContactSettings contacts)
@@ -151,15 +164,7 @@ void World::evaluate(const std::vector<BodyState>& states, std::vector<BodyRate>
       velocity_b = rates[spring.body_b].velocity +
                    derived_angular_velocity(b, masses_[spring.body_b]).cross(point_b - b.position);
     }
-    const Vec3 delta = point_a - point_b;
-    const double length = delta.norm();
-    // a spring of zero length has no direction: it pulls along nothing
-    if (length <= 1e-12) continue;
-    const Vec3 direction = delta / length;
-    const double extension_rate = direction.dot(velocity_a - velocity_b);
-    const Vec3 force_on_a =
-        -(spring.stiffness * (length - spring.rest_length) + spring.damping * extension_rate) *
-        direction;
+    const Vec3 force_on_a = spring_force_on_a(spring, point_a, velocity_a, point_b, velocity_b);
     if (masses_[spring.body_a].inverse_mass > 0.0) {
       rates[spring.body_a].force += force_on_a;
       rates[spring.body_a].torque += (point_a - a.position).cross(force_on_a);
@@ -328,14 +333,8 @@ void World::integrate_velocities(double h) {
       velocity_b = bodies[spring.body_b].linear_velocity +
                    bodies[spring.body_b].angular_velocity.cross(point_b - b.position);
     }
-    const Vec3 delta = point_a - point_b;
-    const double length = delta.norm();
-    if (length <= 1e-12) continue;
-    const Vec3 direction = delta / length;
-    const Vec3 impulse_on_a = -h *
-                              (spring.stiffness * (length - spring.rest_length) +
-                               spring.damping * direction.dot(velocity_a - velocity_b)) *
-                              direction;
+    const Vec3 impulse_on_a =
+        h * spring_force_on_a(spring, point_a, velocity_a, point_b, velocity_b);
     auto push = [&](BodyId body, const Vec3& point, const Vec3& impulse) {
       bodies[body].linear_velocity += masses[body].inverse_mass * impulse;
       bodies[body].angular_velocity +=
