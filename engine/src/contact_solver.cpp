@@ -80,14 +80,11 @@ void make_row(ContactRow& row, const ContactPointConstraint& p, const Vec3& d,
   row.mass = k > 0.0 ? 1.0 / k : 0.0;
 }
 
-}  // namespace
-
-namespace {
-
 // a soft constraint of the given stiffness (Hz) and damping ratio, for a solve of step h, as
 // three numbers: the bias per metre of penetration (1/s), the share of the effective mass used,
-// and the share of the accumulated impulse taken back each solve (Catto, Solver2D 2024; Erleben,
-// "Velocity-based shock propagation", and the soft-constraint form of Baraff's ERP/CFM)
+// and the share of the accumulated impulse taken back each solve: an implicit spring–damper in
+// impulse form (Catto, "Soft Constraints", GDC 2011, and Solver2D, 2024; ODE's ERP/CFM are the
+// same pair of numbers)
 struct Softness {
   double bias_rate, mass_scale, impulse_scale;
 };
