@@ -203,7 +203,7 @@ class Box2dEngine final : public Engine {
     if (driver_) step_particles_after();
   }
 
-  BodyState body_state(int index) const override {
+  SampledState body_state(int index) const override {
     const b2Body* body = bodies_[index];
     const b2Vec2 p = body->GetPosition();
     const b2Vec2 v = body->GetLinearVelocity();

@@ -188,7 +188,7 @@ class BulletEngine final : public Engine {
       });
   }
 
-  BodyState body_state(int index) const override {
+  SampledState body_state(int index) const override {
     const btRigidBody& body = *bodies_[index];
     const btTransform& t = body.getCenterOfMassTransform();
     const btQuaternion q = t.getRotation();

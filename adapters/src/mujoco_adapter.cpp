@@ -402,7 +402,7 @@ class MujocoEngine final : public Engine {
 
   // the velocity change, written into the free joint's qvel (angular part in the body frame)
   void apply_impulse(int b, const Vec3& impulse, const Vec3& point) override {
-    const BodyState now = body_state(b);
+    const SampledState now = body_state(b);
     const VelocityChange change = impulse_velocity_change(scene_.bodies[b], now, impulse, point);
     const Vec3 local_angular = now.orientation.conjugate() * change.angular;
     mjtNum* v = data_->qvel + model_->jnt_dofadr[model_->body_jntadr[body_of_[b]]];
@@ -412,7 +412,7 @@ class MujocoEngine final : public Engine {
     }
   }
 
-  BodyState body_state(int index) const override {
+  SampledState body_state(int index) const override {
     const int body = body_of_[index];
     if (body < 0)
       return {scene_.bodies[index].position, scene_.bodies[index].orientation, Vec3::Zero(),
@@ -420,7 +420,7 @@ class MujocoEngine final : public Engine {
     const int joint = model_->body_jntadr[body];
     const mjtNum* q = data_->qpos + model_->jnt_qposadr[joint];
     const mjtNum* v = data_->qvel + model_->jnt_dofadr[joint];
-    BodyState s;
+    SampledState s;
     s.position = Vec3(q[0], q[1], q[2]);
     s.orientation = Quat(q[3], q[4], q[5], q[6]).normalized();
     s.linear_velocity = Vec3(v[0], v[1], v[2]);

@@ -218,7 +218,7 @@ class OdeEngine final : public Engine {
 
   // ODE has no impulse call: the velocity change is set directly
   void apply_impulse(int b, const Vec3& impulse, const Vec3& point) override {
-    const BodyState now = body_state(b);
+    const SampledState now = body_state(b);
     const VelocityChange change = impulse_velocity_change(scene_.bodies[b], now, impulse, point);
     const Vec3 v = now.linear_velocity + change.linear, w = now.angular_velocity + change.angular;
     dBodySetLinearVel(bodies_[b], v.x(), v.y(), v.z());
@@ -248,7 +248,7 @@ class OdeEngine final : public Engine {
     if (space_) dJointGroupEmpty(contacts_);
   }
 
-  BodyState body_state(int index) const override {
+  SampledState body_state(int index) const override {
     dBodyID body = bodies_[index];
     if (!body)
       return {scene_.bodies[index].position, scene_.bodies[index].orientation, Vec3::Zero(),
@@ -267,12 +267,12 @@ class OdeEngine final : public Engine {
   // (ODE manual, "How to use ERP and CFM"). Implicit, so it holds at any stiffness — and damps.
   void create_spring_joints() {
     for (const SpringSpec& s : scene_.springs) {
-      const BodyState a = body_state(s.body_a);
+      const SampledState a = body_state(s.body_a);
       const Vec3 point_a = a.position + a.orientation * s.local_point_a;
       Vec3 point_b = s.point_b;
       dBodyID body_b = nullptr;
       if (s.body_b >= 0) {
-        const BodyState b = body_state(s.body_b);
+        const SampledState b = body_state(s.body_b);
         point_b = b.position + b.orientation * s.point_b;
         body_b = bodies_[s.body_b];
       }

@@ -97,7 +97,7 @@ class RtpEngine final : public Engine {
     world_->apply_impulse(static_cast<rtp::BodyId>(body), impulse, point);
   }
 
-  BodyState body_state(int body) const override {
+  SampledState body_state(int body) const override {
     if (body >= body_count_) {
       const std::size_t i = static_cast<std::size_t>(body - body_count_);
       return {particles_->position(i), Quat::Identity(), particles_->velocity(i), Vec3::Zero()};

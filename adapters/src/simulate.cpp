@@ -99,7 +99,7 @@ Status status_from_string(const std::string& name) {
 }
 
 bool is_sane(const Sample& sample, double explosion_distance) {
-  for (const BodyState& b : sample.bodies) {
+  for (const SampledState& b : sample.bodies) {
     if (!finite(b.position) || !finite(b.linear_velocity) || !finite(b.angular_velocity))
       return false;
     if (!std::isfinite(b.orientation.w()) || !finite(b.orientation.vec())) return false;

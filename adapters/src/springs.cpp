@@ -2,7 +2,7 @@
 
 namespace physbench {
 
-SpringForce spring_force(const SpringSpec& spring, const BodyState& a, const BodyState* b) {
+SpringForce spring_force(const SpringSpec& spring, const SampledState& a, const SampledState* b) {
   SpringForce f;
   f.point_a = a.position + a.orientation * spring.local_point_a;
   Vec3 velocity_b = Vec3::Zero();
@@ -26,9 +26,9 @@ SpringForce spring_force(const SpringSpec& spring, const BodyState& a, const Bod
 
 void apply_spring_forces(const Scene& scene, const StateOf& state_of, const ApplyForceAt& apply) {
   for (const SpringSpec& spring : scene.springs) {
-    const BodyState a = state_of(spring.body_a);
-    BodyState b_state;
-    const BodyState* b = nullptr;
+    const SampledState a = state_of(spring.body_a);
+    SampledState b_state;
+    const SampledState* b = nullptr;
     if (spring.body_b >= 0) {
       b_state = state_of(spring.body_b);
       b = &b_state;
@@ -39,7 +39,7 @@ void apply_spring_forces(const Scene& scene, const StateOf& state_of, const Appl
   }
 }
 
-VelocityChange impulse_velocity_change(const BodySpec& body, const BodyState& now,
+VelocityChange impulse_velocity_change(const BodySpec& body, const SampledState& now,
                                        const Vec3& impulse, const Vec3& world_point) {
   VelocityChange change;
   if (body.mass == 0.0) return change;

@@ -237,7 +237,7 @@ void write_trajectory_csv(const fs::path& path, const Trajectory& run, const Err
   for (std::size_t k = 0; k < run.samples.size(); ++k) {
     const Sample& s = run.samples[k];
     for (std::size_t b = 0; b < s.bodies.size(); ++b) {
-      const BodyState& st = s.bodies[b];
+      const SampledState& st = s.bodies[b];
       out << number(s.time) << ',' << run.bodies[b];
       for (int i = 0; i < 3; ++i) out << ',' << number(st.position[i]);
       out << ',' << number(st.orientation.w());

@@ -27,7 +27,7 @@ json result_to_json(const RunResult& r) {
   json samples = json::array();
   for (const Sample& s : r.trajectory.samples) {
     json row = json::array({s.time});
-    for (const BodyState& b : s.bodies) {
+    for (const SampledState& b : s.bodies) {
       for (int k = 0; k < 3; ++k) row.push_back(b.position[k]);
       row.push_back(b.orientation.w());
       for (int k = 0; k < 3; ++k) row.push_back(b.orientation.vec()[k]);
@@ -62,7 +62,7 @@ RunResult result_from_json(const json& doc) {
     for (std::size_t b = 0; b < r.trajectory.bodies.size(); ++b) {
       const std::size_t o = 1 + 13 * b;
       auto at = [&](std::size_t k) { return number_or_nan(row.at(o + k)); };
-      BodyState state;
+      SampledState state;
       state.position = Vec3(at(0), at(1), at(2));
       state.orientation = Quat(at(3), at(4), at(5), at(6));
       state.linear_velocity = Vec3(at(7), at(8), at(9));

@@ -56,7 +56,7 @@ TEST(WorkerResult, JsonRoundTripKeepsStatesAndNan) {
   r.trajectory.bodies = {0};
   Sample s;
   s.time = 0.125;
-  BodyState b;
+  SampledState b;
   b.position = Vec3(1.0 / 3.0, 2, 3);
   b.orientation = Quat(0.5, 0.5, 0.5, 0.5);
   b.linear_velocity = Vec3(std::nan(""), 0, 0);
@@ -67,7 +67,7 @@ TEST(WorkerResult, JsonRoundTripKeepsStatesAndNan) {
   EXPECT_EQ(back.status, Status::Exploded);
   EXPECT_EQ(back.wall_seconds, r.wall_seconds);
   EXPECT_EQ(back.settings[0].why, "c");
-  const BodyState& bb = back.trajectory.samples[0].bodies[0];
+  const SampledState& bb = back.trajectory.samples[0].bodies[0];
   EXPECT_EQ(bb.position.x(), 1.0 / 3.0);
   EXPECT_EQ(bb.orientation.coeffs(), b.orientation.coeffs());
   EXPECT_TRUE(std::isnan(bb.linear_velocity.x()));

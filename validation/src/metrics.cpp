@@ -22,9 +22,9 @@ struct Invariants {
 
 Invariants invariants_of(const Scene& scene, const std::vector<int>& bodies, const Sample& sample) {
   Invariants inv;
-  std::vector<const BodyState*> state_of(scene.bodies.size(), nullptr);
+  std::vector<const SampledState*> state_of(scene.bodies.size(), nullptr);
   for (std::size_t i = 0; i < bodies.size(); ++i) {
-    const BodyState& s = sample.bodies[i];
+    const SampledState& s = sample.bodies[i];
     if (bodies[i] >= static_cast<int>(scene.bodies.size())) {
       // a probed particle: a point mass in gravity and the attractors' softened potential
       const ParticleSetSpec& p = *scene.particles;
@@ -55,12 +55,12 @@ Invariants invariants_of(const Scene& scene, const std::vector<int>& bodies, con
   }
   // spring potential, for springs whose moving ends are all probed
   for (const SpringSpec& spring : scene.springs) {
-    const BodyState* a = state_of[spring.body_a];
+    const SampledState* a = state_of[spring.body_a];
     if (!a) continue;
     const Vec3 pa = a->position + a->orientation * spring.local_point_a;
     Vec3 pb = spring.point_b;
     if (spring.body_b >= 0) {
-      const BodyState* b = state_of[spring.body_b];
+      const SampledState* b = state_of[spring.body_b];
       if (!b) continue;
       pb = b->position + b->orientation * spring.point_b;
     }
@@ -322,7 +322,7 @@ Trajectory ballistic_reference(const Scene& scene, const Trajectory& sampled_at)
     s.time = at.time;
     for (int index : sampled_at.bodies) {
       const BodySpec& b = scene.bodies[index];
-      BodyState state;
+      SampledState state;
       if (b.mass > 0.0) {
         state.position =
             b.position + b.linear_velocity * at.time + 0.5 * scene.gravity * at.time * at.time;
@@ -381,7 +381,7 @@ Trajectory oscillator_reference(const Scene& scene, const Trajectory& sampled_at
     solve(at.time, y, v);
     Sample s;
     s.time = at.time;
-    BodyState state;
+    SampledState state;
     state.position = spring.point_b + (equilibrium + y) * u;
     state.linear_velocity = v * u;
     state.orientation = b.orientation;  // not part of the closed form
@@ -532,7 +532,7 @@ void judge_stack(const Scene& scene, const Trajectory& run, const ErrorSeries& s
   long counted = 0;
   const double last_second = run.samples.back().time - 1.0;
   for (const Sample& s : run.samples)
-    for (const BodyState& b : s.bodies) {
+    for (const SampledState& b : s.bodies) {
       const double speed = b.linear_velocity.norm();
       fastest = std::max(fastest, speed);
       if (s.time >= last_second - 1e-9) {
@@ -582,7 +582,7 @@ void judge_bounce(const Scene& scene, const Trajectory& run, ContactSummary& out
   const BodySpec& plane = scene.bodies[plane_index];
   const Vec3 n = plane.orientation * Vec3::UnitY();
   const double g = -scene.gravity.dot(n);
-  auto clearance = [&](const BodyState& s) {
+  auto clearance = [&](const SampledState& s) {
     return (s.position - plane.position).dot(n) - support_extent(b, s.orientation, n);
   };
   const double h0 = clearance(run.samples.front().bodies[std::size_t(slot)]);
@@ -591,8 +591,8 @@ void judge_bounce(const Scene& scene, const Trajectory& run, ContactSummary& out
   // neighbouring samples as clearance + v²/2g (exact between samples of a ballistic flight)
   std::vector<double> apexes;
   for (std::size_t k = 0; k + 1 < run.samples.size(); ++k) {
-    const BodyState& now = run.samples[k].bodies[std::size_t(slot)];
-    const BodyState& next = run.samples[k + 1].bodies[std::size_t(slot)];
+    const SampledState& now = run.samples[k].bodies[std::size_t(slot)];
+    const SampledState& next = run.samples[k + 1].bodies[std::size_t(slot)];
     const double v0 = now.linear_velocity.dot(n), v1 = next.linear_velocity.dot(n);
     if (!(v0 > 0.0 && v1 <= 0.0)) continue;
     const double apex = 0.5 * (clearance(now) + v0 * v0 / (2.0 * g) + clearance(next) +
@@ -712,7 +712,7 @@ void judge_tunnelling(const Scene& scene, const Trajectory& run, ContactSummary&
   const BodySpec& w = scene.bodies[wall];
   const double wall_reach = support_extent(w, w.orientation, heading);
   const double near_face = nearest - wall_reach, far_face = nearest + wall_reach;
-  const BodyState& end = run.samples.back().bodies[std::size_t(slot)];
+  const SampledState& end = run.samples.back().bodies[std::size_t(slot)];
   const double travelled = (end.position - b.position).dot(heading);
   const double reach = support_extent(b, end.orientation, heading);
   out.tunnelled = travelled - reach > far_face;

@@ -198,7 +198,7 @@ std::vector<double> apex_heights(const Scene& scene, const Trajectory& run) {
   double best = 0.0;
   bool rising = false;
   for (std::size_t k = 1; k < run.samples.size(); ++k) {
-    const BodyState& b = run.samples[k].bodies[0];
+    const SampledState& b = run.samples[k].bodies[0];
     const double clearance = b.position.y() - 0.5;
     if (b.linear_velocity.y() > 0.0) rising = true;
     if (rising) best = std::max(best, clearance);

@@ -27,7 +27,7 @@ void expect_initial_state_read_back(const std::string& engine, const std::string
   const Scene scene = turned_projectile(planar);
   const RunResult r = measure(engine, variant, scene).run;
   ASSERT_FALSE(r.trajectory.samples.empty());
-  const BodyState& s = r.trajectory.samples.front().bodies[0];
+  const SampledState& s = r.trajectory.samples.front().bodies[0];
   const BodySpec& b = scene.bodies[0];
   EXPECT_LT((s.position - b.position).norm(), tolerance) << engine;
   EXPECT_LT(orientation_angle(s.orientation, b.orientation), tolerance) << engine;
@@ -54,7 +54,7 @@ void expect_impulses_land(const std::string& engine, const std::string& variant,
   const Scene scene = pushed_box_scene(planar);
   const RunResult r = measure(engine, variant, scene).run;
   const BodySpec& b = scene.bodies[0];
-  auto momenta = [&](const BodyState& s) {
+  auto momenta = [&](const SampledState& s) {
     const Mat3 rotation = s.orientation.toRotationMatrix();
     const Vec3 p = b.mass * s.linear_velocity;
     const Vec3 spin = rotation * principal_inertia(b.shape, b.mass).asDiagonal() *
@@ -123,7 +123,7 @@ void expect_planar_particles_stay_above(const std::string& engine, const std::st
   ASSERT_GT(r.trajectory.samples.size(), 100u);
   auto lowest_in = [&](const Sample& sample) {
     double lowest = std::numeric_limits<double>::infinity();
-    for (const BodyState& particle : sample.bodies)
+    for (const SampledState& particle : sample.bodies)
       for (const ParticlePlaneSpec& plane : scene.particles->planes)
         lowest = std::min(lowest, plane.normal.dot(particle.position - plane.point));
     return lowest;
@@ -131,7 +131,7 @@ void expect_planar_particles_stay_above(const std::string& engine, const std::st
   double lowest = std::numeric_limits<double>::infinity(), fastest = 0.0, off_plane = 0.0;
   for (const Sample& sample : r.trajectory.samples) {
     lowest = std::min(lowest, lowest_in(sample));
-    for (const BodyState& particle : sample.bodies) {
+    for (const SampledState& particle : sample.bodies) {
       fastest = std::max(fastest, particle.linear_velocity.norm());
       off_plane = std::max(off_plane, std::abs(particle.position.z()));
     }
@@ -276,7 +276,7 @@ TEST(Box2d, PlanarProjectileShowsSemiImplicitEuler) {
 TEST(Box2d, SpinIsConstantInFreeFlight) {
   const Scene scene = projectile_planar_scene();
   const auto run = measure("box2d", "default", scene).run.trajectory;
-  const BodyState& last = run.samples.back().bodies[0];
+  const SampledState& last = run.samples.back().bodies[0];
   const double expected = scene.bodies[0].angular_velocity.z() * scene.duration;
   const double turned = 2.0 * std::atan2(last.orientation.z(), last.orientation.w());
   EXPECT_NEAR(std::remainder(turned - expected, 2.0 * M_PI), 0.0, 1e-4);

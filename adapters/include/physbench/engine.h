@@ -16,8 +16,9 @@
 
 namespace physbench {
 
-// a body's state as read back from an engine, in the scene's conventions
-struct BodyState {
+// a body's state as read back from an engine, in the scene's conventions (velocity form:
+// rtp::BodyState, the engine's own, is momentum form)
+struct SampledState {
   Vec3 position = Vec3::Zero();          // centre of mass, world (m)
   Quat orientation = Quat::Identity();   // body to world
   Vec3 linear_velocity = Vec3::Zero();   // world (m/s)
@@ -38,7 +39,7 @@ class Engine {
   virtual void load(const Scene& scene) = 0;
   // advance one fixed step of scene.dt
   virtual void step() = 0;
-  virtual BodyState body_state(int body) const = 0;
+  virtual SampledState body_state(int body) const = 0;
   // an instantaneous impulse (N s) at a world point on a dynamic body, before the next step
   virtual void apply_impulse(int body, const Vec3& impulse, const Vec3& world_point) = 0;
 };

@@ -16,7 +16,7 @@ Status status_from_string(const std::string& name);
 
 struct Sample {
   double time = 0.0;              // s
-  std::vector<BodyState> bodies;  // in Trajectory::bodies order
+  std::vector<SampledState> bodies;  // in Trajectory::bodies order
 };
 
 struct Trajectory {

@@ -19,9 +19,9 @@ struct SpringForce {
 };
 
 // b is null for a spring anchored to the world
-SpringForce spring_force(const SpringSpec& spring, const BodyState& a, const BodyState* b);
+SpringForce spring_force(const SpringSpec& spring, const SampledState& a, const SampledState* b);
 
-using StateOf = std::function<BodyState(int body)>;
+using StateOf = std::function<SampledState(int body)>;
 using ApplyForceAt = std::function<void(int body, const Vec3& force, const Vec3& world_point)>;
 
 // evaluates every spring of the scene from the current states and applies the forces to the
@@ -34,7 +34,7 @@ struct VelocityChange {
   Vec3 linear = Vec3::Zero();
   Vec3 angular = Vec3::Zero();
 };
-VelocityChange impulse_velocity_change(const BodySpec& body, const BodyState& now,
+VelocityChange impulse_velocity_change(const BodySpec& body, const SampledState& now,
                                        const Vec3& impulse, const Vec3& world_point);
 
 }  // namespace physbench
