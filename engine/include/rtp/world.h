@@ -33,7 +33,8 @@ struct ShapeDef {
   BodyShape kind = BodyShape::None;
   Vec3 half_extents = Vec3::Constant(0.5);  // box (m)
   double radius = 0.5;                      // sphere (m)
-  std::vector<Vec3> hull_points;            // hull: the convex hull of these points (m)
+  std::vector<Vec3> hull_points;            // hull: the convex hull of these points, body
+                                            // frame, centre of mass at its origin (m)
   // plane: the body's local y = 0 surface, solid below; only a static body can be a plane
 };
 
