@@ -191,12 +191,16 @@ void ContactPipeline::collide_pairs(std::span<const BodyState> states) {
     manifolds_.resize(n);
     pair_growth_.resize(n);
   }
+  // each body's pose (its rotation matrix) once a step, not once for each of its pairs
+  poses_.resize(states.size());
+  for (std::size_t i = 0; i < states.size(); ++i)
+    if (shapes_[i].kind != BodyShape::None) poses_[i] = pose_of(states[i]);
 #pragma omp parallel for num_threads(settings_.threads) schedule(dynamic, 64) if (n >= 1024)
   for (std::size_t k = 0; k < n; ++k) {
     const BodyId a = BodyId(candidates_[k] >> 32), b = BodyId(candidates_[k] & 0xffffffffu);
     Shape grown_a = shapes_[a].shape, grown_b = shapes_[b].shape;
     pair_growth_[k] = grow_pair(shapes_[a], shapes_[b], grown_a, grown_b);
-    if (!collide(grown_a, pose_of(states[a]), grown_b, pose_of(states[b]), manifolds_[k]))
+    if (!collide(grown_a, poses_[a], grown_b, poses_[b], manifolds_[k]))
       manifolds_[k].count = 0;
   }
 

@@ -138,6 +138,7 @@ class ContactPipeline {
   std::vector<std::uint8_t> colour_scratch_;
   // the narrow phase's results per candidate, filled in parallel
   std::vector<Manifold> manifolds_;
+  std::vector<Pose> poses_;  // per body, this step
   std::vector<double> pair_growth_;
   std::vector<SolverBody> bodies_;
   std::vector<SolverMass> masses_;
