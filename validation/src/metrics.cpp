@@ -573,14 +573,30 @@ void judge_stack(const Scene& scene, const Trajectory& run, const ErrorSeries& s
   out.message = why.str();
 }
 
-void judge_bounce(const Scene& scene, const Trajectory& run, ContactSummary& out) {
+// the one dynamic body of a scene on its one plane, as the bounce and slope judges read them
+struct BodyOnPlane {
+  const BodySpec& body;
+  const BodySpec& plane;
+  int slot;  // the body's place in the trajectory's samples
+  Vec3 n;    // the plane's normal
+};
+
+std::optional<BodyOnPlane> body_on_plane(const Scene& scene, const Trajectory& run) {
   const int body = bodies_where(scene, true, std::nullopt).at(0);
-  const int plane_index = bodies_where(scene, false, ShapeKind::Plane).at(0);
+  const int plane = bodies_where(scene, false, ShapeKind::Plane).at(0);
   const int slot = slot_of(run, body);
-  if (slot < 0) return;
-  const BodySpec& b = scene.bodies[body];
-  const BodySpec& plane = scene.bodies[plane_index];
-  const Vec3 n = plane.orientation * Vec3::UnitY();
+  if (slot < 0) return std::nullopt;
+  return BodyOnPlane{scene.bodies[body], scene.bodies[plane], slot,
+                     scene.bodies[plane].orientation * Vec3::UnitY()};
+}
+
+void judge_bounce(const Scene& scene, const Trajectory& run, ContactSummary& out) {
+  const auto found = body_on_plane(scene, run);
+  if (!found) return;
+  const BodySpec& b = found->body;
+  const BodySpec& plane = found->plane;
+  const int slot = found->slot;
+  const Vec3 n = found->n;
   const double g = -scene.gravity.dot(n);
   auto clearance = [&](const SampledState& s) {
     return (s.position - plane.position).dot(n) - support_extent(b, s.orientation, n);
@@ -627,13 +643,12 @@ void judge_bounce(const Scene& scene, const Trajectory& run, ContactSummary& out
 }
 
 void judge_incline(const Scene& scene, const Trajectory& run, ContactSummary& out) {
-  const int body = bodies_where(scene, true, std::nullopt).at(0);
-  const int plane_index = bodies_where(scene, false, ShapeKind::Plane).at(0);
-  const int slot = slot_of(run, body);
-  if (slot < 0) return;
-  const BodySpec& b = scene.bodies[body];
-  const BodySpec& plane = scene.bodies[plane_index];
-  const Vec3 n = plane.orientation * Vec3::UnitY();
+  const auto found = body_on_plane(scene, run);
+  if (!found) return;
+  const BodySpec& b = found->body;
+  const BodySpec& plane = found->plane;
+  const int slot = found->slot;
+  const Vec3 n = found->n;
   const Vec3 along = scene.gravity - scene.gravity.dot(n) * n;
   if (along.norm() < 1e-12 * scene.gravity.norm()) return;  // a level plane has no downhill
   const Vec3 downhill = along.normalized();
