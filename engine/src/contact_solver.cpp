@@ -6,6 +6,15 @@
 // and the opposite on b (Catto, "Fast and Simple Physics using Sequential Impulses", GDC 2006).
 // The anchors are fixed for the step; the separation of a point is tracked through the substeps
 // from the bodies' motion since the step's start (Catto, Solver2D, 2024: "relative position").
+//
+// The soft step and sequential impulse run on lanes: the contacts of one colour (no two share a
+// dynamic body) are packed W to a block, one manifold a lane, in single precision, and each
+// operation of the solve runs on the W manifolds of a block at once (Box2D v3's wide solver,
+// b2FloatW, does the same with its graph colours). A block's bodies are gathered from the body
+// array and scattered back once per block and pass. Since a colour's contacts are independent,
+// the lane count, the thread count and which block a contact lands in change no result. The
+// colour past the last (contacts that found no free colour) holds one contact a block and is
+// solved in order. The seed's solver is lab 5 as written, one contact at a time, in double.
 #include <algorithm>
 #include <array>
 #include <bit>
@@ -18,67 +27,118 @@ namespace rtp {
 
 namespace {
 
-// the velocity state of the two bodies of a contact, loaded once per contact
-struct PairState {
-  SolverBody& a;
-  SolverBody& b;
-  double inverse_mass_a, inverse_mass_b;
+constexpr std::size_t W = kBlockLanes;
 
-  // the relative velocity of the point along a row's direction d:
-  // d·(v_b − v_a) + ω_b·(r_b × d) − ω_a·(r_a × d)
-  double velocity(const ContactRow& row, const Vec3& d) const {
-    return d.dot(b.linear_velocity - a.linear_velocity) + b.angular_velocity.dot(row.angular_b) -
-           a.angular_velocity.dot(row.angular_a);
+Lane splat(float x) { return simd::splat<Lane>(x); }
+
+// a vector of three lanes: W vectors at once
+struct V3 {
+  Lane x, y, z;
+  friend V3 operator+(const V3& a, const V3& b) { return {a.x + b.x, a.y + b.y, a.z + b.z}; }
+  friend V3 operator-(const V3& a, const V3& b) { return {a.x - b.x, a.y - b.y, a.z - b.z}; }
+  friend V3 operator*(Lane s, const V3& a) { return {s * a.x, s * a.y, s * a.z}; }
+};
+Lane dot(const V3& a, const V3& b) { return a.x * b.x + a.y * b.y + a.z * b.z; }
+V3 cross(const V3& a, const V3& b) {
+  return {a.y * b.z - a.z * b.y, a.z * b.x - a.x * b.z, a.x * b.y - a.y * b.x};
+}
+V3 load3(const Lane (&v)[3]) { return {v[0], v[1], v[2]}; }
+
+// a symmetric 3×3 in six lanes (xx, yy, zz, xy, xz, yz) times a vector
+V3 times(const Lane (&m)[6], const V3& v) {
+  return {m[0] * v.x + m[3] * v.y + m[4] * v.z, m[3] * v.x + m[1] * v.y + m[5] * v.z,
+          m[4] * v.x + m[5] * v.y + m[2] * v.z};
+}
+
+// v turned by the inverse of the unit quaternion (x, y, z, w): Rᵀ v
+V3 rotate_back(const V3& q, Lane w, const V3& v) {
+  const V3 t = splat(2.0f) * cross(v, q);  // 2 (v × q) = 2 ((−q) × v)
+  return v + w * t - cross(q, t);           // v + w t + (−q) × t
+}
+
+}  // namespace
+
+namespace {
+
+// the two bodies of each lane, gathered from the body array, and scattered back
+struct LanePair {
+  V3 va, wa, vb, wb;
+
+  LanePair(const std::vector<SolverBody>& bodies, const ContactBlock& block) {
+    for (std::size_t i = 0; i < W; ++i) {
+      const SolverBody& a = bodies[block.body_a[i]];
+      const SolverBody& b = bodies[block.body_b[i]];
+      va.x[i] = a.linear_velocity.x(), va.y[i] = a.linear_velocity.y();
+      va.z[i] = a.linear_velocity.z();
+      wa.x[i] = a.angular_velocity.x(), wa.y[i] = a.angular_velocity.y();
+      wa.z[i] = a.angular_velocity.z();
+      vb.x[i] = b.linear_velocity.x(), vb.y[i] = b.linear_velocity.y();
+      vb.z[i] = b.linear_velocity.z();
+      wb.x[i] = b.angular_velocity.x(), wb.y[i] = b.angular_velocity.y();
+      wb.z[i] = b.angular_velocity.z();
+    }
   }
-  // an impulse λ along d on b at its anchor, and its opposite on a
-  // (a static body is never written: colours share static bodies, and their threads may not
-  // write the same memory)
-  void apply(const ContactRow& row, const Vec3& d, double impulse) {
-    if (inverse_mass_a > 0.0) {
-      a.linear_velocity -= (inverse_mass_a * impulse) * d;
-      a.angular_velocity -= impulse * row.response_a;
+  // static bodies and the body at rest are never written: colours share them, and their
+  // threads may not write the same memory
+  void store(std::vector<SolverBody>& bodies, const ContactBlock& block) const {
+    for (std::size_t i = 0; i < W; ++i) {
+      if (block.inverse_mass_a[i] > 0.0f) {
+        SolverBody& a = bodies[block.body_a[i]];
+        a.linear_velocity = {va.x[i], va.y[i], va.z[i]};
+        a.angular_velocity = {wa.x[i], wa.y[i], wa.z[i]};
+      }
+      if (block.inverse_mass_b[i] > 0.0f) {
+        SolverBody& b = bodies[block.body_b[i]];
+        b.linear_velocity = {vb.x[i], vb.y[i], vb.z[i]};
+        b.angular_velocity = {wb.x[i], wb.y[i], wb.z[i]};
+      }
     }
-    if (inverse_mass_b > 0.0) {
-      b.linear_velocity += (inverse_mass_b * impulse) * d;
-      b.angular_velocity += impulse * row.response_b;
-    }
+  }
+  // the relative velocity at a point: (v_b + ω_b × r_b) − (v_a + ω_a × r_a)
+  V3 relative_velocity(const ContactBlock::Point& p) const {
+    return (vb + cross(wb, load3(p.anchor_b))) - (va + cross(wa, load3(p.anchor_a)));
+  }
+  // an impulse P on b at its anchor, and −P on a
+  void apply(const ContactBlock& c, const ContactBlock::Point& p, const V3& impulse) {
+    va = va - c.inverse_mass_a * impulse;
+    wa = wa - times(c.inverse_inertia_a, cross(load3(p.anchor_a), impulse));
+    vb = vb + c.inverse_mass_b * impulse;
+    wb = wb + times(c.inverse_inertia_b, cross(load3(p.anchor_b), impulse));
   }
 };
 
-// how far a contact's bodies have moved along its normal since the step's start, as what the
+// how far each lane's bodies have moved along its normal since the step's start, as what the
 // points need: s = s₀' + n·(Δx_b − Δx_a) + (ΔR_bᵀ n)·r_b − (ΔR_aᵀ n)·r_a, the two turned normals
-// computed once per contact rather than two rotations per point
+// once per manifold rather than two rotations per point
 struct NormalMotion {
-  double translation;  // n·(Δx_b − Δx_a) (m)
-  Vec3 turned_a, turned_b;  // ΔR_aᵀ n, ΔR_bᵀ n
+  Lane translation;
+  V3 turned_a, turned_b;
 
-  NormalMotion(const PairState& pair, const Vec3& normal)
-      : translation(normal.dot(pair.b.delta_position - pair.a.delta_position)),
-        turned_a(pair.a.delta_rotation.transpose() * normal),
-        turned_b(pair.b.delta_rotation.transpose() * normal) {}
-  // the point's separation now: at the step's start plus the bodies' motion since (m)
-  double separation(const ContactPointConstraint& p) const {
-    return p.base_separation + translation + turned_b.dot(p.anchor_b) - turned_a.dot(p.anchor_a);
+  NormalMotion(const std::vector<SolverBody>& bodies, const ContactBlock& block) {
+    V3 dpa, dpb, qa, qb;
+    Lane wa, wb;
+    for (std::size_t i = 0; i < W; ++i) {
+      const SolverBody& a = bodies[block.body_a[i]];
+      const SolverBody& b = bodies[block.body_b[i]];
+      dpa.x[i] = a.delta_position.x(), dpa.y[i] = a.delta_position.y();
+      dpa.z[i] = a.delta_position.z();
+      dpb.x[i] = b.delta_position.x(), dpb.y[i] = b.delta_position.y();
+      dpb.z[i] = b.delta_position.z();
+      qa.x[i] = a.delta_rotation.x(), qa.y[i] = a.delta_rotation.y();
+      qa.z[i] = a.delta_rotation.z(), wa[i] = a.delta_rotation.w();
+      qb.x[i] = b.delta_rotation.x(), qb.y[i] = b.delta_rotation.y();
+      qb.z[i] = b.delta_rotation.z(), wb[i] = b.delta_rotation.w();
+    }
+    const V3 n = load3(block.normal);
+    translation = dot(n, dpb - dpa);
+    turned_a = rotate_back(qa, wa, n);
+    turned_b = rotate_back(qb, wb, n);
+  }
+  Lane separation(const ContactBlock::Point& p) const {
+    return p.base_separation + translation + dot(turned_b, load3(p.anchor_b)) -
+           dot(turned_a, load3(p.anchor_a));
   }
 };
-
-PairState pair_of(std::vector<SolverBody>& bodies, const std::vector<SolverMass>& masses,
-                  const ContactConstraint& c) {
-  return {bodies[c.body_a], bodies[c.body_b], masses[c.body_a].inverse_mass,
-          masses[c.body_b].inverse_mass};
-}
-
-// a row's angular parts and effective mass along d at the point's anchors
-void make_row(ContactRow& row, const ContactPointConstraint& p, const Vec3& d,
-              const SolverMass& mass_a, const SolverMass& mass_b) {
-  row.angular_a = p.anchor_a.cross(d);
-  row.angular_b = p.anchor_b.cross(d);
-  row.response_a = mass_a.inverse_inertia * row.angular_a;
-  row.response_b = mass_b.inverse_inertia * row.angular_b;
-  const double k = mass_a.inverse_mass + mass_b.inverse_mass + row.angular_a.dot(row.response_a) +
-                   row.angular_b.dot(row.response_b);
-  row.mass = k > 0.0 ? 1.0 / k : 0.0;
-}
 
 // a soft constraint of the given stiffness (Hz) and damping ratio, for a solve of step h, as
 // three numbers: the bias per metre of penetration (1/s), the share of the effective mass used,
@@ -98,11 +158,36 @@ Softness make_soft(double hertz, double damping_ratio, double h) {
   return {omega / a1, a2 * a3, a3};
 }
 
+// 1 / (the velocity change along d at the anchors per unit impulse), in double
+double effective_mass(const Vec3& ra, const Vec3& rb, const Vec3& d, const SolverMass& a,
+                      const SolverMass& b) {
+  const Vec3 ja = ra.cross(d), jb = rb.cross(d);
+  const double k = a.inverse_mass + b.inverse_mass + ja.dot(a.inverse_inertia * ja) +
+                   jb.dot(b.inverse_inertia * jb);
+  return k > 0.0 ? 1.0 / k : 0.0;
+}
+
+void set3(Lane (&lanes)[3], std::size_t i, const Vec3& v) {
+  for (int k = 0; k < 3; ++k) lanes[k][i] = float(v[k]);
+}
+void set_symmetric(Lane (&lanes)[6], std::size_t i, const Mat3& m) {
+  lanes[0][i] = float(m(0, 0)), lanes[1][i] = float(m(1, 1)), lanes[2][i] = float(m(2, 2));
+  lanes[3][i] = float(m(0, 1)), lanes[4][i] = float(m(0, 2)), lanes[5][i] = float(m(1, 2));
+}
+
+// the velocity of b's anchor less a's along d, in double, from the solver's bodies
+double relative_speed(const SolverBody& a, const SolverBody& b, const Vec3& ra, const Vec3& rb,
+                      const Vec3& d) {
+  const Vec3 va = a.linear_velocity.cast<double>() + a.angular_velocity.cast<double>().cross(ra);
+  const Vec3 vb = b.linear_velocity.cast<double>() + b.angular_velocity.cast<double>().cross(rb);
+  return d.dot(vb - va);
+}
+
 }  // namespace
 
-// a colour's contacts go to threads only past this many: below it the barrier costs more
+// a colour's blocks go to threads only past this many contacts: below it the barrier costs more
 constexpr std::size_t kParallelColour = 256;
-// colours beyond the 63rd are one last group, solved on one thread
+// colours beyond the 63rd are one last group, solved one contact a block, in order
 constexpr int kColours = 64;
 
 void ContactPipeline::colour_contacts() {
@@ -133,36 +218,48 @@ void ContactPipeline::colour_contacts() {
   for (int k = 0; k < kColours; ++k) next[k] = colour_start_[k];
   for (std::size_t i = 0; i < contacts_.size(); ++i)
     colour_order_[next[colour_of[i]]++] = std::uint32_t(i);
+
+  // the blocks: each colour's contacts W at a time, the overflow one at a time
+  if (!lanes_) lanes_ = std::make_unique<ContactLanes>();
+  std::vector<std::uint32_t>& block_start = lanes_->colour_start;
+  block_start.assign(kColours + 1, 0);
+  for (int k = 0; k < kColours; ++k) {
+    const std::size_t n = colour_start_[k + 1] - colour_start_[k];
+    block_start[k + 1] = block_start[k] + std::uint32_t(k + 1 < kColours ? (n + W - 1) / W : n);
+  }
+  lanes_->blocks.resize(block_start[kColours]);
 }
 
-template <class Solve>
-void ContactPipeline::for_each_contact(Solve&& solve) {
+template <class Kernel>
+void ContactPipeline::for_each_block(Kernel&& kernel) {
+  std::vector<ContactBlock>& blocks = lanes_->blocks;
+  const std::vector<std::uint32_t>& start = lanes_->colour_start;
   const int threads = settings_.threads;
-  const std::size_t overflow = colour_start_[kColours - 1];
   if (threads <= 1 || contacts_.size() < kParallelColour) {
-    for (std::uint32_t index : colour_order_) solve(contacts_[index]);
+    for (ContactBlock& block : blocks) kernel(block);
     return;
   }
+  constexpr std::size_t parallel_blocks = kParallelColour / W;
 #pragma omp parallel num_threads(threads)
-  {
-    for (int k = 0; k + 1 < kColours; ++k) {
-      const std::size_t begin = colour_start_[k], end = colour_start_[k + 1];
-      if (end - begin < kParallelColour) {
+  for (int k = 0; k < kColours; ++k) {
+    const std::size_t begin = start[k], end = start[k + 1];
+    if (k + 1 == kColours || end - begin < parallel_blocks) {
 #pragma omp single
-        for (std::size_t i = begin; i < end; ++i) solve(contacts_[colour_order_[i]]);
-      } else {
+      for (std::size_t i = begin; i < end; ++i) kernel(blocks[i]);
+    } else {
 #pragma omp for schedule(static)
-        for (std::size_t i = begin; i < end; ++i) solve(contacts_[colour_order_[i]]);
-      }
+      for (std::size_t i = begin; i < end; ++i) kernel(blocks[i]);
     }
-#pragma omp single
-    for (std::size_t i = overflow; i < colour_order_.size(); ++i)
-      solve(contacts_[colour_order_[i]]);
   }
 }
 
 void ContactPipeline::load_bodies(std::span<const BodyState> states,
                                   std::span<const BodyMass> masses) {
+  // one body past the last, at rest and static: what an empty lane reads
+  bodies_.resize(states.size() + 1);
+  masses_.resize(states.size() + 1);
+  bodies_.back() = SolverBody{};
+  masses_.back() = SolverMass{};
   for (std::size_t i = 0; i < states.size(); ++i) {
     SolverBody& body = bodies_[i];
     SolverMass& mass = masses_[i];
@@ -177,8 +274,8 @@ void ContactPipeline::load_bodies(std::span<const BodyState> states,
     }
     mass.inverse_inertia =
         world_inverse_inertia(states[i].orientation, masses[i].inverse_inertia_body);
-    body.linear_velocity = states[i].linear_momentum * mass.inverse_mass;
-    body.angular_velocity = mass.inverse_inertia * states[i].angular_momentum;
+    body.linear_velocity = (states[i].linear_momentum * mass.inverse_mass).cast<float>();
+    body.angular_velocity = (mass.inverse_inertia * states[i].angular_momentum).cast<float>();
   }
 }
 
@@ -195,142 +292,225 @@ void ContactPipeline::prepare(double dt, const Vec3& gravity) {
   const Softness static_soft =
       make_soft(std::min(2.0 * settings_.contact_hertz, cap), settings_.damping_ratio, h);
   colour_contacts();
-  for_each_contact([&](ContactConstraint& c) {
-    const SolverMass& mass_a = masses_[c.body_a];
-    const SolverMass& mass_b = masses_[c.body_b];
-    const PairState pair = pair_of(bodies_, masses_, c);
-    const bool against_static = mass_a.inverse_mass == 0.0 || mass_b.inverse_mass == 0.0;
-    const Softness& soft = against_static ? static_soft : dynamic_soft;
-    c.bias_rate = soft.bias_rate;
-    c.mass_scale = soft.mass_scale;
-    c.impulse_scale = soft.impulse_scale;
-    c.converged = false;
-    c.fresh = false;
-    for (std::uint8_t i = 0; i < c.count; ++i) {
-      ContactPointConstraint& p = c.points[i];
-      make_row(p.normal, p, c.normal, mass_a, mass_b);
-      make_row(p.tangent[0], p, c.tangent[0], mass_a, mass_b);
-      make_row(p.tangent[1], p, c.tangent[1], mass_a, mass_b);
-      const double separation = p.base_separation;
-      // the separation is tracked from here: s = base + n·(motion of b's anchor − a's)
-      p.base_separation -= c.normal.dot(p.anchor_b - p.anchor_a);
-      p.max_normal_impulse = 0.0;
-      p.approach_velocity = pair.velocity(p.normal, c.normal);
-      // a point still apart hits, if it hits this step, at the speed free flight gives it over
-      // the gap: v² = v₀² − 2 a s₀ with a the relative acceleration gravity gives along n (the
-      // speed the solve sees is one a speculative push has already slowed)
-      p.starts_apart = separation > 0.0;
-      if (p.starts_apart) {
-        const Vec3 gravity_a = mass_a.inverse_mass > 0.0 ? gravity : Vec3::Zero();
-        const Vec3 gravity_b = mass_b.inverse_mass > 0.0 ? gravity : Vec3::Zero();
-        const double acceleration = c.normal.dot(gravity_b - gravity_a);
-        const double squared =
-            p.approach_velocity * p.approach_velocity - 2.0 * acceleration * separation;
-        p.approach_velocity = -std::sqrt(std::max(squared, 0.0));
-      }
-      // no warm start, or an approach fast enough to bounce: the manifold is solved locally
-      if (p.normal.impulse == 0.0 || p.approach_velocity < -settings_.restitution_threshold)
-        c.fresh = true;
+  if (settings_.solver == ContactSolver::Seed) return;  // the seed reads the contacts themselves
+  const std::uint32_t at_rest = std::uint32_t(bodies_.size() - 1);
+  const std::vector<std::uint32_t>& block_start = lanes_->colour_start;
+  std::vector<ContactBlock>& blocks = lanes_->blocks;
+  const std::size_t block_count = blocks.size();
+#pragma omp parallel for num_threads(settings_.threads) schedule(static) if (block_count >= 64)
+  for (std::size_t bi = 0; bi < block_count; ++bi) {
+    ContactBlock& block = blocks[bi];
+    block = ContactBlock{};
+    // the block's contacts: which colour, and where in it
+    const int colour = int(std::upper_bound(block_start.begin(), block_start.end(),
+                                            std::uint32_t(bi)) -
+                           block_start.begin()) -
+                       1;
+    const std::size_t per_block = colour + 1 < kColours ? W : 1;
+    const std::size_t first = colour_start_[colour] + (bi - block_start[colour]) * per_block;
+    const std::size_t last = std::min<std::size_t>(first + per_block, colour_start_[colour + 1]);
+    for (std::size_t i = 0; i < W; ++i) {
+      block.body_a[i] = block.body_b[i] = at_rest;
+      block.contact[i] = kNoContact;
+      block.fresh[i] = 0;
+      for (ContactBlock::Point& p : block.points) p.starts_apart[i] = 0;
     }
-  });
+    for (std::size_t i = 0; first + i < last; ++i) {
+      const std::uint32_t index = colour_order_[first + i];
+      const ContactConstraint& c = contacts_[index];
+      const SolverMass& mass_a = masses_[c.body_a];
+      const SolverMass& mass_b = masses_[c.body_b];
+      const SolverBody& body_a = bodies_[c.body_a];
+      const SolverBody& body_b = bodies_[c.body_b];
+      block.contact[i] = index;
+      block.body_a[i] = c.body_a;
+      block.body_b[i] = c.body_b;
+      set3(block.normal, i, c.normal);
+      set3(block.tangent[0], i, c.tangent[0]);
+      set3(block.tangent[1], i, c.tangent[1]);
+      block.inverse_mass_a[i] = float(mass_a.inverse_mass);
+      block.inverse_mass_b[i] = float(mass_b.inverse_mass);
+      set_symmetric(block.inverse_inertia_a, i, mass_a.inverse_inertia);
+      set_symmetric(block.inverse_inertia_b, i, mass_b.inverse_inertia);
+      block.friction[i] = float(c.friction);
+      block.restitution[i] = float(c.restitution);
+      const bool against_static = mass_a.inverse_mass == 0.0 || mass_b.inverse_mass == 0.0;
+      const Softness& soft = against_static ? static_soft : dynamic_soft;
+      block.bias_rate[i] = float(soft.bias_rate);
+      block.mass_scale[i] = float(soft.mass_scale);
+      block.impulse_scale[i] = float(soft.impulse_scale);
+      bool fresh = false;
+      for (std::uint8_t j = 0; j < c.count; ++j) {
+        const ContactPointConstraint& from = c.points[j];
+        ContactBlock::Point& p = block.points[j];
+        set3(p.anchor_a, i, from.anchor_a);
+        set3(p.anchor_b, i, from.anchor_b);
+        // the separation is tracked from here: s = base + n·(motion of b's anchor − a's)
+        p.base_separation[i] =
+            float(from.base_separation - c.normal.dot(from.anchor_b - from.anchor_a));
+        p.normal_mass[i] = float(effective_mass(from.anchor_a, from.anchor_b, c.normal, mass_a,
+                                                mass_b));
+        for (int t = 0; t < 2; ++t) {
+          p.tangent_mass[t][i] = float(
+              effective_mass(from.anchor_a, from.anchor_b, c.tangent[t], mass_a, mass_b));
+          p.tangent_impulse[t][i] = float(from.tangent_impulse[t]);
+        }
+        p.normal_impulse[i] = float(from.normal_impulse);
+        double approach =
+            relative_speed(body_a, body_b, from.anchor_a, from.anchor_b, c.normal);
+        // a point still apart hits, if it hits this step, at the speed free flight gives it
+        // over the gap: v² = v₀² − 2 a s₀ with a the relative acceleration gravity gives along
+        // n (the speed the solve sees is one a speculative push has already slowed)
+        if (from.base_separation > 0.0) {
+          p.starts_apart[i] = -1;
+          const Vec3 gravity_a = mass_a.inverse_mass > 0.0 ? gravity : Vec3::Zero();
+          const Vec3 gravity_b = mass_b.inverse_mass > 0.0 ? gravity : Vec3::Zero();
+          const double acceleration = c.normal.dot(gravity_b - gravity_a);
+          const double squared = approach * approach - 2.0 * acceleration * from.base_separation;
+          approach = -std::sqrt(std::max(squared, 0.0));
+        }
+        p.approach_velocity[i] = float(approach);
+        // no warm start, or an approach fast enough to bounce: the manifold is solved locally
+        if (from.normal_impulse == 0.0 || approach < -settings_.restitution_threshold)
+          fresh = true;
+      }
+      block.fresh[i] = fresh ? -1 : 0;
+    }
+  }
 }
 
 void ContactPipeline::warm_start() {
-  for_each_contact([&](const ContactConstraint& c) {
-    PairState pair = pair_of(bodies_, masses_, c);
-    for (std::uint8_t i = 0; i < c.count; ++i) {
-      const ContactPointConstraint& p = c.points[i];
-      pair.apply(p.normal, c.normal, p.normal.impulse);
-      pair.apply(p.tangent[0], c.tangent[0], p.tangent[0].impulse);
-      pair.apply(p.tangent[1], c.tangent[1], p.tangent[1].impulse);
-    }
+  for_each_block([&](const ContactBlock& c) {
+    LanePair pair(bodies_, c);
+    const V3 n = load3(c.normal), t0 = load3(c.tangent[0]), t1 = load3(c.tangent[1]);
+    for (const ContactBlock::Point& p : c.points)
+      pair.apply(c, p, p.normal_impulse * n + p.tangent_impulse[0] * t0 +
+                           p.tangent_impulse[1] * t1);
+    pair.store(bodies_, c);
   });
 }
 
 void ContactPipeline::solve(double h, bool bias) {
-  const double inverse_h = 1.0 / h;
+  const float inverse_h = float(1.0 / h);
   const bool soft = settings_.solver == ContactSolver::SoftStep;
   // sequential impulse: the Baumgarte bias removes this fraction of the penetration past the
   // slop in one step (Catto GDC 2006)
-  const double baumgarte_rate = settings_.baumgarte * inverse_h;
-  for_each_contact([&](ContactConstraint& c) {
-    PairState pair = pair_of(bodies_, masses_, c);
+  const Lane baumgarte_rate = splat(float(settings_.baumgarte / h));
+  const Lane slop = splat(float(settings_.linear_slop));
+  const Lane max_push = splat(float(settings_.max_push_speed));
+  const Lane zero = splat(0.0f), one = splat(1.0f);
+  for_each_block([&](ContactBlock& c) {
+    LanePair pair(bodies_, c);
+    const V3 n = load3(c.normal), t0 = load3(c.tangent[0]), t1 = load3(c.tangent[1]);
+    // the approach speed restitution reverses, for points that started the step touching: each
+    // one's last before it first pushed, all read before this manifold pushes at all (read one
+    // by one, the points after the first would see the first's push, and bounce unequally)
+    for (ContactBlock::Point& p : c.points) {
+      const LaneMask unread = (p.max_normal_impulse == zero) & ~p.starts_apart;
+      if (simd::any_of(unread))
+        p.approach_velocity =
+            simd::select(unread, dot(n, pair.relative_velocity(p)), p.approach_velocity);
+    }
+    const NormalMotion motion(bodies_, c);
     // non-penetration: the normal impulse accumulates and stays ≥ 0 (Catto GDC 2006). A
     // manifold with no warm start (a new contact, an impact) runs its points several times in a
     // row: one pass over a face's four points lands the whole impulse on the first and spins the
     // body, where the converged answer pushes all four alike
-    // the approach speed restitution reverses, for points that started the step touching: each
-    // one's last before it first pushed, all read before this manifold pushes at all (read one
-    // by one, the points after the first would see the first's push, and bounce unequally)
-    for (std::uint8_t i = 0; i < c.count; ++i)
-      if (c.points[i].max_normal_impulse == 0.0 && !c.points[i].starts_apart)
-        c.points[i].approach_velocity = pair.velocity(c.points[i].normal, c.normal);
-    const NormalMotion motion(pair, c.normal);
-    const int rounds = c.fresh ? settings_.local_iterations : 1;
-    for (int k = 0; k < rounds * c.count; ++k) {
-      ContactPointConstraint& p = c.points[k % c.count];
-      const double s = motion.separation(p);
-      const double vn = pair.velocity(p.normal, c.normal);
-      double velocity_bias = 0.0, mass_scale = 1.0, impulse_scale = 0.0;
-      if (s > 0.0) {
+    const int rounds = simd::any_of(c.fresh) ? settings_.local_iterations : 1;
+    for (int round = 0; round < rounds; ++round) {
+      const LaneMask active = round == 0 ? LaneMask(zero == zero) : c.fresh;
+      for (ContactBlock::Point& p : c.points) {
+        const Lane s = motion.separation(p);
+        const Lane vn = dot(n, pair.relative_velocity(p));
+        const LaneMask apart = s > zero;
         // speculative: the bodies may close the gap in this step, no more
-        velocity_bias = s * inverse_h;
-      } else if (bias && soft) {
-        velocity_bias = std::max(c.bias_rate * s, -settings_.max_push_speed);
-        mass_scale = c.mass_scale;
-        impulse_scale = c.impulse_scale;
-      } else if (bias) {
-        velocity_bias = -baumgarte_rate * std::max(-s - settings_.linear_slop, 0.0);
+        Lane velocity_bias = s * inverse_h, mass_scale = one, impulse_scale = zero;
+        if (bias && soft) {
+          velocity_bias = simd::select(apart, velocity_bias,
+                                       simd::max(c.bias_rate * s, zero - max_push));
+          mass_scale = simd::select(apart, one, c.mass_scale);
+          impulse_scale = simd::select(apart, zero, c.impulse_scale);
+        } else if (bias) {
+          velocity_bias = simd::select(
+              apart, velocity_bias, zero - baumgarte_rate * simd::max(zero - s - slop, zero));
+        } else {
+          velocity_bias = simd::select(apart, velocity_bias, zero);
+        }
+        const Lane impulse =
+            zero - p.normal_mass * mass_scale * (vn + velocity_bias) -
+            impulse_scale * p.normal_impulse;
+        const Lane accumulated =
+            simd::select(active, simd::max(p.normal_impulse + impulse, zero), p.normal_impulse);
+        const Lane applied = accumulated - p.normal_impulse;
+        p.normal_impulse = accumulated;
+        p.max_normal_impulse = simd::max(p.max_normal_impulse, applied);
+        pair.apply(c, p, applied * n);
       }
-      const double impulse =
-          -p.normal.mass * mass_scale * (vn + velocity_bias) - impulse_scale * p.normal.impulse;
-      const double accumulated = std::max(p.normal.impulse + impulse, 0.0);
-      const double applied = accumulated - p.normal.impulse;
-      p.normal.impulse = accumulated;
-      p.max_normal_impulse = std::max(p.max_normal_impulse, applied);
-      pair.apply(p.normal, c.normal, applied);
     }
     // Coulomb friction: the friction impulse accumulates on the two tangents and its length
     // stays within μ times the normal impulse (the friction cone as a circle)
-    for (std::uint8_t i = 0; i < c.count; ++i) {
-      ContactPointConstraint& p = c.points[i];
-      const double limit = c.friction * p.normal.impulse;
-      const double old0 = p.tangent[0].impulse, old1 = p.tangent[1].impulse;
-      double t0 = old0 - p.tangent[0].mass * pair.velocity(p.tangent[0], c.tangent[0]);
-      double t1 = old1 - p.tangent[1].mass * pair.velocity(p.tangent[1], c.tangent[1]);
-      const double length_squared = t0 * t0 + t1 * t1;
-      if (length_squared > limit * limit) {
-        const double scale = limit / std::sqrt(length_squared);
-        t0 *= scale;
-        t1 *= scale;
+    for (ContactBlock::Point& p : c.points) {
+      const Lane limit = c.friction * p.normal_impulse;
+      const V3 dv = pair.relative_velocity(p);
+      const Lane old0 = p.tangent_impulse[0], old1 = p.tangent_impulse[1];
+      Lane f0 = old0 - p.tangent_mass[0] * dot(t0, dv);
+      Lane f1 = old1 - p.tangent_mass[1] * dot(t1, dv);
+      const Lane length_squared = f0 * f0 + f1 * f1;
+      const LaneMask outside = length_squared > limit * limit;
+      if (simd::any_of(outside)) {
+        const Lane scale =
+            simd::select(outside, limit / simd::sqrt(simd::max(length_squared, splat(1e-30f))),
+                         one);
+        f0 = f0 * scale;
+        f1 = f1 * scale;
       }
-      p.tangent[0].impulse = t0;
-      p.tangent[1].impulse = t1;
-      pair.apply(p.tangent[0], c.tangent[0], t0 - old0);
-      pair.apply(p.tangent[1], c.tangent[1], t1 - old1);
+      p.tangent_impulse[0] = f0;
+      p.tangent_impulse[1] = f1;
+      pair.apply(c, p, (f0 - old0) * t0 + (f1 - old1) * t1);
     }
+    pair.store(bodies_, c);
   });
 }
 
 void ContactPipeline::restitution() {
-  const double threshold = settings_.restitution_threshold;
+  const Lane threshold = splat(float(-settings_.restitution_threshold));
+  const Lane zero = splat(0.0f);
   for (int iteration = 0; iteration < settings_.restitution_iterations; ++iteration)
-    for_each_contact([&](ContactConstraint& c) {
-      if (c.restitution == 0.0) return;
-      PairState pair = pair_of(bodies_, masses_, c);
+    for_each_block([&](ContactBlock& c) {
+      if (!simd::any_of(c.restitution > zero)) return;
+      LanePair pair(bodies_, c);
+      const V3 n = load3(c.normal);
       // each manifold's points several times in a row, as for a fresh contact in solve()
-      for (int k = 0; k < settings_.local_iterations * c.count; ++k) {
-        ContactPointConstraint& p = c.points[k % c.count];
-        // only points that pushed this step, and hit faster than the threshold: a resting
-        // contact does not bounce
-        if (p.approach_velocity > -threshold || p.max_normal_impulse == 0.0) continue;
-        const double vn = pair.velocity(p.normal, c.normal);
-        const double impulse = -p.normal.mass * (vn + c.restitution * p.approach_velocity);
-        const double accumulated = std::max(p.normal.impulse + impulse, 0.0);
-        pair.apply(p.normal, c.normal, accumulated - p.normal.impulse);
-        p.normal.impulse = accumulated;
-      }
+      for (int round = 0; round < settings_.local_iterations; ++round)
+        for (ContactBlock::Point& p : c.points) {
+          // only points that pushed this step, and hit faster than the threshold: a resting
+          // contact does not bounce
+          const LaneMask hit = (p.approach_velocity < threshold) &
+                               (p.max_normal_impulse > zero) & (c.restitution > zero);
+          if (!simd::any_of(hit)) continue;
+          const Lane vn = dot(n, pair.relative_velocity(p));
+          const Lane impulse = zero - p.normal_mass * (vn + c.restitution * p.approach_velocity);
+          const Lane accumulated =
+              simd::select(hit, simd::max(p.normal_impulse + impulse, zero), p.normal_impulse);
+          pair.apply(c, p, (accumulated - p.normal_impulse) * n);
+          p.normal_impulse = accumulated;
+        }
+      pair.store(bodies_, c);
     });
+}
+
+void ContactPipeline::store_impulses() {
+  if (settings_.solver == ContactSolver::Seed || !lanes_) return;
+  for (const ContactBlock& block : lanes_->blocks)
+    for (std::size_t i = 0; i < W; ++i) {
+      if (block.contact[i] == kNoContact) continue;
+      ContactConstraint& c = contacts_[block.contact[i]];
+      for (std::uint8_t j = 0; j < c.count; ++j) {
+        const ContactBlock::Point& p = block.points[j];
+        c.points[j].normal_impulse = p.normal_impulse[i];
+        c.points[j].tangent_impulse = {p.tangent_impulse[0][i], p.tangent_impulse[1][i]};
+      }
+    }
 }
 
 void ContactPipeline::solve_seed(double dt) {
@@ -342,39 +522,63 @@ void ContactPipeline::solve_seed(double dt) {
   const double penalty_rate = settings_.baumgarte / dt;
   // a pair has converged when no impulse of an iteration changes a velocity by 10 µm/s
   const double converged_velocity = 1e-5;
+  std::vector<bool>& converged = seed_converged_;
+  converged.assign(contacts_.size(), false);
   for (int iteration = 0; iteration < settings_.velocity_iterations; ++iteration) {
     bool any = false;
     for (std::uint32_t index : colour_order_) {
-      ContactConstraint& c = contacts_[index];
-      if (c.converged) continue;
-      PairState pair = pair_of(bodies_, masses_, c);
+      if (converged[index]) continue;
+      const ContactConstraint& c = contacts_[index];
       const SolverMass& mass_a = masses_[c.body_a];
       const SolverMass& mass_b = masses_[c.body_b];
+      // the pair's velocities in double while its points are solved
+      Vec3 va = bodies_[c.body_a].linear_velocity.cast<double>();
+      Vec3 wa = bodies_[c.body_a].angular_velocity.cast<double>();
+      Vec3 vb = bodies_[c.body_b].linear_velocity.cast<double>();
+      Vec3 wb = bodies_[c.body_b].angular_velocity.cast<double>();
+      auto velocity = [&](const ContactPointConstraint& p, const Vec3& d) {
+        return d.dot((vb + wb.cross(p.anchor_b)) - (va + wa.cross(p.anchor_a)));
+      };
+      auto apply = [&](const ContactPointConstraint& p, const Vec3& impulse) {
+        va -= mass_a.inverse_mass * impulse;
+        wa -= mass_a.inverse_inertia * p.anchor_a.cross(impulse);
+        vb += mass_b.inverse_mass * impulse;
+        wb += mass_b.inverse_inertia * p.anchor_b.cross(impulse);
+      };
       double largest_change = 0.0;
       for (std::uint8_t i = 0; i < c.count; ++i) {
         const ContactPointConstraint& p = c.points[i];
-        const double depth = -(p.base_separation + c.normal.dot(p.anchor_b - p.anchor_a));
+        const double depth = -p.base_separation;
         // the seed's narrow phase reports touching shapes only: no speculative points
         if (depth < 0.0) continue;
-        const double vn = pair.velocity(p.normal, c.normal);
+        const double normal_mass =
+            effective_mass(p.anchor_a, p.anchor_b, c.normal, mass_a, mass_b);
+        const double vn = velocity(p, c.normal);
         const double j =
-            p.normal.mass * (-(1.0 + c.restitution) * vn +
-                             penalty_rate * std::max(depth - settings_.linear_slop, 0.0));
+            normal_mass * (-(1.0 + c.restitution) * vn +
+                           penalty_rate * std::max(depth - settings_.linear_slop, 0.0));
         if (j <= 0.0) continue;
-        pair.apply(p.normal, c.normal, j);
-        largest_change = std::max(largest_change, j / std::max(p.normal.mass, 1e-300));
+        apply(p, j * c.normal);
+        largest_change = std::max(largest_change, j / std::max(normal_mass, 1e-300));
         // friction against the sliding velocity, at most μ j
-        const double v0 = pair.velocity(p.tangent[0], c.tangent[0]);
-        const double v1 = pair.velocity(p.tangent[1], c.tangent[1]);
+        const double v0 = velocity(p, c.tangent[0]);
+        const double v1 = velocity(p, c.tangent[1]);
         const double speed = std::sqrt(v0 * v0 + v1 * v1);
         if (speed > 0.0) {
           const Vec3 direction = (v0 * c.tangent[0] + v1 * c.tangent[1]) / speed;
-          ContactRow row;
-          make_row(row, p, direction, mass_a, mass_b);
-          pair.apply(row, direction, -std::min(speed * row.mass, c.friction * j));
+          const double mass = effective_mass(p.anchor_a, p.anchor_b, direction, mass_a, mass_b);
+          apply(p, -std::min(speed * mass, c.friction * j) * direction);
         }
       }
-      if (largest_change < converged_velocity) c.converged = true;
+      if (mass_a.inverse_mass > 0.0) {
+        bodies_[c.body_a].linear_velocity = va.cast<float>();
+        bodies_[c.body_a].angular_velocity = wa.cast<float>();
+      }
+      if (mass_b.inverse_mass > 0.0) {
+        bodies_[c.body_b].linear_velocity = vb.cast<float>();
+        bodies_[c.body_b].angular_velocity = wb.cast<float>();
+      }
+      if (largest_change < converged_velocity) converged[index] = true;
       any = true;
     }
     if (!any) break;

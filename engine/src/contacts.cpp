@@ -143,7 +143,8 @@ void ContactPipeline::update_bounds(std::span<const BodyState> states, double dt
     data.growth = fixed;
     if (!data.is_static && (data.kind == BodyShape::Box || data.kind == BodyShape::Sphere)) {
       const double motion =
-          (body.linear_velocity.norm() + body.angular_velocity.norm() * data.reach) * dt;
+          (double(body.linear_velocity.norm()) + double(body.angular_velocity.norm()) * data.reach) *
+          dt;
       data.growth += std::min(motion, settings_.motion_margin_share * data.thinnest);
     }
     const double extra = data.growth - fixed;
@@ -274,13 +275,13 @@ void ContactPipeline::carry_impulses(const ContactConstraint& old, ContactConstr
     ++matched_;
     const ContactPointConstraint& from = old.points[source[i]];
     ContactPointConstraint& to = c.points[i];
-    to.normal.impulse = from.normal.impulse;
+    to.normal_impulse = from.normal_impulse;
     // the friction impulse as a world vector, onto this step's basis (the normal turns a little
     // between steps, and the basis with it)
     const Vec3 friction =
-        from.tangent[0].impulse * old.tangent[0] + from.tangent[1].impulse * old.tangent[1];
-    to.tangent[0].impulse = friction.dot(c.tangent[0]);
-    to.tangent[1].impulse = friction.dot(c.tangent[1]);
+        from.tangent_impulse[0] * old.tangent[0] + from.tangent_impulse[1] * old.tangent[1];
+    to.tangent_impulse[0] = friction.dot(c.tangent[0]);
+    to.tangent_impulse[1] = friction.dot(c.tangent[1]);
   }
 }
 

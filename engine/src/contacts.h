@@ -24,19 +24,24 @@
 #include <span>
 #include <vector>
 
+#include "contact_lanes.h"
 #include "rtp/broadphase.h"
 #include "rtp/collision.h"
 #include "rtp/world.h"
 
 namespace rtp {
 
-// the velocity state the solver reads and writes, per body (144 bytes: 18 doubles)
-struct SolverBody {
-  Vec3 linear_velocity = Vec3::Zero();   // world (m/s)
-  Vec3 angular_velocity = Vec3::Zero();  // world (rad/s)
-  Vec3 delta_position = Vec3::Zero();    // moved since the step's start (m)
-  Mat3 delta_rotation = Mat3::Identity();  // turned since the step's start
+// the velocity state the solver reads and writes, per body, in single precision (64 bytes: one
+// cache line). The solve works on velocities and on the motion since the step's start, both
+// small numbers, so floats hold them as well as Box2D's and Jolt's solvers do; positions and
+// momenta stay in double in the world.
+struct alignas(64) SolverBody {
+  Eigen::Vector3f linear_velocity = Eigen::Vector3f::Zero();   // world (m/s)
+  Eigen::Vector3f angular_velocity = Eigen::Vector3f::Zero();  // world (rad/s)
+  Eigen::Vector3f delta_position = Eigen::Vector3f::Zero();    // moved since the step's start (m)
+  Eigen::Quaternionf delta_rotation = Eigen::Quaternionf::Identity();  // turned since then
 };
+static_assert(sizeof(SolverBody) == 64);
 
 // a body's mass as the solver sees it this step: zero for a static body
 struct SolverMass {
@@ -44,24 +49,14 @@ struct SolverMass {
   Mat3 inverse_inertia = Mat3::Zero();       // world, at the step's start (1/(kg m²))
 };
 
-// one row of a contact point's Jacobian, along the normal or a tangent d: its angular parts
-// on each body and their response through the inverse inertia, computed once a step so the
-// iterations do no matrix products
-struct ContactRow {
-  Vec3 angular_a = Vec3::Zero(), angular_b = Vec3::Zero();    // r_a × d, r_b × d (m)
-  Vec3 response_a = Vec3::Zero(), response_b = Vec3::Zero();  // I_a⁻¹ (r_a × d), I_b⁻¹ (r_b × d)
-  double mass = 0.0;     // 1 / (the change of velocity along d per unit impulse) (kg)
-  double impulse = 0.0;  // accumulated this step, carried to the next (N s)
-};
-
+// a point of a manifold as the narrow phase made it and the solver leaves it: what the next
+// step's match needs (the solver's own per-step numbers live in its lanes, contact_solver.cpp)
 struct ContactPointConstraint {
   Vec3 anchor_a = Vec3::Zero(), anchor_b = Vec3::Zero();  // the point from each centre of mass,
                                                           // world (m)
-  ContactRow normal, tangent[2];
-  double base_separation = 0.0;     // separation at the step's start − n·(anchor_b − anchor_a) (m)
-  double max_normal_impulse = 0.0;  // the largest normal impulse of this step (N s)
-  double approach_velocity = 0.0;   // relative normal velocity at impact (m/s), < 0 closing
-  bool starts_apart = false;        // the point was a speculative one at the step's start
+  double base_separation = 0.0;  // separation at the step's start (m); < 0 penetrating
+  double normal_impulse = 0.0;   // accumulated, carried to the next step (N s)
+  std::array<double, 2> tangent_impulse{};  // along the two tangents (N s)
   ContactFeature feature;
 };
 
@@ -72,11 +67,7 @@ struct ContactConstraint {
   Vec3 tangent[2] = {Vec3::Zero(), Vec3::Zero()};
   double friction = 0.0;
   double restitution = 0.0;
-  // soft step: the contact's stiffness as three numbers (Catto, Solver2D: b2MakeSoft)
-  double bias_rate = 0.0, mass_scale = 1.0, impulse_scale = 0.0;
   std::uint8_t count = 0;
-  bool converged = false;  // seed: the pair's impulses stopped changing this step
-  bool fresh = false;      // a point without a warm start, or hitting: solved locally
   std::array<ContactPointConstraint, 4> points;
   std::uint64_t key() const { return std::uint64_t(body_a) << 32 | body_b; }
 };
@@ -102,6 +93,7 @@ class ContactPipeline {
   void solve(double h, bool bias);
   void solve_seed(double dt);
   void restitution();
+  // the accumulated impulses back into the contacts, for the next step's warm start
   void store_impulses();
 
   std::vector<SolverBody>& bodies() { return bodies_; }
@@ -130,8 +122,9 @@ class ContactPipeline {
   // colour share a dynamic body, so a colour's contacts are solved at once, on any number of
   // threads, with the same result as on one; every solve visits contacts in this order
   void colour_contacts();
-  template <class Solve>
-  void for_each_contact(Solve&& solve);
+  // a kernel on every block of lanes_, colour by colour, each colour's blocks on the threads
+  template <class Kernel>
+  void for_each_block(Kernel&& kernel);
   std::vector<std::uint32_t> colour_order_;  // contact indices, colour by colour
   std::vector<std::uint32_t> colour_start_;  // colour k: colour_order_[start[k], start[k + 1])
   std::vector<std::uint64_t> body_colours_;  // per body, the colours holding it this step
@@ -140,8 +133,10 @@ class ContactPipeline {
   std::vector<Manifold> manifolds_;
   std::vector<Pose> poses_;  // per body, this step
   std::vector<double> pair_growth_;
-  std::vector<SolverBody> bodies_;
+  std::vector<SolverBody> bodies_;  // per body, and one at rest past the last, for empty lanes
   std::vector<SolverMass> masses_;
+  std::unique_ptr<ContactLanes> lanes_;
+  std::vector<bool> seed_converged_;  // seed: per contact, its impulses stopped changing
   double deepest_ = 0.0;
   std::size_t matched_ = 0;
 };

@@ -244,6 +244,24 @@ V max(V a, V b) {
   return extreme<false>(a, b);
 }
 
+// the lane-wise square root, correctly rounded (the instruction where the build has one for the
+// pack, else lane by lane)
+template <typename V>
+V sqrt(V x) {
+#if defined(RTP_SIMD_VECTORS) && defined(__AVX512F__)
+  if constexpr (std::is_same_v<V, Pack<float, 16>>) return _mm512_maskz_sqrt_ps(0xFFFF, x);
+#endif
+#if defined(RTP_SIMD_VECTORS) && defined(__AVX__)
+  if constexpr (std::is_same_v<V, Pack<float, 8>>) return _mm256_sqrt_ps(x);
+#endif
+#if defined(RTP_SIMD_VECTORS) && defined(__SSE__)
+  if constexpr (std::is_same_v<V, Pack<float, 4>>) return _mm_sqrt_ps(x);
+#endif
+  V r = x;
+  for (std::size_t i = 0; i < kLanesOf<V>; ++i) r[i] = std::sqrt(x[i]);
+  return r;
+}
+
 // lanes rearranged: lane i of the result is lane I_i of x
 template <std::size_t... I, typename V>
 V shuffle(V x) {

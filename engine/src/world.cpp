@@ -319,26 +319,29 @@ void World::integrate_velocities(double h) {
   // of this substep and the solver's velocities
   std::vector<SolverBody>& bodies = pipeline_->bodies();
   const std::vector<SolverMass>& masses = pipeline_->masses();
+  const Eigen::Vector3f kick = (h * gravity_).cast<float>();
   for (std::size_t i = 0; i < states_.size(); ++i)
-    if (masses[i].inverse_mass > 0.0) bodies[i].linear_velocity += h * gravity_;
+    if (masses[i].inverse_mass > 0.0) bodies[i].linear_velocity += kick;
+  auto velocity_at = [&](BodyId body, const Vec3& point) -> Vec3 {
+    return bodies[body].linear_velocity.cast<double>() +
+           bodies[body].angular_velocity.cast<double>().cross(point - states_[body].position);
+  };
   for (const SpringDef& spring : springs_) {
     const BodyState& a = states_[spring.body_a];
     const Vec3 point_a = world_point(a, spring.local_point_a);
-    const Vec3 velocity_a = bodies[spring.body_a].linear_velocity +
-                            bodies[spring.body_a].angular_velocity.cross(point_a - a.position);
+    const Vec3 velocity_a = velocity_at(spring.body_a, point_a);
     Vec3 point_b = spring.point_b, velocity_b = Vec3::Zero();
     if (spring.body_b != kWorldAnchor) {
-      const BodyState& b = states_[spring.body_b];
-      point_b = world_point(b, spring.point_b);
-      velocity_b = bodies[spring.body_b].linear_velocity +
-                   bodies[spring.body_b].angular_velocity.cross(point_b - b.position);
+      point_b = world_point(states_[spring.body_b], spring.point_b);
+      velocity_b = velocity_at(spring.body_b, point_b);
     }
     const Vec3 impulse_on_a =
         h * spring_force_on_a(spring, point_a, velocity_a, point_b, velocity_b);
     auto push = [&](BodyId body, const Vec3& point, const Vec3& impulse) {
-      bodies[body].linear_velocity += masses[body].inverse_mass * impulse;
+      bodies[body].linear_velocity += (masses[body].inverse_mass * impulse).cast<float>();
       bodies[body].angular_velocity +=
-          masses[body].inverse_inertia * (point - states_[body].position).cross(impulse);
+          (masses[body].inverse_inertia * (point - states_[body].position).cross(impulse))
+              .cast<float>();
     };
     push(spring.body_a, point_a, impulse_on_a);
     if (spring.body_b != kWorldAnchor) push(spring.body_b, point_b, -impulse_on_a);
@@ -354,14 +357,15 @@ void World::integrate_positions(double h) {
     if (masses[i].inverse_mass == 0.0) continue;
     SolverBody& body = bodies[i];
     BodyState& s = states_[i];
-    const Vec3 moved = h * body.linear_velocity;
+    const Vec3 moved = h * body.linear_velocity.cast<double>();
     s.position += moved;
-    body.delta_position += moved;
-    const double angle = body.angular_velocity.norm() * h;
+    body.delta_position += moved.cast<float>();
+    const Vec3 angular_velocity = body.angular_velocity.cast<double>();
+    const double angle = angular_velocity.norm() * h;
     if (angle > 0.0) {
-      const Quat turn(Eigen::AngleAxisd(angle, body.angular_velocity.normalized()));
+      const Quat turn(Eigen::AngleAxisd(angle, angular_velocity.normalized()));
       s.orientation = (turn * s.orientation).normalized();
-      body.delta_rotation = turn.toRotationMatrix() * body.delta_rotation;
+      body.delta_rotation = (turn.cast<float>() * body.delta_rotation).normalized();
     }
   }
 }
@@ -373,10 +377,10 @@ void World::store_momenta() {
     const BodyMass& m = masses_[i];
     if (m.inverse_mass == 0.0) continue;
     BodyState& s = states_[i];
-    s.linear_momentum = bodies[i].linear_velocity / m.inverse_mass;
+    s.linear_momentum = bodies[i].linear_velocity.cast<double>() / m.inverse_mass;
     const Mat3 rotation = s.orientation.toRotationMatrix();
     s.angular_momentum = rotation * m.inverse_inertia_body.cwiseInverse().asDiagonal() *
-                         rotation.transpose() * bodies[i].angular_velocity;
+                         rotation.transpose() * bodies[i].angular_velocity.cast<double>();
   }
 }
 
@@ -423,6 +427,7 @@ void World::step_with_contacts(double dt) {
       timed(profile_.integrate_positions, [&] { integrate_positions(dt); });
       break;
   }
+  contacts.store_impulses();
   store_momenta();
   profile_.contact_pairs = contacts.contacts().size();
   profile_.contact_points = contacts.point_count();

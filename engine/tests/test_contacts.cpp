@@ -93,7 +93,9 @@ TEST(Contacts, HeadOnElasticBoxesExchangeVelocities) {
     EXPECT_NEAR(world.velocity(left).x(), -1.0, 0.01);
     EXPECT_NEAR(world.velocity(right).x(), 2.0, 0.02);
     const Vec3 momentum = world.state(left).linear_momentum + world.state(right).linear_momentum;
-    EXPECT_NEAR((momentum - Vec3(1.0, 0.0, 0.0)).norm(), 0.0, 1e-12);
+    // to the round-off of the solver's single precision (a lost or one-sided impulse is 0.1 or
+    // more)
+    EXPECT_NEAR((momentum - Vec3(1.0, 0.0, 0.0)).norm(), 0.0, 1e-6);
   }
 }
 

@@ -94,7 +94,7 @@ TEST(ContactGates, RestingStackGainsNoEnergyAndStaysStill) {
 }
 
 // two equal boxes head-on, e = 1, no gravity: velocities exchange within 1 %, and the momentum
-// is kept to round-off
+// is kept to round-off (the solver's single precision: about 1e-7 of it)
 TEST(ContactGates, HeadOnBoxesExchangeVelocities) {
   const ContactRun r = run_rtp("soft-step", head_on_scene());
   ASSERT_TRUE(r.contact.exchange_error);
@@ -104,7 +104,7 @@ TEST(ContactGates, HeadOnBoxesExchangeVelocities) {
   Vec3 start = Vec3::Zero(), end = Vec3::Zero();
   for (const auto& s : t.samples.front().bodies) start += s.linear_velocity;
   for (const auto& s : t.samples.back().bodies) end += s.linear_velocity;  // equal masses
-  EXPECT_LT((end - start).norm(), 1e-12);
+  EXPECT_LT((end - start).norm(), 1e-6 * start.norm());
 }
 
 // heavy on light: 10:1 holds (under 1 cm); 100:1 and 1000:1 are measured and printed

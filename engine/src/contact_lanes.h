@@ -1,0 +1,49 @@
+// The contact solver's lanes: the contacts of one colour packed kBlockLanes manifolds to a block, one a
+// lane, in single precision (contact_solver.cpp solves them; docs/solver.md has the layout).
+#pragma once
+
+#include <array>
+#include <cstdint>
+#include <vector>
+
+#include "simd.h"
+
+namespace rtp {
+
+// lanes per block: the widest float register, at least 8 (a narrower core splits a block in
+// halves, which gives it two independent chains to interleave)
+inline constexpr std::size_t kBlockLanes = std::max<std::size_t>(simd::kNativeFloats, 8);
+using Lane = simd::Pack<float, kBlockLanes>;
+using LaneMask = simd::MaskOf<Lane>;
+
+
+// one block: kBlockLanes manifolds of one colour, one a lane, every number the solve reads (docs/solver.md
+// gives the layout's bytes per point)
+struct ContactBlock {
+  std::array<std::uint32_t, kBlockLanes> body_a, body_b;  // an empty lane holds the body at rest
+  std::array<std::uint32_t, kBlockLanes> contact;         // index into contacts_, or kNoContact
+  Lane normal[3], tangent[2][3];
+  Lane inverse_mass_a, inverse_mass_b;
+  Lane inverse_inertia_a[6], inverse_inertia_b[6];  // world, symmetric: xx yy zz xy xz yz
+  Lane friction, restitution;
+  Lane bias_rate, mass_scale, impulse_scale;  // the soft step's stiffness (Catto, b2MakeSoft)
+  LaneMask fresh;  // a point without a warm start, or hitting: the manifold is solved locally
+  struct Point {
+    Lane anchor_a[3], anchor_b[3];
+    Lane base_separation;  // at the step's start, less n·(anchor_b − anchor_a) (m)
+    Lane normal_mass, tangent_mass[2];  // 1 / the velocity change per unit impulse (kg); 0 for
+                                        // an empty point
+    Lane normal_impulse, tangent_impulse[2];
+    Lane max_normal_impulse;  // the largest this step (N s)
+    Lane approach_velocity;   // relative normal velocity at impact (m/s), < 0 closing
+    LaneMask starts_apart;    // a speculative point at the step's start
+  } points[4];
+};
+inline constexpr std::uint32_t kNoContact = ~std::uint32_t{0};
+
+struct ContactLanes {
+  std::vector<ContactBlock> blocks;
+  std::vector<std::uint32_t> colour_start;  // colour k: blocks[start[k], start[k + 1])
+};
+
+}  // namespace rtp
