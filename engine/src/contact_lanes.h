@@ -30,6 +30,10 @@ struct ContactBlock {
   LaneMask fresh;  // a point without a warm start, or hitting: the manifold is solved locally
   struct Point {
     Lane anchor_a[3], anchor_b[3];
+    // the normal row's angular parts, r × n on each body and their response I⁻¹ (r × n): the
+    // row every pass reads most, computed once a step (the tangent rows are computed as read)
+    Lane normal_angular_a[3], normal_angular_b[3];
+    Lane normal_response_a[3], normal_response_b[3];
     Lane base_separation;  // at the step's start, less n·(anchor_b − anchor_a) (m)
     Lane normal_mass, tangent_mass[2];  // 1 / the velocity change per unit impulse (kg); 0 for
                                         // an empty point

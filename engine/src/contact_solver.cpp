@@ -98,6 +98,19 @@ struct LanePair {
   V3 relative_velocity(const ContactBlock::Point& p) const {
     return (vb + cross(wb, load3(p.anchor_b))) - (va + cross(wa, load3(p.anchor_a)));
   }
+  // the relative velocity along the normal, by the point's precomputed row
+  Lane normal_velocity(const V3& n, const ContactBlock::Point& p) const {
+    return dot(n, vb - va) + dot(wb, load3(p.normal_angular_b)) -
+           dot(wa, load3(p.normal_angular_a));
+  }
+  // an impulse λ n on b at its anchor, and its opposite on a, by the precomputed row
+  void apply_normal(const ContactBlock& c, const ContactBlock::Point& p, const V3& n,
+                    Lane impulse) {
+    va = va - (c.inverse_mass_a * impulse) * n;
+    wa = wa - impulse * load3(p.normal_response_a);
+    vb = vb + (c.inverse_mass_b * impulse) * n;
+    wb = wb + impulse * load3(p.normal_response_b);
+  }
   // an impulse P on b at its anchor, and −P on a
   void apply(const ContactBlock& c, const ContactBlock::Point& p, const V3& impulse) {
     va = va - c.inverse_mass_a * impulse;
@@ -350,6 +363,12 @@ void ContactPipeline::prepare(double dt, const Vec3& gravity) {
             float(from.base_separation - c.normal.dot(from.anchor_b - from.anchor_a));
         p.normal_mass[i] = float(effective_mass(from.anchor_a, from.anchor_b, c.normal, mass_a,
                                                 mass_b));
+        const Vec3 angular_a = from.anchor_a.cross(c.normal);
+        const Vec3 angular_b = from.anchor_b.cross(c.normal);
+        set3(p.normal_angular_a, i, angular_a);
+        set3(p.normal_angular_b, i, angular_b);
+        set3(p.normal_response_a, i, mass_a.inverse_inertia * angular_a);
+        set3(p.normal_response_b, i, mass_b.inverse_inertia * angular_b);
         for (int t = 0; t < 2; ++t) {
           p.tangent_mass[t][i] = float(
               effective_mass(from.anchor_a, from.anchor_b, c.tangent[t], mass_a, mass_b));
@@ -409,7 +428,7 @@ void ContactPipeline::solve(double h, bool bias) {
       const LaneMask unread = (p.max_normal_impulse == zero) & ~p.starts_apart;
       if (simd::any_of(unread))
         p.approach_velocity =
-            simd::select(unread, dot(n, pair.relative_velocity(p)), p.approach_velocity);
+            simd::select(unread, pair.normal_velocity(n, p), p.approach_velocity);
     }
     const NormalMotion motion(bodies_, c);
     // non-penetration: the normal impulse accumulates and stays ≥ 0 (Catto GDC 2006). A
@@ -421,7 +440,7 @@ void ContactPipeline::solve(double h, bool bias) {
       const LaneMask active = round == 0 ? LaneMask(zero == zero) : c.fresh;
       for (ContactBlock::Point& p : c.points) {
         const Lane s = motion.separation(p);
-        const Lane vn = dot(n, pair.relative_velocity(p));
+        const Lane vn = pair.normal_velocity(n, p);
         const LaneMask apart = s > zero;
         // speculative: the bodies may close the gap in this step, no more
         Lane velocity_bias = s * inverse_h, mass_scale = one, impulse_scale = zero;
@@ -444,7 +463,7 @@ void ContactPipeline::solve(double h, bool bias) {
         const Lane applied = accumulated - p.normal_impulse;
         p.normal_impulse = accumulated;
         p.max_normal_impulse = simd::max(p.max_normal_impulse, applied);
-        pair.apply(c, p, applied * n);
+        pair.apply_normal(c, p, n, applied);
       }
     }
     // Coulomb friction: the friction impulse accumulates on the two tangents and its length
@@ -488,11 +507,11 @@ void ContactPipeline::restitution() {
           const LaneMask hit = (p.approach_velocity < threshold) &
                                (p.max_normal_impulse > zero) & (c.restitution > zero);
           if (!simd::any_of(hit)) continue;
-          const Lane vn = dot(n, pair.relative_velocity(p));
+          const Lane vn = pair.normal_velocity(n, p);
           const Lane impulse = zero - p.normal_mass * (vn + c.restitution * p.approach_velocity);
           const Lane accumulated =
               simd::select(hit, simd::max(p.normal_impulse + impulse, zero), p.normal_impulse);
-          pair.apply(c, p, (accumulated - p.normal_impulse) * n);
+          pair.apply_normal(c, p, n, accumulated - p.normal_impulse);
           p.normal_impulse = accumulated;
         }
       pair.store(bodies_, c);
