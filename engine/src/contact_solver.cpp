@@ -43,6 +43,7 @@ V3 cross(const V3& a, const V3& b) {
   return {a.y * b.z - a.z * b.y, a.z * b.x - a.x * b.z, a.x * b.y - a.y * b.x};
 }
 V3 load3(const Lane (&v)[3]) { return {v[0], v[1], v[2]}; }
+void store3(Lane (&to)[3], const V3& v) { to[0] = v.x, to[1] = v.y, to[2] = v.z; }
 
 // a symmetric 3×3 in six lanes (xx, yy, zz, xy, xz, yz) times a vector
 V3 times(const Lane (&m)[6], const V3& v) {
@@ -188,14 +189,6 @@ void set_symmetric(Lane (&lanes)[6], std::size_t i, const Mat3& m) {
   lanes[3][i] = float(m(0, 1)), lanes[4][i] = float(m(0, 2)), lanes[5][i] = float(m(1, 2));
 }
 
-// the velocity of b's anchor less a's along d, in double, from the solver's bodies
-double relative_speed(const SolverBody& a, const SolverBody& b, const Vec3& ra, const Vec3& rb,
-                      const Vec3& d) {
-  const Vec3 va = a.linear_velocity.cast<double>() + a.angular_velocity.cast<double>().cross(ra);
-  const Vec3 vb = b.linear_velocity.cast<double>() + b.angular_velocity.cast<double>().cross(rb);
-  return d.dot(vb - va);
-}
-
 }  // namespace
 
 // a colour's blocks go to threads only past this many contacts: below it the barrier costs more
@@ -325,16 +318,14 @@ void ContactPipeline::prepare(double dt, const Vec3& gravity) {
     for (std::size_t i = 0; i < W; ++i) {
       block.body_a[i] = block.body_b[i] = at_rest;
       block.contact[i] = kNoContact;
-      block.fresh[i] = 0;
-      for (ContactBlock::Point& p : block.points) p.starts_apart[i] = 0;
     }
+    std::array<LaneMask, 4> exists{};  // the lanes where each point is
+    Lane acceleration{};
     for (std::size_t i = 0; first + i < last; ++i) {
       const std::uint32_t index = colour_order_[first + i];
       const ContactConstraint& c = contacts_[index];
       const SolverMass& mass_a = masses_[c.body_a];
       const SolverMass& mass_b = masses_[c.body_b];
-      const SolverBody& body_a = bodies_[c.body_a];
-      const SolverBody& body_b = bodies_[c.body_b];
       block.contact[i] = index;
       block.body_a[i] = c.body_a;
       block.body_b[i] = c.body_b;
@@ -352,50 +343,69 @@ void ContactPipeline::prepare(double dt, const Vec3& gravity) {
       block.bias_rate[i] = float(soft.bias_rate);
       block.mass_scale[i] = float(soft.mass_scale);
       block.impulse_scale[i] = float(soft.impulse_scale);
-      bool fresh = false;
+      // the gravity along n that free flight closes a gap with (relative, b's less a's)
+      const Vec3 gravity_a = mass_a.inverse_mass > 0.0 ? gravity : Vec3::Zero();
+      const Vec3 gravity_b = mass_b.inverse_mass > 0.0 ? gravity : Vec3::Zero();
+      acceleration[i] = float(c.normal.dot(gravity_b - gravity_a));
       for (std::uint8_t j = 0; j < c.count; ++j) {
         const ContactPointConstraint& from = c.points[j];
         ContactBlock::Point& p = block.points[j];
+        exists[j][i] = -1;
         set3(p.anchor_a, i, from.anchor_a);
         set3(p.anchor_b, i, from.anchor_b);
-        // the separation is tracked from here: s = base + n·(motion of b's anchor − a's)
-        p.base_separation[i] =
-            float(from.base_separation - c.normal.dot(from.anchor_b - from.anchor_a));
-        p.normal_mass[i] = float(effective_mass(from.anchor_a, from.anchor_b, c.normal, mass_a,
-                                                mass_b));
-        const Vec3 angular_a = from.anchor_a.cross(c.normal);
-        const Vec3 angular_b = from.anchor_b.cross(c.normal);
-        set3(p.normal_angular_a, i, angular_a);
-        set3(p.normal_angular_b, i, angular_b);
-        set3(p.normal_response_a, i, mass_a.inverse_inertia * angular_a);
-        set3(p.normal_response_b, i, mass_b.inverse_inertia * angular_b);
-        for (int t = 0; t < 2; ++t) {
-          p.tangent_mass[t][i] = float(
-              effective_mass(from.anchor_a, from.anchor_b, c.tangent[t], mass_a, mass_b));
-          p.tangent_impulse[t][i] = float(from.tangent_impulse[t]);
-        }
+        p.base_separation[i] = float(from.base_separation);
         p.normal_impulse[i] = float(from.normal_impulse);
-        double approach =
-            relative_speed(body_a, body_b, from.anchor_a, from.anchor_b, c.normal);
-        // a point still apart hits, if it hits this step, at the speed free flight gives it
-        // over the gap: v² = v₀² − 2 a s₀ with a the relative acceleration gravity gives along
-        // n (the speed the solve sees is one a speculative push has already slowed)
-        if (from.base_separation > 0.0) {
-          p.starts_apart[i] = -1;
-          const Vec3 gravity_a = mass_a.inverse_mass > 0.0 ? gravity : Vec3::Zero();
-          const Vec3 gravity_b = mass_b.inverse_mass > 0.0 ? gravity : Vec3::Zero();
-          const double acceleration = c.normal.dot(gravity_b - gravity_a);
-          const double squared = approach * approach - 2.0 * acceleration * from.base_separation;
-          approach = -std::sqrt(std::max(squared, 0.0));
-        }
-        p.approach_velocity[i] = float(approach);
-        // no warm start, or an approach fast enough to bounce: the manifold is solved locally
-        if (from.normal_impulse == 0.0 || approach < -settings_.restitution_threshold)
-          fresh = true;
+        p.tangent_impulse[0][i] = float(from.tangent_impulse[0]);
+        p.tangent_impulse[1][i] = float(from.tangent_impulse[1]);
       }
-      block.fresh[i] = fresh ? -1 : 0;
     }
+    prepare_lanes(block, exists, acceleration);
   }
+}
+
+void ContactPipeline::prepare_lanes(ContactBlock& c, const std::array<LaneMask, 4>& exists,
+                                    Lane acceleration) const {
+  // the rows, effective masses and approach speeds of a block's points, lane by lane
+  const Lane zero = splat(0.0f);
+  const Lane threshold = splat(float(-settings_.restitution_threshold));
+  const LanePair pair(bodies_, c);
+  const V3 n = load3(c.normal);
+  // 1 / (the velocity change along d at the anchors per unit impulse), 0 for an empty point
+  auto effective_mass = [&](const V3& ra, const V3& rb, const V3& d, LaneMask point) {
+    const V3 ja = cross(ra, d), jb = cross(rb, d);
+    const Lane k = c.inverse_mass_a + c.inverse_mass_b + dot(ja, times(c.inverse_inertia_a, ja)) +
+                   dot(jb, times(c.inverse_inertia_b, jb));
+    const LaneMask valid = point & (k > zero);
+    return simd::select(valid, splat(1.0f) / simd::select(valid, k, splat(1.0f)), zero);
+  };
+  LaneMask fresh = zero != zero;
+  for (int j = 0; j < 4; ++j) {
+    ContactBlock::Point& p = c.points[j];
+    const V3 ra = load3(p.anchor_a), rb = load3(p.anchor_b);
+    const Lane separation = p.base_separation;
+    // the separation is tracked from here: s = base + n·(motion of b's anchor − a's)
+    p.base_separation = separation - dot(n, rb - ra);
+    const V3 ja = cross(ra, n), jb = cross(rb, n);
+    const V3 response_a = times(c.inverse_inertia_a, ja), response_b = times(c.inverse_inertia_b, jb);
+    store3(p.normal_angular_a, ja);
+    store3(p.normal_angular_b, jb);
+    store3(p.normal_response_a, response_a);
+    store3(p.normal_response_b, response_b);
+    p.normal_mass = effective_mass(ra, rb, n, exists[j]);
+    p.tangent_mass[0] = effective_mass(ra, rb, load3(c.tangent[0]), exists[j]);
+    p.tangent_mass[1] = effective_mass(ra, rb, load3(c.tangent[1]), exists[j]);
+    // a point still apart hits, if it hits this step, at the speed free flight gives it over the
+    // gap: v² = v₀² − 2 a s₀ with a the relative acceleration gravity gives along n (the speed
+    // the solve sees is one a speculative push has already slowed)
+    const Lane approach = pair.normal_velocity(n, p);
+    p.starts_apart = exists[j] & (separation > zero);
+    const Lane squared = approach * approach - splat(2.0f) * acceleration * separation;
+    p.approach_velocity = simd::select(p.starts_apart, zero - simd::sqrt(simd::max(squared, zero)),
+                                       approach);
+    // no warm start, or an approach fast enough to bounce: the manifold is solved locally
+    fresh |= exists[j] & ((p.normal_impulse == zero) | (p.approach_velocity < threshold));
+  }
+  c.fresh = fresh;
 }
 
 void ContactPipeline::warm_start() {

@@ -125,6 +125,9 @@ class ContactPipeline {
   // a kernel on every block of lanes_, colour by colour, each colour's blocks on the threads
   template <class Kernel>
   void for_each_block(Kernel&& kernel);
+  // a block's rows, effective masses, approach speeds and fresh lanes from its raw points
+  void prepare_lanes(ContactBlock& block, const std::array<LaneMask, 4>& exists,
+                     Lane acceleration) const;
   std::vector<std::uint32_t> colour_order_;  // contact indices, colour by colour
   std::vector<std::uint32_t> colour_start_;  // colour k: colour_order_[start[k], start[k + 1])
   std::vector<std::uint64_t> body_colours_;  // per body, the colours holding it this step
