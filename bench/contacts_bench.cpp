@@ -67,6 +67,7 @@ void Pyramid(benchmark::State& state) {
   state.counters["bodies"] = bodies;
   state.counters["contact_pairs"] = double(last.contact_pairs);
   state.counters["contact_points"] = double(last.contact_points);
+  state.counters["reused_pairs"] = double(last.reused_pairs);
   state.counters["ms_per_step"] = 1e3 * sum.total / double(steps);
   // the solve's passes over every point in a step: per substep one biased and the relax passes
   const double passes = double(c.substeps * (1 + c.relax_iterations));
