@@ -521,10 +521,14 @@ def drift_cost_views(results: pd.DataFrame) -> list[dict]:
             ok["cost"] = 1e3 / ok["steps_per_s"]
             ok["drift"] = ok["stack_drift_max"].clip(lower=DRIFT_FLOOR)
             for _, r in ok.iterrows():
+                # a stack that failed its question otherwise (sank, settled) is an open marker
+                verdict = r.get("contact_verdict") if isinstance(r.get("contact_verdict"), str) else ""
+                failed = verdict in FAILED_VERDICTS
                 fig.add_trace(go.Scatter(x=[r["cost"]], y=[r["drift"]], mode="markers+text", text=[r["engine"]],
                                          textposition="top center", name=r["label"], legendgroup=r["label"],
                                          showlegend=r["label"] not in seen,
-                                         hovertemplate=f"{r['label']}<br>%{{x:.3g}} ms per step<br>"
+                                         marker=dict(size=10, symbol="circle-open" if failed else "circle"),
+                                         hovertemplate=f"{r['label']}: {verdict}<br>%{{x:.3g}} ms per step<br>"
                                                        f"drift max {fmt(r['stack_drift_max'])} m<extra></extra>"),
                               row=1, col=col)
                 seen.add(r["label"])
@@ -722,7 +726,8 @@ the run's status.</p>
 <p><em>Which engine keeps a stack standing for the least time per step? Max drift (the largest horizontal
 displacement of any box) against ms per step, each scenario in two views: every engine at its own defaults, and
 every engine at 10 velocity iterations or its nearest (docs/engines.md, "Contacts"). The dashed line is the
-Pareto front: nothing else in that view is both faster and drifts less.</em></p>
+Pareto front: nothing else in that view is both faster and drifts less. An open marker is a stack whose verdict
+is a failure (it drifted, settled, sank or collapsed): drift is one of its criteria, not all.</em></p>
 <p class="note">Variants: {% for view, chosen in contact_views.items() %}{{ view }}: {% for e, v in chosen.items() %}{{ e }}/{{ v }}{{ ", " if not loop.last }}{% endfor %}{{ "; " if not loop.last else "." }}{% endfor %}
 An engine that exploded, failed or did not run has no point; its status is listed under the chart.</p>
 {% for d in drift_cost %}<h3>{{ d.scenario }}</h3>{{ d.chart | safe }}

@@ -303,7 +303,7 @@ def test_drift_against_cost_has_a_front_per_view():
         contact_row("bullet", "float", 500, 5e-4),             # 2 ms, in both views
         contact_row("ode", "quickstep", 250, 0.01),            # 4 ms, beaten by bullet
         contact_row("ode", "quickstep-10", 0, 0, status="exploded"),
-        contact_row("box2d", "default", 10000, 0.1),           # 0.1 ms
+        contact_row("box2d", "default", 10000, 0.1, verdict="settles"),  # 0.1 ms, failed otherwise
         contact_row("box2d", "iterations-10", 8000, 0.02),     # 0.125 ms
         contact_row("rtp", "seed", 1e6, 1e-9),                 # in neither view: must not win one
     ])
@@ -313,6 +313,9 @@ def test_drift_against_cost_has_a_front_per_view():
     assert fronts["equal iterations (10)"] == ["box2d/iterations-10", "bullet/float"]
     assert section["missing"] == ["equal iterations (10): ode/quickstep-10 exploded"]
     assert "rtp/seed" not in section["chart"]
+    # the settled stack is drawn open, the standing ones filled
+    assert section["chart"].count('"symbol":"circle-open"') == 1
+    assert "box2d\\u002fdefault: settles" in section["chart"]
 
 
 def test_a_scene_without_drift_has_no_drift_chart():
