@@ -19,6 +19,7 @@ import jinja2
 import pandas as pd
 import plotly.graph_objects as go
 import plotly.offline
+from plotly.subplots import make_subplots
 
 # the error series a trajectory CSV may hold: column, title, unit, and the results.csv summary column
 SERIES = [
@@ -40,11 +41,23 @@ CONTACT_COLUMNS = [
     ("energy_added_max", "energy added max (J)"), ("speed_max", "speed max (m/s)"),
     ("rest_speed_rms", "RMS speed, last second (m/s)"), ("apex_rel_err", "apex errors (relative)"),
     ("slide_distance", "slide (m)"), ("slide_accel", "slide a (m/s²)"), ("slide_accel_expected", "closed form a"),
-    ("exchange_err", "exchange error"), ("tunnelled", "tunnelled"),
+    ("exchange_err", "exchange error"), ("tunnelled", "tunnelled"), ("escaped", "escaped bodies"),
 ]
 # verdicts that answer a contact scene's question badly (reports colour them)
 FAILED_VERDICTS = {"collapsed", "sinks", "drifts", "settles", "tumbled", "no bounce", "tunnelled", "stuck",
-                   "exploded", "slides, should stay", "stays, should slide"}
+                   "exploded", "slides, should stay", "stays, should slide", "escaped", "unsettled"}
+
+# the two views of drift against cost (docs/engines.md, "Contacts"): each engine at its own
+# defaults, and each at 10 velocity iterations or the nearest it has (Bullet's default is 10;
+# rtp's soft step has no iteration count, so its 10-iteration solver stands for it there)
+CONTACT_VIEWS = {
+    "each engine's defaults": {"rtp": "soft-step", "bullet": "float", "ode": "quickstep", "box2d": "default",
+                               "mujoco": "euler"},
+    "equal iterations (10)": {"rtp": "sequential-impulse", "bullet": "float", "ode": "quickstep-10",
+                              "box2d": "iterations-10", "mujoco": "pgs-10"},
+}
+# drift below this is drawn at it (a log axis has no zero)
+DRIFT_FLOOR = 1e-6
 
 
 def has_contact_metrics(rows: pd.DataFrame) -> bool:
@@ -86,7 +99,7 @@ def verdict_table(results: pd.DataFrame) -> dict | None:
             verdict = row.get("contact_verdict")
             text = verdict if isinstance(verdict, str) and verdict else ("ok" if row["status"] == "ok" else row["status"])
             css = "unstable" if text in FAILED_VERDICTS or row["status"] in ("error", "crashed", "timeout") else (
-                "stable" if text in ("stands", "stays", "slides", "stopped", "ok") else "")
+                "stable" if text in ("stands", "stays", "slides", "stopped", "contained", "ok") else "")
             cells.append((text, css))
         rows.append(dict(label=label, cells=cells))
     return dict(scenarios=contact, rows=rows)
@@ -486,7 +499,103 @@ def narrowphase_benchmark(folder: Path) -> dict | None:
     return dict(rows=rows, settings=settings, tolerances=context.get("tolerances", ""), paired=paired)
 
 
-def scaling_charts(results: pd.DataFrame, meta: dict, benchmark: dict | None = None) -> list[dict]:
+def drift_cost_views(results: pd.DataFrame) -> list[dict]:
+    """Per stack scenario (one with a drift column), max drift against ms per step in the two
+    views of CONTACT_VIEWS side by side, one marker per engine, each view's Pareto front dashed;
+    the fronts as a list, and the engines of a view that gave no point with their status."""
+    sections = []
+    for name, rows in results.groupby("scenario", sort=False):
+        if "stack_drift_max" not in rows or rows["stack_drift_max"].isna().all():
+            continue
+        fig = make_subplots(rows=1, cols=len(CONTACT_VIEWS), subplot_titles=list(CONTACT_VIEWS),
+                            shared_yaxes=True, horizontal_spacing=0.06)
+        fronts, missing, seen = [], [], set()
+        for col, (view, chosen) in enumerate(CONTACT_VIEWS.items(), start=1):
+            picked = rows[rows.apply(lambda r: chosen.get(r["engine"]) == r["variant"], axis=1)]
+            ok = picked[(picked["status"] == "ok") & picked["steps_per_s"].notna() &
+                        picked["stack_drift_max"].notna()].copy()
+            for _, r in picked.drop(ok.index).iterrows():
+                missing.append(f"{view}: {r['label']} {r.get('contact_verdict') or r['status']}")
+            if ok.empty:
+                continue
+            ok["cost"] = 1e3 / ok["steps_per_s"]
+            ok["drift"] = ok["stack_drift_max"].clip(lower=DRIFT_FLOOR)
+            for _, r in ok.iterrows():
+                # a stack that failed its question otherwise (sank, settled) is an open marker
+                verdict = r.get("contact_verdict") if isinstance(r.get("contact_verdict"), str) else ""
+                failed = verdict in FAILED_VERDICTS
+                fig.add_trace(go.Scatter(x=[r["cost"]], y=[r["drift"]], mode="markers+text", text=[r["engine"]],
+                                         textposition="top center", name=r["label"], legendgroup=r["label"],
+                                         showlegend=r["label"] not in seen,
+                                         marker=dict(size=10, symbol="circle-open" if failed else "circle"),
+                                         hovertemplate=f"{r['label']}: {verdict}<br>%{{x:.3g}} ms per step<br>"
+                                                       f"drift max {fmt(r['stack_drift_max'])} m<extra></extra>"),
+                              row=1, col=col)
+                seen.add(r["label"])
+            front = pareto_front(ok, "drift")
+            fig.add_trace(go.Scatter(x=front["cost"], y=front["drift"], mode="lines", showlegend=col == 1,
+                                     name="Pareto front", legendgroup="front",
+                                     line=dict(dash="dash", color="black", width=1)), row=1, col=col)
+            fronts.append(dict(view=view, members=[f"{r['label']} ({fmt(r['cost'])} ms, {fmt(r['stack_drift_max'])} m)"
+                                                   for _, r in front.iterrows()]))
+        if not fig.data:
+            continue
+        fig.update_layout(title=f"{name}: max drift against ms per step (drift under {DRIFT_FLOOR:g} m drawn at it)")
+        fig.update_xaxes(type="log", exponentformat="power", title_text="ms per step, median")
+        fig.update_yaxes(type="log", exponentformat="power")
+        fig.update_yaxes(title_text="max drift (m)", row=1, col=1)
+        sections.append(dict(scenario=name, chart=figure_html(fig), fronts=fronts, missing=missing))
+    return sections
+
+
+def contacts_benchmark(folder: Path) -> dict | None:
+    """rtp's contact step on the pyramids (bench/contacts_bench.cpp), if bench.sh wrote it: per
+    (base, threads) the ms per step, the bodies, contact pairs and points, the solver's ns per
+    point and pass, and each stage's share of the step; the median of repetitions when there are
+    any. A run without the counters is named as malformed."""
+    document = benchmark_document(folder, "contacts.json")
+    if document is None:
+        return None
+    cases: dict[tuple, dict] = {}
+    for run in document.get("benchmarks", []):
+        name = run.get("run_name", run.get("name", ""))
+        if not name.startswith("Pyramid/"):
+            continue
+        aggregate = run.get("aggregate_name") if run.get("run_type") == "aggregate" else None
+        if aggregate not in (None, "median"):
+            continue
+        fields = dict(part.split(":", 1) for part in name.split("/")[1:] if ":" in part)
+        try:
+            key = (int(fields["base"]), int(fields["threads"]))
+            row = dict(base=key[0], threads=key[1], bodies=int(run["bodies"]), ms=float(run["ms_per_step"]),
+                       pairs=int(run["contact_pairs"]), points=int(run["contact_points"]),
+                       ns_point_pass=float(run["solver_ns_per_point_pass"]),
+                       shares={k.removeprefix("share_"): float(v) for k, v in run.items() if k.startswith("share_")})
+        except (KeyError, ValueError) as exc:
+            raise ReportError(f"{folder / 'benchmarks' / 'contacts.json'}: benchmark {name!r} lacks "
+                              f"or garbles {exc}") from exc
+        if aggregate == "median" or key not in cases:
+            cases[key] = row
+    if not cases:
+        return None
+    rows = sorted(cases.values(), key=lambda r: (r["base"], r["threads"]))
+    stages = list(dict.fromkeys(stage for r in rows for stage in r["shares"]))
+    for r in rows:
+        one = cases.get((r["base"], 1))
+        r["speedup"] = one["ms"] / r["ms"] if one and r["threads"] != 1 and r["ms"] > 0 else None
+    fig = go.Figure()
+    labels = [f"base {r['base']}, {r['threads']} thread(s)" for r in rows]
+    for stage in stages:
+        fig.add_trace(go.Bar(x=labels, y=[r["shares"].get(stage, 0.0) for r in rows], name=stage))
+    fig.update_layout(barmode="stack", title="rtp contact step: each stage's share of the step (contacts_bench)",
+                      yaxis_title="share of the step")
+    context = document.get("context", {})
+    return dict(rows=rows, stages=stages, chart=figure_html(fig), solver=context.get("solver", ""),
+                scene=context.get("scene", ""))
+
+
+def scaling_charts(results: pd.DataFrame, meta: dict, benchmark: dict | None = None,
+                   contacts: dict | None = None) -> list[dict]:
     """For families that vary a count (particles-scaling): body- or particle-steps/s against the
     count on log-log axes, one curve per engine/variant, with the memory-bandwidth roofline when
     the metadata carries one."""
@@ -507,6 +616,12 @@ def scaling_charts(results: pd.DataFrame, meta: dict, benchmark: dict | None = N
                                          name=label))
             if not fig.data:
                 continue
+            if contacts and family == "pyramid":
+                for threads in sorted({r["threads"] for r in contacts["rows"]}):
+                    points = sorted((r["bodies"], r["ms"]) for r in contacts["rows"] if r["threads"] == threads)
+                    fig.add_trace(go.Scatter(x=[b for b, _ in points], y=[m for _, m in points], mode="markers",
+                                             marker=dict(symbol="x", size=10),
+                                             name=f"rtp soft-step, contacts_bench, {threads} thread(s)"))
             fig.update_layout(title=f"{family}: ms per step against bodies", xaxis_title="dynamic bodies",
                               yaxis_title="ms per step, median")
             fig.update_xaxes(type="log", exponentformat="power")
@@ -600,9 +715,36 @@ TEMPLATE = jinja2.Template("""<!doctype html>
 <p class="note">Each contact scenario's verdict per engine and variant (docs/metrics.md, "Contact"): stands (drift and
 top-height change within 1 cm), settles (the top sank over 1 cm), drifts (over 1 cm sideways), sinks (final
 penetration over 2 cm), collapsed (over 0.5 m), tumbled / no bounce (a dropped box), stays / slides (a slope),
-tunnelled / stuck / stopped (a fast box at a wall); otherwise the run's status.</p>
+tunnelled / stuck / stopped (a fast box at a wall), contained / escaped / unsettled (boxes rained into a
+container: all inside and at rest, some outside, still moving over 0.05 m/s RMS in the last second); otherwise
+the run's status.</p>
 <table><tr><th class="l">engine/variant</th>{% for n in verdicts.scenarios %}<th>{{ n }}</th>{% endfor %}</tr>
 {% for r in verdicts.rows %}<tr><td class="l">{{ r.label }}</td>{% for text, css in r.cells %}<td class="{{ css }}">{{ text }}</td>{% endfor %}</tr>{% endfor %}
+</table></section>{% endif %}
+
+{% if drift_cost %}<section><h2>Stacks: drift against cost</h2>
+<p><em>Which engine keeps a stack standing for the least time per step? Max drift (the largest horizontal
+displacement of any box) against ms per step, each scenario in two views: every engine at its own defaults, and
+every engine at 10 velocity iterations or its nearest (docs/engines.md, "Contacts"). The dashed line is the
+Pareto front: nothing else in that view is both faster and drifts less. An open marker is a stack whose verdict
+is a failure (it drifted, settled, sank or collapsed): drift is one of its criteria, not all.</em></p>
+<p class="note">Variants: {% for view, chosen in contact_views.items() %}{{ view }}: {% for e, v in chosen.items() %}{{ e }}/{{ v }}{{ ", " if not loop.last }}{% endfor %}{{ "; " if not loop.last else "." }}{% endfor %}
+An engine that exploded, failed or did not run has no point; its status is listed under the chart.</p>
+{% for d in drift_cost %}<h3>{{ d.scenario }}</h3>{{ d.chart | safe }}
+<p class="note">{% for f in d.fronts %}Pareto front, {{ f.view }}: {{ f.members | join("; ") }}<br>{% endfor %}
+{% if d.missing %}No point: {{ d.missing | join("; ") }}{% endif %}</p>{% endfor %}
+</section>{% endif %}
+
+{% if contacts %}<section><h2>rtp contact step on the pyramids (contacts_bench)</h2>
+<p><em>What does rtp's contact step cost per pyramid base and thread count, and where does the time go?
+Google Benchmark, same session (bench/contacts_bench.cpp); {{ contacts.solver }}; {{ contacts.scene }}.
+The ms per step are also drawn as crosses on the pyramid scaling chart.</em></p>
+{{ contacts.chart | safe }}
+<table><tr><th>base</th><th>threads</th><th>bodies</th><th>contact pairs</th><th>contact points</th><th>ms per step</th>
+<th>speedup over 1 thread</th><th>solver ns per point and pass</th>{% for st in contacts.stages %}<th>{{ st.replace("_", " ") }}</th>{% endfor %}</tr>
+{% for r in contacts.rows %}<tr><td>{{ r.base }}</td><td>{{ r.threads }}</td><td>{{ r.bodies }}</td><td>{{ r.pairs }}</td>
+<td>{{ r.points }}</td><td>{{ "%.3g" % r.ms }}</td><td>{{ "%.2f×" % r.speedup if r.speedup }}</td><td>{{ "%.3g" % r.ns_point_pass }}</td>
+{% for st in contacts.stages %}<td>{{ "%.1f %%" % (100 * r.shares.get(st, 0)) }}</td>{% endfor %}</tr>{% endfor %}
 </table></section>{% endif %}
 
 {% for f in families %}<section><h2>Stability map: {{ f.name }}</h2>
@@ -769,7 +911,9 @@ def build_report(folder: Path) -> Path:
 
     families = stability_maps(results, meta)
     benchmark = particle_benchmark(folder)
-    scaling = scaling_charts(results, meta, benchmark)
+    contacts = contacts_benchmark(folder)
+    scaling = scaling_charts(results, meta, benchmark, contacts)
+    nominal_all = results[[is_nominal(meta, r) for _, r in results.iterrows()]]
 
     engines = []
     for name, info in meta.get("engines", {}).items():
@@ -780,7 +924,8 @@ def build_report(folder: Path) -> Path:
     page = TEMPLATE.render(meta=meta, plotlyjs=plotly.offline.get_plotlyjs(), summary_columns=summary_columns,
                            summary_rows=summary_rows, scenarios=scenarios, families=families, scaling=scaling,
                            benchmark=benchmark, broadphase=broadphase_benchmark(folder),
-                           verdicts=verdict_table(results[[is_nominal(meta, r) for _, r in results.iterrows()]]),
+                           verdicts=verdict_table(nominal_all), drift_cost=drift_cost_views(nominal_all),
+                           contact_views=CONTACT_VIEWS, contacts=contacts,
                            narrowphase=narrowphase_benchmark(folder), engines=engines)
     out = folder / "index.html"
     partial = folder / "index.html.partial"

@@ -92,7 +92,7 @@ const std::vector<Metric>& all_metrics() {
   static const std::vector<Metric> all = {
       Metric::Position,   Metric::Orientation, Metric::Energy,     Metric::LinearMomentum,
       Metric::AngularMomentum, Metric::StackDrift, Metric::Penetration, Metric::BounceApex,
-      Metric::Incline,    Metric::Exchange,    Metric::Tunnelling};
+      Metric::Incline,    Metric::Exchange,    Metric::Tunnelling, Metric::Confined};
   return all;
 }
 
@@ -120,6 +120,8 @@ const char* to_string(Metric metric) {
       return "exchange";
     case Metric::Tunnelling:
       return "tunnelling";
+    case Metric::Confined:
+      return "confined";
   }
   return "?";
 }
@@ -180,7 +182,8 @@ void validate_contact_metrics(const Scene& scene) {
   }
   const bool contact_metric = wants(Metric::StackDrift) || wants(Metric::Penetration) ||
                               wants(Metric::BounceApex) || wants(Metric::Incline) ||
-                              wants(Metric::Exchange) || wants(Metric::Tunnelling);
+                              wants(Metric::Exchange) || wants(Metric::Tunnelling) ||
+                              wants(Metric::Confined);
   if (!contact_metric) return;
   if (scene.particles) fail("probe.metrics", "the contact metrics are for bodies, not particles");
   if (dynamic.empty()) fail("probe.metrics", "the contact metrics need a dynamic body");
@@ -210,6 +213,18 @@ void validate_contact_metrics(const Scene& scene) {
     if (scene.bodies[dynamic[0]].linear_velocity.norm() == 0.0)
       fail("bodies[" + std::to_string(dynamic[0]) + "].linear_velocity",
            "tunnelling needs a moving body");
+  }
+  if (wants(Metric::Confined)) {
+    if (planes.size() != 1 || static_boxes.empty())
+      fail("probe.metrics",
+           "confined needs one static plane (the floor) and static boxes (the walls)");
+    const Vec3 g = scene.gravity;
+    if (g.norm() == 0.0 || (g.cwiseAbs().maxCoeff() < g.norm() * (1.0 - 1e-12)))
+      fail("gravity", "confined needs gravity along a world axis (the container's up)");
+    for (int w : static_boxes)
+      if (scene.bodies[w].orientation.angularDistance(Quat::Identity()) > 1e-9)
+        fail("bodies[" + std::to_string(w) + "].orientation",
+             "confined needs its walls aligned with the world axes");
   }
 }
 

@@ -215,6 +215,7 @@ const std::vector<std::string> kColumns = {"scenario",
                                            "slide_accel_rel_err",
                                            "exchange_err",
                                            "tunnelled",
+                                           "escaped",
                                            "reference",
                                            "reference_self_error",
                                            "trajectory",
@@ -574,6 +575,7 @@ int run_suite(const RunOptions& options, const fs::path& self) {
             put_value("slide_accel_rel_err", contact.slide_acceleration_error);
             put_value("exchange_err", contact.exchange_error);
             if (contact.tunnelled) row["tunnelled"] = *contact.tunnelled ? "1" : "0";
+            if (contact.escaped) row["escaped"] = std::to_string(*contact.escaped);
             row["contact_verdict"] = contact.verdict;
             if (r.status == Status::Exploded && scene.has_contacts())
               row["contact_verdict"] = "exploded";

@@ -287,3 +287,118 @@ def test_contact_scenes_have_their_tables(contact_results):
     # rtp has no contact solver yet: its rows say why, and the report shows it
     for message in table[table["status"] == "unsupported"]["message"]:
         assert build_report.html.escape(message) in page
+
+
+def contact_row(engine, variant, steps_per_s, drift, status="ok", verdict="stands"):
+    return dict(scenario="tower-10", engine=engine, variant=variant, label=f"{engine}/{variant}", status=status,
+                steps_per_s=steps_per_s if status == "ok" else float("nan"),
+                stack_drift_max=drift if status == "ok" else float("nan"),
+                contact_verdict=verdict if status == "ok" else "exploded")
+
+
+def test_drift_against_cost_has_a_front_per_view():
+    rows = pd.DataFrame([
+        contact_row("rtp", "soft-step", 1000, 1e-3),           # 1 ms
+        contact_row("rtp", "sequential-impulse", 2000, 0.05),  # 0.5 ms, beaten by box2d/iterations-10
+        contact_row("bullet", "float", 500, 5e-4),             # 2 ms, in both views
+        contact_row("ode", "quickstep", 250, 0.01),            # 4 ms, beaten by bullet
+        contact_row("ode", "quickstep-10", 0, 0, status="exploded"),
+        contact_row("box2d", "default", 10000, 0.1, verdict="settles"),  # 0.1 ms, failed otherwise
+        contact_row("box2d", "iterations-10", 8000, 0.02),     # 0.125 ms
+        contact_row("rtp", "seed", 1e6, 1e-9),                 # in neither view: must not win one
+    ])
+    (section,) = build_report.drift_cost_views(rows)
+    fronts = {f["view"]: [m.split(" (")[0] for m in f["members"]] for f in section["fronts"]}
+    assert fronts["each engine's defaults"] == ["box2d/default", "rtp/soft-step", "bullet/float"]
+    assert fronts["equal iterations (10)"] == ["box2d/iterations-10", "bullet/float"]
+    assert section["missing"] == ["equal iterations (10): ode/quickstep-10 exploded"]
+    assert "rtp/seed" not in section["chart"]
+    # the settled stack is drawn open, the standing ones filled
+    assert section["chart"].count('"symbol":"circle-open"') == 1
+    assert "box2d\\u002fdefault: settles" in section["chart"]
+
+
+def test_a_scene_without_drift_has_no_drift_chart():
+    rows = pd.DataFrame([dict(contact_row("rtp", "soft-step", 1000, 1e-3), stack_drift_max=float("nan"))])
+    assert build_report.drift_cost_views(rows) == []
+
+
+def contacts_json(runs):
+    return json.dumps({"context": {"solver": "soft step, 8 substeps", "scene": "pyramid-N"}, "benchmarks": runs})
+
+
+def pyramid_run(base, threads, ms, **extra):
+    run = {"name": f"Pyramid/base:{base}/threads:{threads}/min_time:0.500/real_time",
+           "run_name": f"Pyramid/base:{base}/threads:{threads}/min_time:0.500/real_time",
+           "run_type": "iteration", "threads": 1, "real_time": ms, "time_unit": "ms",
+           "bodies": base * (base + 1) / 2, "contact_pairs": 3.0 * base, "contact_points": 12.0 * base,
+           "ms_per_step": ms, "solver_ns_per_point_pass": 90.0, "share_solve": 0.25, "share_relax": 0.5,
+           "share_narrow_phase": 0.25}
+    run.update(extra)
+    return run
+
+
+def test_contacts_benchmark_rows_speedups_and_shares(tmp_path):
+    (tmp_path / "benchmarks").mkdir()
+    (tmp_path / "benchmarks" / "contacts.json").write_text(contacts_json([
+        pyramid_run(10, 1, 2.0), pyramid_run(10, 2, 1.6), pyramid_run(20, 1, 8.0)]))
+    bench = build_report.contacts_benchmark(tmp_path)
+    assert [(r["base"], r["threads"], r["bodies"]) for r in bench["rows"]] == [(10, 1, 55), (10, 2, 55), (20, 1, 210)]
+    assert bench["rows"][1]["speedup"] == pytest.approx(1.25)
+    assert bench["rows"][0]["speedup"] is None and bench["rows"][2]["speedup"] is None
+    assert set(bench["stages"]) == {"solve", "relax", "narrow_phase"}
+    assert bench["solver"] == "soft step, 8 substeps"
+
+
+def test_a_contacts_benchmark_without_its_counters_is_named(tmp_path):
+    (tmp_path / "benchmarks").mkdir()
+    broken = pyramid_run(10, 1, 2.0)
+    del broken["ms_per_step"]
+    (tmp_path / "benchmarks" / "contacts.json").write_text(contacts_json([broken]))
+    with pytest.raises(build_report.ReportError, match=r"contacts.json: benchmark 'Pyramid/base:10.*ms_per_step"):
+        build_report.contacts_benchmark(tmp_path)
+
+
+def test_pyramid_series_draws_cost_against_bodies_with_the_benchmark(tmp_path):
+    if not PHYSBENCH:
+        pytest.skip("PHYSBENCH_EXE is not set (CTest sets it)")
+    out = tmp_path / "r"
+    subprocess.run([PHYSBENCH, "run", "-s", "pyramid-10,pyramid-20", "-e", "rtp,box2d", "--duration", "0.5",
+                    "--budget", "0", "--out", str(out)], check=True, capture_output=True)
+    table = pd.read_csv(out / "results.csv")
+    ran = table[(table["status"] == "ok") & table["steps_per_s"].notna()]
+    if ran.empty:
+        pytest.skip("no engine in this build runs contact scenes")
+    (out / "benchmarks").mkdir()
+    (out / "benchmarks" / "contacts.json").write_text(contacts_json([
+        pyramid_run(10, 1, 2.0), pyramid_run(10, 2, 1.6), pyramid_run(20, 1, 8.0), pyramid_run(20, 2, 5.0)]))
+    page = build_report.build_report(out).read_text()
+    chart = page.split("Scaling: pyramid")[1].split("</section>")[0]
+    assert "pyramid: ms per step against bodies" in chart
+    # one line per engine/variant that ran both bases, each at 55 and 210 bodies
+    for label, curve in ran.groupby(ran["engine"] + "/" + ran["variant"]):
+        assert '"name":"' + label.replace("/", "\\u002f") + '"' in chart  # plotly escapes the slash
+        assert sorted(curve["bodies"]) == [55, 210]
+    assert "rtp soft-step, contacts_bench, 2 thread(s)" in chart
+    assert "rtp contact step on the pyramids" in page and "<td>1.60</td>" not in page
+    assert "<td>1.6</td><td>1.25×</td>" in page
+    # drift against cost: both views for both pyramids, each with its front
+    costs = page.split("Stacks: drift against cost")[1].split("</section>")[0]
+    for name in ("pyramid-10", "pyramid-20"):
+        assert f"<h3>{name}</h3>" in costs
+    assert costs.count("Pareto front, each engine&#39;s defaults:") == 2
+    assert costs.count("Pareto front, equal iterations (10):") == 2
+
+
+def test_rain_verdicts_are_coloured_by_what_they_mean():
+    rows = pd.DataFrame([
+        dict(scenario="rain", label="rtp/soft-step", status="ok", contact_verdict="contained", penetration_max=0.01),
+        dict(scenario="rain", label="bullet/float", status="ok", contact_verdict="escaped", penetration_max=0.2),
+        dict(scenario="rain", label="ode/quickstep", status="ok", contact_verdict="unsettled", penetration_max=0.2),
+        dict(scenario="rain", label="mujoco/euler", status="error", contact_verdict=None, penetration_max=None),
+    ])
+    table = build_report.verdict_table(rows)
+    assert table["scenarios"] == ["rain"]
+    cells = {r["label"]: r["cells"][0] for r in table["rows"]}
+    assert cells == {"rtp/soft-step": ("contained", "stable"), "bullet/float": ("escaped", "unstable"),
+                     "ode/quickstep": ("unsettled", "unstable"), "mujoco/euler": ("error", "unstable")}

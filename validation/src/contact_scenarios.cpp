@@ -1,5 +1,6 @@
-// Contact scenarios (issue 18): stacks, bounces, slopes, mass ratios, overlap recovery, tunnelling
-// and a head-on collision, as data every engine builds the same way.
+// Contact scenarios (issue 18): stacks, bounces, slopes, mass ratios, overlap recovery, tunnelling,
+// a head-on collision and boxes raining into a container, as data every engine builds the same
+// way.
 //
 // Common to all: unit boxes (1 m cubes, 1 kg) unless a scene says otherwise, y up, dt = 1/60,
 // a static ground that is a ShapeKind::Plane body (its local y = 0 surface, solid below: every
@@ -7,8 +8,10 @@
 // and restitution set on every body (the pair takes √(μa μb) and max(ea, eb)). Sleeping is off in
 // every adapter. All motion is in the XY plane, so every scene here is marked planar and Box2D
 // runs the same scene (no "-planar" twins: a twin would be the same data under a second name and
-// double the rows).
+// double the rows) — except `rain`, a 3D pile in a box of four walls, whose planar twin
+// `rain-planar` (two walls) is a different scene.
 #include <cmath>
+#include <cstdint>
 #include <sstream>
 
 #include "physbench/scenarios.h"
@@ -60,6 +63,23 @@ Scene contact_scene(const std::string& name, const std::string& description, dou
   scene.collisions = true;
   scene.reference.kind = ReferenceKind::None;
   return scene;
+}
+
+// a rotation drawn from a counter (SplitMix64): the same scene on every run and every engine
+Quat tilt(std::uint64_t counter, double max_angle, bool about_z_only) {
+  auto next = [&counter] {
+    std::uint64_t z = (counter += 0x9e3779b97f4a7c15ULL);
+    z = (z ^ (z >> 30)) * 0xbf58476d1ce4e5b9ULL;
+    z = (z ^ (z >> 27)) * 0x94d049bb133111ebULL;
+    return double((z ^ (z >> 31)) >> 11) * 0x1.0p-53;  // [0, 1)
+  };
+  const double angle = (2.0 * next() - 1.0) * max_angle;
+  Vec3 axis = Vec3::UnitZ();
+  if (!about_z_only) {
+    const double u = 2.0 * next() - 1.0, phi = 2.0 * M_PI * next();
+    axis = Vec3(std::sqrt(1.0 - u * u) * std::cos(phi), std::sqrt(1.0 - u * u) * std::sin(phi), u);
+  }
+  return Quat(Eigen::AngleAxisd(angle, axis));
 }
 
 }  // namespace
@@ -219,6 +239,68 @@ Scene head_on_scene() {
   return scene;
 }
 
+Scene rain_scene(bool planar) {
+  // 0.5 m boxes, 1 kg, μ = 0.6, in a lattice 0.9 m apart (each tilted up to 20°, so its bounds
+  // reach at most 0.42 m: no two start touching), from 1 m above the floor upwards, each layer
+  // shifted half a spacing from the one below (±0.225 m) so that boxes land on the gaps and
+  // tumble rather than stand in columns; the walls 0.5 m thick, their tops at the rim
+  constexpr double kHalfBox = 0.25, kSpacing = 0.9, kLowest = 1.0, kWallHalf = 0.25,
+                   kFriction = 0.6, kTilt = 20.0 * M_PI / 180.0;
+  const int columns = planar ? 8 : 5, layers = planar ? 12 : 8;
+  const double inner_half = planar ? 4.0 : 2.5, rim = planar ? 6.0 : 4.0, stagger = 0.25 * kSpacing;
+  const int count = (planar ? columns : columns * columns) * layers;
+  std::ostringstream description;
+  description << count << " boxes of 0.5 m (1 kg, μ = 0.6), tilted up to 20°, falling from rest in "
+              << "a lattice 0.9 m apart, each layer shifted half a spacing (1 m to "
+              << kLowest + (layers - 1) * kSpacing << " m up) into a "
+              << (planar ? "trough " : "box ") << 2.0 * inner_half << " m "
+              << (planar ? "wide" : "square") << " with " << (planar ? "two" : "four")
+              << " static walls " << rim << " m high, for 8 s"
+              << (planar ? " (the planar twin of rain: all motion in XY, walls at ±x only)" : "")
+              << ": does every box end inside, at rest, and at what cost per step?";
+  Scene scene = contact_scene(planar ? "rain-planar" : "rain", description.str(), 8.0);
+  scene.planar = planar;
+  scene.bodies.push_back(ground(kFriction));
+  // the walls: at ±x, and in 3D at ±z too, each long enough to close the corners; the planar
+  // twin's walls reach 50 m either side of z = 0, so that a box a 3D engine lets wander out of
+  // the plane stays between them (with 1 m, boxes walked round the walls' ends on three engines)
+  auto wall = [&](const std::string& name, const Vec3& centre, const Vec3& half) {
+    BodySpec w;
+    w.name = name;
+    w.shape.kind = ShapeKind::Box;
+    w.shape.half_extents = half;
+    w.mass = 0.0;
+    w.position = centre;
+    w.friction = kFriction;
+    scene.bodies.push_back(w);
+  };
+  const double across = inner_half + 2.0 * kWallHalf, side = inner_half + kWallHalf;
+  const double depth = planar ? 50.0 : across;
+  wall("wall-x-", Vec3(-side, 0.5 * rim, 0.0), Vec3(kWallHalf, 0.5 * rim, depth));
+  wall("wall-x+", Vec3(side, 0.5 * rim, 0.0), Vec3(kWallHalf, 0.5 * rim, depth));
+  if (!planar) {
+    wall("wall-z-", Vec3(0.0, 0.5 * rim, -side), Vec3(across, 0.5 * rim, kWallHalf));
+    wall("wall-z+", Vec3(0.0, 0.5 * rim, side), Vec3(across, 0.5 * rim, kWallHalf));
+  }
+  std::uint64_t counter = 18;
+  for (int layer = 0; layer < layers; ++layer)
+    for (int i = 0; i < columns; ++i)
+      for (int k = 0; k < (planar ? 1 : columns); ++k) {
+        const double shift = layer % 2 ? stagger : -stagger;
+        const double x = (i - 0.5 * (columns - 1)) * kSpacing + shift;
+        const double z = planar ? 0.0 : (k - 0.5 * (columns - 1)) * kSpacing + shift;
+        std::ostringstream name;
+        name << 'l' << layer << 'c' << i << '.' << k;
+        BodySpec b = unit_box(name.str(), Vec3(x, kLowest + layer * kSpacing, z), kFriction);
+        b.shape.half_extents = Vec3::Constant(kHalfBox);
+        b.orientation = tilt(counter++ * 0x100, kTilt, planar);
+        scene.bodies.push_back(b);
+      }
+  scene.probe.interval = 2.0 * scene.dt;  // impacts last a few steps: sampled every other step
+  scene.probe.metrics = {Metric::Confined, Metric::Penetration, Metric::Energy};
+  return scene;
+}
+
 std::vector<Scenario> contact_scenarios() {
   std::vector<Scenario> all;
   for (int boxes : {10, 20})
@@ -270,6 +352,13 @@ std::vector<Scenario> contact_scenarios() {
                    [hz] { return tunnelling_scene(hz); }});
   all.push_back({"head-on", "do two equal boxes exchange velocities in an elastic collision?",
                  head_on_scene});
+  all.push_back({"rain",
+                 "do 200 boxes rained into a four-walled box all end inside it, at rest, and what "
+                 "does a step cost while the contact set changes?",
+                 [] { return rain_scene(false); }});
+  all.push_back({"rain-planar",
+                 "the same in the XY plane (96 boxes, two walls), so Box2D runs it too",
+                 [] { return rain_scene(true); }});
   return all;
 }
 

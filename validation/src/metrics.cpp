@@ -516,18 +516,8 @@ int slot_of(const Trajectory& run, int body) {
   return at == run.bodies.end() ? -1 : static_cast<int>(at - run.bodies.begin());
 }
 
-void judge_stack(const Scene& scene, const Trajectory& run, const ErrorSeries& series,
-                 ContactSummary& out) {
-  const Vec3 up = up_of(scene);
-  // the top body: the probed dynamic body that starts highest
-  int top = -1;
-  for (std::size_t b = 0; b < run.bodies.size(); ++b)
-    if (top < 0 || run.samples.front().bodies[b].position.dot(up) >
-                       run.samples.front().bodies[std::size_t(top)].position.dot(up))
-      top = static_cast<int>(b);
-  if (top < 0) return;
-  out.top_height_change =
-      (run.samples.back().bodies[top].position - run.samples.front().bodies[top].position).dot(up);
+// the fastest probed body at any sample, and the RMS speed of all of them over the last second
+void judge_speeds(const Trajectory& run, ContactSummary& out) {
   double fastest = 0.0, squares = 0.0;
   long counted = 0;
   const double last_second = run.samples.back().time - 1.0;
@@ -543,6 +533,21 @@ void judge_stack(const Scene& scene, const Trajectory& run, const ErrorSeries& s
   out.speed_max = fastest;
   if (counted > 0 && run.samples.back().time >= 1.0 - 1e-9)
     out.rest_speed_rms = std::sqrt(squares / static_cast<double>(counted));
+}
+
+void judge_stack(const Scene& scene, const Trajectory& run, const ErrorSeries& series,
+                 ContactSummary& out) {
+  const Vec3 up = up_of(scene);
+  // the top body: the probed dynamic body that starts highest
+  int top = -1;
+  for (std::size_t b = 0; b < run.bodies.size(); ++b)
+    if (top < 0 || run.samples.front().bodies[b].position.dot(up) >
+                       run.samples.front().bodies[std::size_t(top)].position.dot(up))
+      top = static_cast<int>(b);
+  if (top < 0) return;
+  out.top_height_change =
+      (run.samples.back().bodies[top].position - run.samples.front().bodies[top].position).dot(up);
+  judge_speeds(run, out);
 
   double drift = 0.0;
   for (double d : series.stack_drift) drift = std::isnan(d) ? d : std::max(drift, d);
@@ -745,12 +750,84 @@ void judge_tunnelling(const Scene& scene, const Trajectory& run, ContactSummary&
 
 }  // namespace
 
+Container container_of(const Scene& scene) {
+  Container c;
+  const Vec3 g = scene.gravity;
+  g.cwiseAbs().maxCoeff(&c.up_axis);
+  c.up_sign = g[c.up_axis] < 0.0 ? 1.0 : -1.0;
+  const std::vector<int> walls = bodies_where(scene, false, ShapeKind::Box);
+  Vec3 centre = Vec3::Zero();
+  for (int w : walls) centre += scene.bodies[w].position;
+  centre /= static_cast<double>(walls.size());
+  c.low = Vec3::Constant(-std::numeric_limits<double>::infinity());
+  c.high = Vec3::Constant(std::numeric_limits<double>::infinity());
+  c.rim = -std::numeric_limits<double>::infinity();
+  for (int w : walls) {
+    const BodySpec& b = scene.bodies[w];
+    // world-aligned (validate() checks it): the box's faces are at position ± half extents
+    for (int axis = 0; axis < 3; ++axis) {
+      const double low = b.position[axis] - b.shape.half_extents[axis];
+      const double high = b.position[axis] + b.shape.half_extents[axis];
+      if (axis == c.up_axis) {
+        c.rim = std::max(c.rim, c.up_sign > 0.0 ? high * c.up_sign : low * c.up_sign);
+        continue;
+      }
+      // a wall wholly on one side of the centre bounds the inside there
+      if (low > centre[axis])
+        c.high[axis] = std::min(c.high[axis], low);
+      else if (high < centre[axis])
+        c.low[axis] = std::max(c.low[axis], high);
+    }
+  }
+  return c;
+}
+
+bool Container::holds(const Vec3& x) const {
+  if (!std::isfinite(x.squaredNorm())) return false;
+  for (int axis = 0; axis < 3; ++axis)
+    if (axis != up_axis && (x[axis] < low[axis] || x[axis] > high[axis])) return false;
+  return x[up_axis] * up_sign <= rim;
+}
+
+namespace {
+
+void judge_confined(const Scene& scene, const Trajectory& run, const ErrorSeries& series,
+                    ContactSummary& out) {
+  const Container c = container_of(scene);
+  judge_speeds(run, out);
+  long escaped = 0;
+  for (const SampledState& b : run.samples.back().bodies) escaped += !c.holds(b.position);
+  out.escaped = escaped;
+  const double sunk = series.penetration.empty() ? 0.0 : series.penetration.back();
+  if (escaped > 0) {
+    out.verdict = "escaped";
+    out.message = "escaped: " + std::to_string(escaped) + " of " +
+                  std::to_string(run.bodies.size()) +
+                  " bodies ended outside the container (beyond a wall or above the rim at " +
+                  metres(c.rim) + ")";
+  } else if (sunk > kSinksBeyond) {
+    out.verdict = "sinks";
+    out.message = "sinks: final penetration " + metres(sunk) + " (> " + metres(kSinksBeyond) + ")";
+  } else if (out.rest_speed_rms && *out.rest_speed_rms > kRestlessBeyond) {
+    std::ostringstream why;
+    why.precision(3);
+    why << "unsettled: RMS speed over the last second " << *out.rest_speed_rms << " m/s (> "
+        << kRestlessBeyond << ")";
+    out.verdict = "unsettled";
+    out.message = why.str();
+  } else {
+    out.verdict = "contained";
+  }
+}
+
+}  // namespace
+
 bool verdict_is_failure(const std::string& verdict) {
   return verdict == "collapsed" || verdict == "sinks" || verdict == "drifts" ||
          verdict == "settles" || verdict == "tumbled" || verdict == "slides, should stay" ||
          verdict == "stays, should slide" ||
          verdict == "tunnelled" || verdict == "stuck" || verdict == "no bounce" ||
-         verdict == "exploded";
+         verdict == "exploded" || verdict == "escaped" || verdict == "unsettled";
 }
 
 ContactSummary contact_summary(const Scene& scene, const Trajectory& run,
@@ -769,6 +846,7 @@ ContactSummary contact_summary(const Scene& scene, const Trajectory& run,
   if (wants(scene, Metric::Incline)) judge_incline(scene, run, out);
   if (wants(scene, Metric::Exchange)) judge_exchange(scene, run, out);
   if (wants(scene, Metric::Tunnelling)) judge_tunnelling(scene, run, out);
+  if (wants(scene, Metric::Confined)) judge_confined(scene, run, series, out);
   return out;
 }
 

@@ -115,6 +115,8 @@ enum class ReferenceKind {
 //   Incline       one body on a sloped plane: slide and acceleration against g (sin θ − μ cos θ)
 //   Exchange      two bodies in a head-on collision: final velocities against the 1D closed form
 //   Tunnelling    one fast body at a static wall: did it end up beyond the wall?
+//   Confined      dynamic bodies in a container of static world-aligned boxes on a plane: how
+//                 many end outside it or above its rim?
 enum class Metric {
   Position,
   Orientation,
@@ -127,6 +129,7 @@ enum class Metric {
   Incline,
   Exchange,
   Tunnelling,
+  Confined,
 };
 
 // every metric, in declaration order (for parsing and messages)

@@ -73,6 +73,7 @@ inline constexpr double kMovedBeyond = 0.01;     // m: an incline block that mov
 inline constexpr double kApexFloor = 0.02;       // m: closed-form apexes below this are not judged
 inline constexpr int kMaxApexes = 5;
 inline constexpr double kTumbledBeyond = 0.1;  // rad: a dropped box that turned this far tumbled
+inline constexpr double kRestlessBeyond = 0.05;  // m/s: a pile's RMS speed, last second, not at rest
 
 // Everything a contact scene's question asks for, from the sampled poses. A value that cannot be
 // computed stays empty (nullopt), never zero.
@@ -95,14 +96,31 @@ struct ContactSummary {
   std::optional<double> exchange_error;
   // tunnelling: the body ended wholly beyond the wall's far face
   std::optional<bool> tunnelled;
+  // confined: probed bodies whose centre ends outside the container (beyond a wall's inner face
+  // or above the rim)
+  std::optional<long> escaped;
   // stands, settles, drifts, sinks, collapsed, tumbled, no bounce, stays, slides, "slides, should
-  // stay", "stays, should slide", tunnelled, stopped, stuck, "" (no verdict)
+  // stay", "stays, should slide", tunnelled, stopped, stuck, contained, escaped, unsettled, ""
+  // (no verdict)
   std::string verdict;
   std::string message;  // why, for any verdict that is a failure of the scene's question
 };
 
 ContactSummary contact_summary(const Scene& scene, const Trajectory& run,
                                const ErrorSeries& series);
+
+// A container of static world-aligned boxes (walls) on a floor, as the confined metric reads it:
+// along each horizontal world axis the inside runs between the inner faces of the walls wholly on
+// either side of the walls' mean centre (unbounded where there is none), and up to the rim, the
+// highest wall top along −g.
+struct Container {
+  int up_axis = 1;       // the world axis along gravity
+  double up_sign = 1.0;  // +1 when up is +axis
+  Vec3 low, high;        // the inside along the horizontal axes (the up entries unused)
+  double rim = 0.0;      // the highest wall top, as up_sign · coordinate
+  bool holds(const Vec3& centre) const;
+};
+Container container_of(const Scene& scene);
 
 // whether a verdict is a failure the row's message must name (collapsed, sinks, tunnelled, …)
 bool verdict_is_failure(const std::string& verdict);

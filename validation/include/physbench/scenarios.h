@@ -49,7 +49,7 @@ Scene particles_plume_scene(long count = 100000);
 Scene planar_particles(Scene scene);
 
 // contact scenes (validation/src/contact_scenarios.cpp): unit boxes (1 m, 1 kg), y up, a static
-// ground plane, dt = 1/60, every scene planar (all motion in XY)
+// ground plane, dt = 1/60, every scene planar (all motion in XY) but rain
 Scene tower_scene(int boxes);                 // "tower-N": μ = 0.6, exactly touching, 10 s
 Scene pyramid_scene(int base);                // "pyramid-B": B (B + 1) / 2 boxes, μ = 0.6, 10 s
 Scene bounce_scene(double restitution);       // "bounce-eE": dropped flat from 1 m, e^(2n) apexes
@@ -58,6 +58,9 @@ Scene mass_ratio_scene(double ratio);         // "mass-ratio-R": R kg on 1 kg on
 Scene overlap_recovery_scene();               // "overlap-recovery": a stack started 5 cm deep
 Scene tunnelling_scene(double hz);            // "tunnelling-H": 0.1 m box at 50 m/s, dt = 1/H
 Scene head_on_scene();                        // "head-on": e = 1, μ = 0, no gravity
+// "rain": 200 tilted 0.5 m boxes falling into a box of four static walls 4 m high, 8 s (3D, not
+// planar); planar: "rain-planar", 96 boxes into a trough of two walls 6 m high
+Scene rain_scene(bool planar = false);
 // the contact scenarios in the default suite, in the order above
 std::vector<Scenario> contact_scenarios();
 
