@@ -37,12 +37,16 @@ std::string base_variant(const std::string& variant) {
 
 // The contact variants: rtp's default soft step, Box2D v3's own soft-step settings (4 substeps,
 // 30 Hz, damping ratio 10, one relax pass, 3 m/s push-out), sequential impulses, and the seed's
-// lab 5; "-2t" runs the narrow phase and each colour of the solve on two threads
+// lab 5; "soft-step-fresh" is the default with the pair cache off (every candidate through the
+// narrow phase every step); "-2t" runs the narrow phase and each colour of the solve on two threads
 std::optional<rtp::ContactSettings> contact_settings_for(const std::string& variant) {
   const std::string base = base_variant(variant);
   rtp::ContactSettings settings;
   if (base == "soft-step") {
     settings.solver = rtp::ContactSolver::SoftStep;
+  } else if (base == "soft-step-fresh") {
+    settings.solver = rtp::ContactSolver::SoftStep;
+    settings.manifold_reuse_distance = 0.0;
   } else if (base == "soft-step-4") {
     settings.solver = rtp::ContactSolver::SoftStep;
     settings.substeps = 4;
@@ -125,7 +129,7 @@ EngineInfo rtp_engine_info() {
   info.name = "rtp";
   info.variants = {"rk4",       "midpoint",     "euler",        "symplectic",
                    "explicit-euler", "midpoint-2t", "soft-step",  "soft-step-2t",
-                   "soft-step-4", "sequential-impulse", "seed"};
+                   "soft-step-4", "soft-step-fresh", "sequential-impulse", "seed"};
   // particles integrate by explicit Euler, semi-implicit Euler or midpoint (the seed's three);
   // the rigid-body-only integrators do not apply to a particle scene, nor the particle-only ones
   // to a scene without particles. A scene with contacts steps by a contact solver (the three
@@ -172,7 +176,15 @@ EngineInfo rtp_engine_info() {
                : "contacts made this far apart, plus each body's motion in the step"},
           {"threads", std::to_string(c.threads), "narrow phase and each colour of the solve"},
           {"sleeping", "none", "rtp has no sleeping"},
+          {"pair cache",
+           c.manifold_reuse_distance > 0.0 ? number(c.manifold_reuse_distance) + " m" : "off",
+           "a manifold is moved with its bodies while neither shape has moved this far in the "
+           "other's frame since it was computed"},
       };
+      if (c.solver != rtp::ContactSolver::Seed)
+        table.push_back({"solver precision", "single, " + std::to_string(rtp::contact_block_lanes()) +
+                                                 " manifolds a block",
+                         "a colour's contacts solved in SIMD lanes (docs/solver.md)"});
       if (c.solver == rtp::ContactSolver::SoftStep) {
         table.push_back({"substeps", std::to_string(c.substeps),
                          base == "soft-step-4" ? "Box2D v3's default"

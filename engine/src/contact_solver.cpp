@@ -19,6 +19,8 @@
 #include <array>
 #include <bit>
 #include <cmath>
+#include <cstddef>
+#include <cstring>
 #include <numbers>
 
 #include "contacts.h"
@@ -61,23 +63,35 @@ V3 rotate_back(const V3& q, Lane w, const V3& v) {
 
 namespace {
 
+// where each of a body's numbers is among its 16 floats (Eigen stores a quaternion x, y, z, w)
+constexpr int kBodyFloats = sizeof(SolverBody) / sizeof(float);
+constexpr int kLinearVelocity = 0, kAngularVelocity = 3, kDeltaPosition = 6, kDeltaRotation = 12;
+static_assert(offsetof(SolverBody, angular_velocity) == kAngularVelocity * sizeof(float) &&
+              offsetof(SolverBody, delta_position) == kDeltaPosition * sizeof(float) &&
+              offsetof(SolverBody, delta_rotation) == kDeltaRotation * sizeof(float));
+
+using LaneIndex = LaneMask;  // 32-bit integer lanes
+
+// each lane's body as the offset of its first float in the body array
+LaneIndex body_offsets(const std::array<std::uint32_t, W>& bodies) {
+  LaneIndex index;
+  std::memcpy(&index, bodies.data(), sizeof index);
+  return index * kBodyFloats;
+}
+V3 gather3(const float* base, LaneIndex index) {
+  return {simd::gather<Lane>(base, index), simd::gather<Lane>(base + 1, index),
+          simd::gather<Lane>(base + 2, index)};
+}
+
 // the two bodies of each lane, gathered from the body array, and scattered back
 struct LanePair {
   V3 va, wa, vb, wb;
 
   LanePair(const std::vector<SolverBody>& bodies, const ContactBlock& block) {
-    for (std::size_t i = 0; i < W; ++i) {
-      const SolverBody& a = bodies[block.body_a[i]];
-      const SolverBody& b = bodies[block.body_b[i]];
-      va.x[i] = a.linear_velocity.x(), va.y[i] = a.linear_velocity.y();
-      va.z[i] = a.linear_velocity.z();
-      wa.x[i] = a.angular_velocity.x(), wa.y[i] = a.angular_velocity.y();
-      wa.z[i] = a.angular_velocity.z();
-      vb.x[i] = b.linear_velocity.x(), vb.y[i] = b.linear_velocity.y();
-      vb.z[i] = b.linear_velocity.z();
-      wb.x[i] = b.angular_velocity.x(), wb.y[i] = b.angular_velocity.y();
-      wb.z[i] = b.angular_velocity.z();
-    }
+    const float* base = reinterpret_cast<const float*>(bodies.data());
+    const LaneIndex a = body_offsets(block.body_a), b = body_offsets(block.body_b);
+    va = gather3(base + kLinearVelocity, a), wa = gather3(base + kAngularVelocity, a);
+    vb = gather3(base + kLinearVelocity, b), wb = gather3(base + kAngularVelocity, b);
   }
   // static bodies and the body at rest are never written: colours share them, and their
   // threads may not write the same memory
@@ -129,20 +143,12 @@ struct NormalMotion {
   V3 turned_a, turned_b;
 
   NormalMotion(const std::vector<SolverBody>& bodies, const ContactBlock& block) {
-    V3 dpa, dpb, qa, qb;
-    Lane wa, wb;
-    for (std::size_t i = 0; i < W; ++i) {
-      const SolverBody& a = bodies[block.body_a[i]];
-      const SolverBody& b = bodies[block.body_b[i]];
-      dpa.x[i] = a.delta_position.x(), dpa.y[i] = a.delta_position.y();
-      dpa.z[i] = a.delta_position.z();
-      dpb.x[i] = b.delta_position.x(), dpb.y[i] = b.delta_position.y();
-      dpb.z[i] = b.delta_position.z();
-      qa.x[i] = a.delta_rotation.x(), qa.y[i] = a.delta_rotation.y();
-      qa.z[i] = a.delta_rotation.z(), wa[i] = a.delta_rotation.w();
-      qb.x[i] = b.delta_rotation.x(), qb.y[i] = b.delta_rotation.y();
-      qb.z[i] = b.delta_rotation.z(), wb[i] = b.delta_rotation.w();
-    }
+    const float* base = reinterpret_cast<const float*>(bodies.data());
+    const LaneIndex a = body_offsets(block.body_a), b = body_offsets(block.body_b);
+    const V3 dpa = gather3(base + kDeltaPosition, a), dpb = gather3(base + kDeltaPosition, b);
+    const V3 qa = gather3(base + kDeltaRotation, a), qb = gather3(base + kDeltaRotation, b);
+    const Lane wa = simd::gather<Lane>(base + kDeltaRotation + 3, a);
+    const Lane wb = simd::gather<Lane>(base + kDeltaRotation + 3, b);
     const V3 n = load3(block.normal);
     translation = dot(n, dpb - dpa);
     turned_a = rotate_back(qa, wa, n);
@@ -190,6 +196,8 @@ void set_symmetric(Lane (&lanes)[6], std::size_t i, const Mat3& m) {
 }
 
 }  // namespace
+
+std::size_t contact_block_lanes() { return W; }
 
 // a colour's blocks go to threads only past this many contacts: below it the barrier costs more
 constexpr std::size_t kParallelColour = 256;

@@ -262,6 +262,23 @@ V sqrt(V x) {
   return r;
 }
 
+// lane i is base[index[i]]: the gather instruction where the build has one for the pack, else
+// lane by lane (the same loads either way)
+template <typename V>
+V gather(const LaneOf<V>* base, MaskOf<V> index) {
+#if defined(RTP_SIMD_VECTORS) && defined(__AVX512F__)
+  if constexpr (std::is_same_v<V, Pack<float, 16>>)
+    return _mm512_mask_i32gather_ps(_mm512_setzero_ps(), 0xFFFF, (__m512i)index, base, 4);
+#endif
+#if defined(RTP_SIMD_VECTORS) && defined(__AVX2__)
+  if constexpr (std::is_same_v<V, Pack<float, 8>>)
+    return _mm256_i32gather_ps(base, (__m256i)index, 4);
+#endif
+  V r{};
+  for (std::size_t i = 0; i < kLanesOf<V>; ++i) r[i] = base[index[i]];
+  return r;
+}
+
 // lanes rearranged: lane i of the result is lane I_i of x
 template <std::size_t... I, typename V>
 V shuffle(V x) {

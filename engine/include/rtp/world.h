@@ -142,6 +142,10 @@ struct ContactSettings {
                     // count: a colour's contacts share no dynamic body)
 };
 
+// how many manifolds the contact solver's lanes hold: the build's widest float register, at
+// least 8 (it changes no result: a block's manifolds share no dynamic body)
+std::size_t contact_block_lanes();
+
 // wall time of each stage of the last step (s)
 struct StepProfile {
   double integrate = 0.0;  // forces and velocities (all of it in a world without contacts)
