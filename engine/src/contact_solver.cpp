@@ -248,22 +248,32 @@ template <class Kernel>
 void ContactPipeline::for_each_block(Kernel&& kernel) {
   std::vector<ContactBlock>& blocks = lanes_->blocks;
   const std::vector<std::uint32_t>& start = lanes_->colour_start;
-  const int threads = settings_.threads;
-  if (threads <= 1 || contacts_.size() < kParallelColour) {
+  constexpr std::size_t parallel_blocks = kParallelColour / W;
+  auto wide = [&](int k) {
+    return k + 1 < kColours && start[k + 1] - start[k] >= parallel_blocks;
+  };
+  // threads only when some colour is wide enough to share: each colour ends in a barrier, and
+  // a barrier among threads that have nothing to share costs more than the colour
+  bool any_wide = false;
+  for (int k = 0; k + 1 < kColours && !any_wide; ++k) any_wide = wide(k);
+  if (settings_.threads <= 1 || !any_wide) {
     for (ContactBlock& block : blocks) kernel(block);
     return;
   }
-  constexpr std::size_t parallel_blocks = kParallelColour / W;
-#pragma omp parallel num_threads(threads)
-  for (int k = 0; k < kColours; ++k) {
-    const std::size_t begin = start[k], end = start[k + 1];
-    if (k + 1 == kColours || end - begin < parallel_blocks) {
-#pragma omp single
-      for (std::size_t i = begin; i < end; ++i) kernel(blocks[i]);
-    } else {
+#pragma omp parallel num_threads(settings_.threads)
+  for (int k = 0; k < kColours;) {
+    if (wide(k)) {
 #pragma omp for schedule(static)
-      for (std::size_t i = begin; i < end; ++i) kernel(blocks[i]);
+      for (std::size_t i = start[k]; i < start[k + 1]; ++i) kernel(blocks[i]);
+      ++k;
+      continue;
     }
+    // a run of narrow colours (and the overflow) on one thread, one barrier for the run
+    int end = k;
+    while (end < kColours && !wide(end)) ++end;
+#pragma omp single
+    for (std::size_t i = start[k]; i < start[end]; ++i) kernel(blocks[i]);
+    k = end;
   }
 }
 
