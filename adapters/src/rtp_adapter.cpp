@@ -46,7 +46,7 @@ std::optional<rtp::ContactSettings> contact_settings_for(const std::string& vari
     settings.solver = rtp::ContactSolver::SoftStep;
   } else if (base == "soft-step-fresh") {
     settings.solver = rtp::ContactSolver::SoftStep;
-    settings.manifold_reuse_distance = 0.0;
+    settings.pair_cache_distance = 0.0;
   } else if (base == "soft-step-4") {
     settings.solver = rtp::ContactSolver::SoftStep;
     settings.substeps = 4;
@@ -177,9 +177,9 @@ EngineInfo rtp_engine_info() {
           {"threads", std::to_string(c.threads), "narrow phase and each colour of the solve"},
           {"sleeping", "none", "rtp has no sleeping"},
           {"pair cache",
-           c.manifold_reuse_distance > 0.0 ? number(c.manifold_reuse_distance) + " m" : "off",
-           "a manifold is moved with its bodies while neither shape has moved this far in the "
-           "other's frame since it was computed"},
+           c.pair_cache_distance > 0.0 ? number(c.pair_cache_distance) + " m" : "off",
+           "a pair found apart is not tested again while neither shape has moved this far in "
+           "the other's frame since"},
       };
       if (c.solver != rtp::ContactSolver::Seed)
         table.push_back({"solver precision", "single, " + std::to_string(rtp::contact_block_lanes()) +

@@ -135,24 +135,19 @@ class ContactPipeline {
   std::vector<std::uint8_t> colour_scratch_;
   // the narrow phase's results per candidate, filled in parallel
   std::vector<Manifold> manifolds_;
-  // the pair cache (as Jolt's body pair cache): each candidate's manifold with the two bodies'
-  // relative pose when it was computed; while neither body's shape has moved more than
-  // ContactSettings::manifold_reuse_distance in the other's frame since, the manifold is moved
-  // with the bodies instead of computed again (docs/solver.md)
+  // the pair cache (as Jolt's body pair cache, for pairs found apart): each candidate's result
+  // with the two bodies' relative pose when it was computed; while neither body's shape has
+  // moved more than ContactSettings::pair_cache_distance in the other's frame since, a pair
+  // found apart is taken to be apart still instead of tested again (docs/solver.md)
   struct CachedPair {
     std::uint64_t key = ~std::uint64_t{0};
+    bool apart = false;  // found apart, so cached (a touching pair is always computed again)
     Vec3 offset_in_a = Vec3::Zero(), offset_in_b = Vec3::Zero();  // Raᵀ(xb − xa), Rbᵀ(xa − xb)
     Mat3 relative_rotation = Mat3::Identity();                    // Raᵀ Rb
     double growth = 0.0;  // the pair's growth then (m)
-    Vec3 normal_in_a = Vec3::Zero();
-    std::array<Vec3, 4> point_in_a, point_in_b;  // each point fixed to a and to b
-    std::array<double, 4> separation{};           // each point's separation then (m)
-    Manifold manifold;                            // count and features
   };
-  bool reuse_manifold(const CachedPair& cached, BodyId a, BodyId b, double growth,
-                      Manifold& out) const;
-  void cache_manifold(const Manifold& manifold, BodyId a, BodyId b, double growth,
-                      CachedPair& out) const;
+  bool still_apart(const CachedPair& cached, BodyId a, BodyId b, double growth) const;
+  CachedPair cache_apart(BodyId a, BodyId b, double growth) const;
   std::vector<CachedPair> pair_cache_, next_pair_cache_;  // by candidate, sorted by key
   std::vector<std::uint32_t> cache_index_;  // per candidate: its entry in pair_cache_, or ~0
   std::size_t reused_ = 0;

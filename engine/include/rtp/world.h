@@ -135,9 +135,9 @@ struct ContactSettings {
   bool warm_start = true;              // soft step and sequential impulse
   double match_distance = 0.02;  // m: a point with no feature match takes the impulses of last
                                  // step's nearest point within this distance
-  double manifold_reuse_distance = 1e-3;  // m: a pair's manifold is moved with its bodies, not
-                                          // computed again, while neither shape has moved more
-                                          // than this in the other's frame since it was (0: off)
+  double pair_cache_distance = 1e-3;  // m: a pair found apart is not tested again while
+                                      // neither shape has moved more than this in the other's
+                                      // frame since (0: off)
   int threads = 1;  // the narrow phase and each colour of the solve (identical results at any
                     // count: a colour's contacts share no dynamic body)
 };
@@ -162,7 +162,7 @@ struct StepProfile {
   std::size_t contact_pairs = 0;   // touching manifolds this step
   std::size_t contact_points = 0;
   std::size_t matched_points = 0;  // points that carried last step's impulses
-  std::size_t reused_pairs = 0;    // candidate pairs whose manifold the pair cache moved
+  std::size_t reused_pairs = 0;    // candidate pairs the pair cache found still apart
 };
 
 class ContactPipeline;
