@@ -5,6 +5,7 @@
 #include <filesystem>
 #include <iostream>
 
+#include "physbench/metrics.h"
 #include "physbench/registry.h"
 #include "physbench/runner.h"
 #include "physbench/scenarios.h"
@@ -97,6 +98,13 @@ int main(int argc, char** argv) {
   std::vector<std::string> check_files;
   check->add_option("files", check_files, "scene files")->required();
 
+  // every scene a default run writes, without running it (the scene loader's fuzz seeds)
+  auto* export_scenes = app.add_subcommand(
+      "export-scenes", "write every built-in scene, at each swept step and reference step, as JSON");
+  std::string export_dir;
+  export_scenes->add_option("dir", export_dir, "folder to write into")->required();
+  export_scenes->group("");  // hidden from --help
+
   WorkerJob job;
   auto* worker = add_worker_subcommand(app, job);
   worker->group("");  // hidden from --help
@@ -109,6 +117,36 @@ int main(int argc, char** argv) {
     return 0;
   }
   if (*worker) return run_worker(job);
+  if (*export_scenes) try {
+    fs::create_directories(export_dir);
+    int written = 0;
+    for (const Scenario& s : scenarios()) {
+      std::vector<double> dts = s.sweep_dt;
+      const Scene base = s.build();
+      dts.insert(dts.begin(), base.dt);
+      for (std::size_t i = 0; i < dts.size(); ++i) {
+        Scene scene = base;
+        scene.dt = dts[i];
+        const std::string stem = (fs::path(export_dir) / (scene.name + "." + std::to_string(i))).string();
+        save_scene_file(scene, stem + ".json");
+        load_scene_file(stem + ".json");  // what a run writes, its workers must read
+        ++written;
+        if (scene.reference.kind == ReferenceKind::Converged)
+          for (int factor : {1, 2}) {
+            const int divisor = scene.reference.dt_divisor * factor;
+            const std::string file = stem + ".reference-dt-over-" + std::to_string(divisor) + ".json";
+            save_scene_file(refined(scene, divisor), file);
+            load_scene_file(file);
+            ++written;
+          }
+      }
+    }
+    std::cout << written << " scenes in " << export_dir << "\n";
+    return 0;
+  } catch (const SceneError& e) {
+    std::cerr << "physbench: a built-in scene fails its own checks: " << e.what() << '\n';
+    return 1;
+  }
   if (*check) {
     int bad = 0;
     for (const std::string& f : check_files) {
