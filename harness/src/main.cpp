@@ -1,6 +1,7 @@
 // physbench: run identical scenes on rtp and the peer engines; report speed against error.
 #include <CLI/CLI.hpp>
 #include <chrono>
+#include <csignal>
 #include <ctime>
 #include <filesystem>
 #include <iostream>
@@ -164,7 +165,12 @@ int main(int argc, char** argv) {
   if (dt > 0.0) options.dt = dt;
   for (double hz : sweep_hz) options.sweep_dt.push_back(1.0 / hz);
   if (duration > 0.0) options.duration = duration;
-  options.out = out.empty() ? default_out_dir() : out;
+  if (out.empty()) {
+    // two runs started in the same second get two folders
+    out = default_out_dir();
+    for (int n = 2; fs::exists(out); ++n) out = default_out_dir() + "-" + std::to_string(n);
+  }
+  options.out = out;
   for (int i = 0; i < argc; ++i) options.command_line += (i ? " " : "") + std::string(argv[i]);
   try {
     const int failures = run_suite(options, self);
@@ -172,6 +178,13 @@ int main(int argc, char** argv) {
     if (failures)
       std::cerr << failures << " job(s) crashed, timed out or failed: see the status column\n";
     return 0;
+  } catch (const RunInterrupted& e) {
+    std::cerr << "physbench: interrupted (" << e.what() << "); " << options.out.string()
+              << " is marked INCOMPLETE\n";
+    // end as the signal would have ended us, so a calling shell or script sees it
+    std::signal(e.signal, SIG_DFL);
+    std::raise(e.signal);
+    return 128 + e.signal;
   } catch (const RunError& e) {
     std::cerr << "physbench: " << e.what() << '\n';
     return 2;
