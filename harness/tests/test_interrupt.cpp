@@ -98,10 +98,13 @@ TEST_P(Interrupt, KillsTheWorkerAndMarksTheRunIncomplete) {
              "--variant", "euler,rk4", "--budget", "0", "--timeout", "600", "--out",
              (dir / "r").string()},
             dir / "run.log");
+  // the worker, not the runner's other short-lived children (git through popen)
   std::vector<pid_t> workers;
   for (int i = 0; i < 3000 && workers.empty(); ++i) {
     std::this_thread::sleep_for(std::chrono::milliseconds(10));
-    workers = children_of(runner);
+    for (pid_t p : children_of(runner))
+      if (read_text("/proc/" + std::to_string(p) + "/cmdline").find("worker") != std::string::npos)
+        workers.push_back(p);
   }
   ASSERT_FALSE(workers.empty()) << "no worker started: " << read_text(dir / "run.log");
   std::this_thread::sleep_for(std::chrono::milliseconds(200));  // well inside the job
