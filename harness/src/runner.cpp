@@ -52,6 +52,9 @@ std::vector<EngineVariant> engine_catalog(const fs::path& self) {
 
 namespace {
 
+// a finished run whose energy in play grew by more than this fraction reads `diverged`
+constexpr double kDivergedEnergyGrowth = 1.0;
+
 // ---- small helpers --------------------------------------------------------------------------
 
 std::string csv_field(const std::string& text) {
@@ -558,6 +561,19 @@ int run_suite(const RunOptions& options, const fs::path& self) {
               row["energy_change_final"] = number(*summary.energy_change_final);
             row["stability"] =
                 r.status == Status::Exploded ? "exploded" : stability_of(scene, series);
+            // a finished run whose energy more than doubled is not a success to skim past;
+            // contact scenes are left out: their energy at rest is in joules, not relative
+            if (r.status == Status::Ok && !scene.has_contacts() && !series.energy_change.empty()) {
+              const double grew =
+                  *std::max_element(series.energy_change.begin(), series.energy_change.end());
+              if (!(grew <= kDivergedEnergyGrowth)) {
+                r.status = Status::Diverged;
+                std::ostringstream why;
+                why << "energy grew to " << std::setprecision(3) << 1.0 + grew
+                    << " times the energy in play (over +100 %)";
+                message = why.str() + (message.empty() ? "" : "; " + message);
+              }
+            }
             put("linear_momentum_drift", summary.linear_momentum, false);
             put("angular_momentum_drift", summary.angular_momentum, false);
             put("stack_drift", summary.stack_drift, false);

@@ -194,6 +194,32 @@ TEST(Runner, RunawaySceneIsRecordedAsExploded) {
   }
 }
 
+TEST(Runner, EnergyGrowthOverAHundredPercentReadsDivergedNotOk) {
+  // a spring at ω dt = 5/6: the midpoint method gains (ω dt)⁴/4 = 12 % of its energy a step and
+  // ends finite (some 30 m out) but 10³ times higher; symplectic Euler's energy stays bounded
+  const fs::path dir = fresh_dir("diverged");
+  std::ofstream(dir / "spring.json")
+      << R"({"name": "spring", "dt": 0.03333333333333333, "duration": 2, "collisions": false,
+    "gravity": [0, 0, 0],
+    "bodies": [{"shape": {"type": "sphere", "radius": 0.1}, "mass": 1, "position": [1, 0, 0]}],
+    "springs": [{"body_a": 0, "body_b": -1, "point_b": [0, 0, 0], "stiffness": 625}],
+    "probe": {"metrics": ["energy"]}})";
+  const Invocation inv =
+      physbench({"run", "--scene", (dir / "spring.json").string(), "-e", "rtp", "--variant",
+                 "midpoint,symplectic", "--budget", "0", "--out", (dir / "r").string()},
+                dir);
+  ASSERT_EQ(inv.outcome.exit_code, 0) << inv.output;
+  const auto rows = read_rows(dir / "r" / "results.csv");
+  const auto* euler = find_row(rows, "rtp", "midpoint");
+  const auto* symplectic = find_row(rows, "rtp", "symplectic");
+  ASSERT_TRUE(euler && symplectic);
+  EXPECT_EQ(euler->at("status"), "diverged") << euler->at("message");
+  EXPECT_GT(std::stod(euler->at("energy_drift_max")), 1.0);
+  EXPECT_NE(euler->at("message").find("energy grew to"), std::string::npos) << euler->at("message");
+  EXPECT_FALSE(euler->at("steps_per_s").empty()) << "it finished: its speed is a measurement";
+  EXPECT_EQ(symplectic->at("status"), "ok") << symplectic->at("message");
+}
+
 TEST(Runner, UnknownEngineIsAClearErrorAndWritesNothing) {
   const fs::path dir = fresh_dir("unknown_engine");
   const Invocation inv = physbench({"run", "-e", "havok", "--out", (dir / "r").string()}, dir);
