@@ -8,6 +8,8 @@
 #include <map>
 #include <sstream>
 
+#include <nlohmann/json.hpp>
+
 #include "physbench/process.h"
 
 namespace {
@@ -218,6 +220,33 @@ TEST(Runner, EnergyGrowthOverAHundredPercentReadsDivergedNotOk) {
   EXPECT_NE(euler->at("message").find("energy grew to"), std::string::npos) << euler->at("message");
   EXPECT_FALSE(euler->at("steps_per_s").empty()) << "it finished: its speed is a measurement";
   EXPECT_EQ(symplectic->at("status"), "ok") << symplectic->at("message");
+}
+
+// rtp's determinism across processes (in-process repeats and threads: validation's Determinism
+// tests): the worker's result holds every sample at full precision, so equal files are equal bits
+TEST(Runner, RtpStackGivesTheSameBitsInSeparateProcessesAtOneAndTwoThreads) {
+  const fs::path dir = fresh_dir("determinism");
+  ASSERT_EQ(physbench({"export-scenes", (dir / "scenes").string()}, dir).outcome.exit_code, 0);
+  // tower-10 for 1 s of its 10
+  std::ifstream in(dir / "scenes" / "tower-10.0.json");
+  nlohmann::json scene = nlohmann::json::parse(in);
+  scene["duration"] = 1.0;
+  std::ofstream(dir / "tower.json") << scene.dump();
+  std::vector<nlohmann::json> samples;
+  for (const char* variant : {"soft-step", "soft-step", "soft-step-2t", "soft-step-2t"}) {
+    const fs::path out = dir / (std::string(variant) + std::to_string(samples.size()) + ".json");
+    const Invocation inv = physbench({"worker", "--scene", (dir / "tower.json").string(),
+                                      "--engine", "rtp", "--variant", variant, "--budget", "0",
+                                      "--out", out.string()},
+                                     dir);
+    ASSERT_EQ(inv.outcome.exit_code, 0) << inv.output;
+    std::ifstream result(out);
+    const nlohmann::json doc = nlohmann::json::parse(result);
+    ASSERT_EQ(doc.at("status"), "ok") << doc.at("message");
+    samples.push_back(doc.at("samples"));
+  }
+  ASSERT_GT(samples[0].size(), 10u);
+  for (std::size_t i = 1; i < samples.size(); ++i) EXPECT_EQ(samples[i], samples[0]) << "run " << i;
 }
 
 TEST(Runner, UnknownEngineIsAClearErrorAndWritesNothing) {
