@@ -212,7 +212,9 @@ class Box2dEngine final : public Engine {
       if (!body || body->GetType() != b2_dynamicBody) continue;
       const float h = float(dt_);
       const float moved = body->GetLinearVelocity().Length() * h;
-      const float turned = std::abs(body->GetAngularVelocity()) * h;
+      // a particle is a point in the scene: the spin of the circle that stands for it is not
+      const float turned =
+          i < scene_.bodies.size() ? std::abs(body->GetAngularVelocity()) * h : 0.0f;
       if (moved >= 0.9999f * b2_maxTranslation || turned >= 0.9999f * b2_maxRotation) {
         std::ostringstream why;
         why << "Box2D clamped body " << i << "'s velocity to its per-step limit ("

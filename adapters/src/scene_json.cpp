@@ -436,11 +436,17 @@ class SceneSax : public nlohmann::json_sax<json> {
                    const nlohmann::detail::exception& e) override {
     if (!error_.empty()) return false;  // ours came first
     const std::string at = path();
-    if (e.id == 406)  // nlohmann's number overflow: finite in the text, infinite as a double
-      error_ = (at.empty() ? "(top level)" : at) + ": the number " + token +
+    if (e.id == 406) {  // nlohmann's number overflow: finite in the text, infinite as a double
+      const std::string shown =
+          token.size() <= 40 ? token
+                             : token.substr(0, 20) + "... (" + std::to_string(token.size()) +
+                                   " characters)";
+      error_ = (at.empty() ? "(top level)" : at) + ": the number " + shown +
                " is past the range of a double (about ±1.8e308)";
-    else
+    }
+    else {
       error_ = (at.empty() ? "" : at + ": ") + "not valid JSON: " + e.what();
+    }
     return false;
   }
 
