@@ -4,6 +4,8 @@
 
 #include <cfloat>
 #include <cmath>
+#include <sstream>
+#include <stdexcept>
 
 #include "physbench/particle_driver.h"
 #include "physbench/registry.h"
@@ -200,7 +202,28 @@ class Box2dEngine final : public Engine {
           });
     if (driver_) step_particles_before();
     world_->Step(float(dt_), velocity_iterations_, kPositionIterations);
+    ++steps_;
     if (driver_) step_particles_after();
+    // Box2D scales down any velocity that would carry a body more than b2_maxTranslation (2 m)
+    // or turn it more than b2_maxRotation (π/2) in one step, silently: the motion is then not the
+    // scene's. A clamped velocity sits exactly at the limit.
+    for (std::size_t i = 0; i < bodies_.size(); ++i) {
+      const b2Body* body = bodies_[i];
+      if (!body || body->GetType() != b2_dynamicBody) continue;
+      const float h = float(dt_);
+      const float moved = body->GetLinearVelocity().Length() * h;
+      // a particle is a point in the scene: the spin of the circle that stands for it is not
+      const float turned =
+          i < scene_.bodies.size() ? std::abs(body->GetAngularVelocity()) * h : 0.0f;
+      if (moved >= 0.9999f * b2_maxTranslation || turned >= 0.9999f * b2_maxRotation) {
+        std::ostringstream why;
+        why << "Box2D clamped body " << i << "'s velocity to its per-step limit ("
+            << (moved >= 0.9999f * b2_maxTranslation ? "b2_maxTranslation = 2 m" : "b2_maxRotation = π/2")
+            << " per step at dt = " << dt_ << " s) at step " << steps_
+            << ": the motion is not the scene's";
+        throw std::runtime_error(why.str());
+      }
+    }
   }
 
   SampledState body_state(int index) const override {
@@ -218,6 +241,7 @@ class Box2dEngine final : public Engine {
   int velocity_iterations_;
   double dt_ = 0.0;
   std::unique_ptr<b2World> world_;
+  long steps_ = 0;
   std::vector<b2Body*> bodies_;  // owned by world_; the particles follow the scene's bodies
   std::unique_ptr<ParticleDriver> driver_;
   std::size_t first_particle_ = 0;

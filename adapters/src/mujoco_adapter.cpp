@@ -363,6 +363,20 @@ class MujocoEngine final : public Engine {
   void step() override {
     mj_step(model_, data_);
     ++steps_;
+    // MuJoCo checks qpos, qvel and qacc each step and, on a non-finite or huge value, warns and
+    // resets the state to the model's initial one (mj_resetData) and carries on: the samples then
+    // look sane and the run would read as ok. The warning counters are the only trace.
+    for (const auto& [warning, what] :
+         {std::pair{mjWARN_BADQACC, "bad acceleration (mjWARN_BADQACC)"},
+          std::pair{mjWARN_BADQVEL, "bad velocity (mjWARN_BADQVEL)"},
+          std::pair{mjWARN_BADQPOS, "bad position (mjWARN_BADQPOS)"}})
+      if (data_->warning[warning].number > 0) {
+        std::ostringstream why;
+        why << "MuJoCo reset its state after its " << what << " warning at step " << steps_
+            << " (t = " << steps_ * scene_.dt << " s, degree of freedom "
+            << data_->warning[warning].lastinfo << "): the motion is unstable";
+        throw EngineExploded(why.str());
+      }
     // MuJoCo drops the contacts beyond nconmax (and constraints beyond njmax) and carries on: a
     // run that lost contacts is not a result
     if (data_->warning[mjWARN_CONTACTFULL].number > 0 ||

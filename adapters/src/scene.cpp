@@ -2,6 +2,7 @@
 
 #include <algorithm>
 #include <cmath>
+#include <map>
 #include <sstream>
 
 namespace physbench {
@@ -153,14 +154,58 @@ void require_finite(const std::string& field, const Vec3& v) {
   for (int i = 0; i < 3; ++i) require_finite(field + "[" + std::to_string(i) + "]", v[i]);
 }
 
-void require_positive(const std::string& field, double value) {
-  require_finite(field, value);
-  if (!(value > 0.0)) fail(field, "must be > 0, got " + show(value));
-}
 
 void require_nonnegative(const std::string& field, double value) {
   require_finite(field, value);
   if (!(value >= 0.0)) fail(field, "must be >= 0, got " + show(value));
+}
+
+// a stated range, inclusive at both ends
+void require_range(const std::string& field, double value, double lo, double hi,
+                   const char* unit = "") {
+  require_finite(field, value);
+  if (!(value >= lo && value <= hi))
+    fail(field, "must lie in [" + show(lo) + ", " + show(hi) + "]" + unit + ", got " + show(value));
+}
+
+// every component within ±bound
+void require_bounded(const std::string& field, const Vec3& v, double bound, const char* unit) {
+  for (int i = 0; i < 3; ++i)
+    require_range(field + "[" + std::to_string(i) + "]", v[i], -bound, bound, unit);
+}
+
+void require_count(const std::string& field, std::size_t count, std::size_t cap,
+                   const char* why) {
+  if (count > cap)
+    fail(field, "has " + std::to_string(count) + " entries, over the cap of " +
+                    std::to_string(cap) + " (" + why + ")");
+}
+
+// names become parts of file names: letters, digits, '-', '_', '.', starting with a letter or digit
+void require_file_name(const std::string& field, const std::string& name) {
+  if (name.empty()) fail(field, "must not be empty");
+  if (name.size() > limits::kNameLength)
+    fail(field, "is " + std::to_string(name.size()) + " bytes, over the cap of " +
+                    std::to_string(limits::kNameLength) + " (it becomes part of file names)");
+  const auto plain = [](char c) {
+    return (c >= 'a' && c <= 'z') || (c >= 'A' && c <= 'Z') || (c >= '0' && c <= '9');
+  };
+  if (!plain(name[0]))
+    fail(field, "must start with a letter or digit (it becomes part of file names), got \"" +
+                    name + "\"");
+  for (char c : name)
+    if (!plain(c) && c != '-' && c != '_' && c != '.')
+      fail(field, "may hold only letters, digits, '-', '_' and '.' (it becomes part of file "
+                  "names), got \"" + name + "\"");
+}
+
+// free text: no control characters (it lands in CSV cells, logs and the report)
+void require_text(const std::string& field, const std::string& text, std::size_t cap) {
+  if (text.size() > cap)
+    fail(field, "is " + std::to_string(text.size()) + " bytes, over the cap of " +
+                    std::to_string(cap));
+  for (unsigned char c : text)
+    if (c < 0x20 || c == 0x7f) fail(field, "must not contain control characters");
 }
 
 
@@ -231,38 +276,49 @@ void validate_contact_metrics(const Scene& scene) {
 }  // namespace
 
 void validate(const Scene& scene) {
-  if (scene.name.empty()) fail("name", "must not be empty");
-  require_finite("gravity", scene.gravity);
-  require_positive("dt", scene.dt);
-  require_positive("duration", scene.duration);
+  using namespace limits;
+  require_file_name("name", scene.name);
+  require_text("description", scene.description, kDescriptionLength);
+  require_bounded("gravity", scene.gravity, kMaxGravity, " m/s²");
+  require_range("dt", scene.dt, kMinDt, kMaxDt, " s");
+  require_range("duration", scene.duration, kMinDt, kMaxDuration, " s");
   if (scene.duration < scene.dt)
     fail("duration", "is shorter than one step (dt = " + show(scene.dt) + ")");
+  if (scene.duration / scene.dt > static_cast<double>(kMaxSteps))
+    fail("duration", "is " + show(scene.duration / scene.dt) + " steps of dt, over the cap of " +
+                         std::to_string(kMaxSteps) +
+                         " (at a million steps a second that is minutes for one engine)");
+  require_count("bodies", scene.bodies.size(), kMaxBodies,
+                "ten times the largest built-in scene, pyramid-100's 5,050");
+  require_count("springs", scene.springs.size(), kMaxSprings, "as many as bodies");
+  require_count("impulses", scene.impulses.size(), kMaxImpulses, "one a step for 10^5 steps");
   if (scene.planar && scene.gravity.z() != 0.0) fail("gravity[2]", "must be 0 in a planar scene");
 
   const int body_count = static_cast<int>(scene.bodies.size());
   for (int i = 0; i < body_count; ++i) {
     const BodySpec& b = scene.bodies[i];
     const std::string at = "bodies[" + std::to_string(i) + "]";
-    require_nonnegative(at + ".mass", b.mass);
-    require_finite(at + ".position", b.position);
-    require_finite(at + ".linear_velocity", b.linear_velocity);
-    require_finite(at + ".angular_velocity", b.angular_velocity);
+    require_text(at + ".name", b.name, kNameLength);
+    require_finite(at + ".mass", b.mass);
+    if (b.mass != 0.0) require_range(at + ".mass", b.mass, kMinMass, kMaxMass, " kg (or 0: static)");
+    require_bounded(at + ".position", b.position, kMaxCoordinate, " m");
+    require_bounded(at + ".linear_velocity", b.linear_velocity, kMaxSpeed, " m/s");
+    require_bounded(at + ".angular_velocity", b.angular_velocity, kMaxAngularSpeed, " rad/s");
     require_finite(at + ".orientation", b.orientation.vec());
     require_finite(at + ".orientation", b.orientation.w());
     if (std::abs(b.orientation.norm() - 1.0) > 1e-6)
       fail(at + ".orientation",
            "must be a unit quaternion [w, x, y, z], norm is " + show(b.orientation.norm()));
-    require_nonnegative(at + ".friction", b.friction);
-    require_nonnegative(at + ".restitution", b.restitution);
-    if (b.restitution > 1.0) fail(at + ".restitution", "must be <= 1, got " + show(b.restitution));
+    require_range(at + ".friction", b.friction, 0.0, kMaxFriction);
+    require_range(at + ".restitution", b.restitution, 0.0, 1.0);
     switch (b.shape.kind) {
       case ShapeKind::Box:
         for (int k = 0; k < 3; ++k)
-          require_positive(at + ".shape.half_extents[" + std::to_string(k) + "]",
-                           b.shape.half_extents[k]);
+          require_range(at + ".shape.half_extents[" + std::to_string(k) + "]",
+                        b.shape.half_extents[k], kMinSize, kMaxSize, " m");
         break;
       case ShapeKind::Sphere:
-        require_positive(at + ".shape.radius", b.shape.radius);
+        require_range(at + ".shape.radius", b.shape.radius, kMinSize, kMaxSize, " m");
         break;
       case ShapeKind::Plane:
         if (b.mass != 0.0) fail(at + ".mass", "a plane must be static (mass 0)");
@@ -289,11 +345,11 @@ void validate(const Scene& scene) {
     if (s.body_b < -1 || s.body_b >= body_count)
       fail(at + ".body_b", "no body " + std::to_string(s.body_b) + " (-1 anchors to the world)");
     if (s.body_b == s.body_a) fail(at + ".body_b", "a spring needs two different ends");
-    require_finite(at + ".local_point_a", s.local_point_a);
-    require_finite(at + ".point_b", s.point_b);
-    require_nonnegative(at + ".stiffness", s.stiffness);
-    require_nonnegative(at + ".damping", s.damping);
-    require_nonnegative(at + ".rest_length", s.rest_length);
+    require_bounded(at + ".local_point_a", s.local_point_a, kMaxCoordinate, " m");
+    require_bounded(at + ".point_b", s.point_b, kMaxCoordinate, " m");
+    require_range(at + ".stiffness", s.stiffness, 0.0, kMaxStiffness, " N/m");
+    require_range(at + ".damping", s.damping, 0.0, kMaxDamping, " N s/m");
+    require_range(at + ".rest_length", s.rest_length, 0.0, kMaxCoordinate, " m");
   }
 
   for (int i = 0; i < static_cast<int>(scene.impulses.size()); ++i) {
@@ -304,8 +360,8 @@ void validate(const Scene& scene) {
       fail(at + ".time", "must lie in [0, duration), got " + show(p.time));
     if (p.body < 0 || p.body >= body_count || scene.bodies[p.body].mass == 0.0)
       fail(at + ".body", "no dynamic body " + std::to_string(p.body));
-    require_finite(at + ".impulse", p.impulse);
-    require_finite(at + ".point", p.point);
+    require_bounded(at + ".impulse", p.impulse, kMaxImpulse, " N s");
+    require_bounded(at + ".point", p.point, kMaxCoordinate, " m");
     if (scene.planar && (p.impulse.z() != 0.0 || p.point.z() != 0.0))
       fail(at, "must lie in the XY plane in a planar scene");
   }
@@ -317,41 +373,52 @@ void validate(const Scene& scene) {
     const ParticleSetSpec& p = *scene.particles;
     const std::string at = "particles";
     if (p.count < 1) fail(at + ".count", "must be >= 1");
-    for (auto [name, v] : {std::pair{".spawn_min", p.spawn_min},
-                           {".spawn_max", p.spawn_max},
-                           {".velocity_min", p.velocity_min},
+    if (p.count > kMaxParticles)
+      fail(at + ".count", "is " + std::to_string(p.count) + ", over the cap of " +
+                              std::to_string(kMaxParticles) +
+                              " (the largest built-in, 4·10^6, took 4.7 GB in one engine)");
+    require_count(at + ".attractors", p.attractors.size(), kMaxAttractors,
+                  "each particle sums every attractor each step");
+    require_count(at + ".planes", p.planes.size(), kMaxParticlePlanes,
+                  "each particle tests every plane each step");
+    require_count(at + ".probe", p.probe.size(), static_cast<std::size_t>(p.count),
+                  "one entry per particle");
+    for (auto [name, v] : {std::pair{".spawn_min", p.spawn_min}, {".spawn_max", p.spawn_max}})
+      require_bounded(at + name, v, kMaxCoordinate, " m");
+    for (auto [name, v] : {std::pair{".velocity_min", p.velocity_min},
                            {".velocity_max", p.velocity_max},
                            {".wind", p.wind}})
-      require_finite(at + name, v);
+      require_bounded(at + name, v, kMaxSpeed, " m/s");
     for (int k = 0; k < 3; ++k) {
       if (p.spawn_min[k] > p.spawn_max[k]) fail(at + ".spawn_min", "must not exceed spawn_max");
       if (p.velocity_min[k] > p.velocity_max[k])
         fail(at + ".velocity_min", "must not exceed velocity_max");
     }
-    require_positive(at + ".mass", p.mass);
-    require_positive(at + ".radius", p.radius);
-    require_nonnegative(at + ".drag", p.drag);
-    require_nonnegative(at + ".wind_jitter", p.wind_jitter);
-    require_positive(at + ".softening", p.softening);
+    require_range(at + ".mass", p.mass, kMinMass, kMaxMass, " kg");
+    require_range(at + ".radius", p.radius, kMinSize, kMaxSize, " m");
+    require_range(at + ".drag", p.drag, 0.0, kMaxDrag, " 1/s");
+    require_range(at + ".wind_jitter", p.wind_jitter, 0.0, kMaxSpeed, " m/s");
+    require_range(at + ".softening", p.softening, kMinSize, kMaxSize, " m");
     require_nonnegative(at + ".restitution", p.restitution);
     if (p.restitution > 1.0) fail(at + ".restitution", "must be <= 1");
     require_nonnegative(at + ".friction", p.friction);
     if (p.friction > 1.0)
       fail(at + ".friction", "must be <= 1 (the fraction of tangential velocity lost)");
-    require_nonnegative(at + ".lifetime", p.lifetime);
+    require_range(at + ".lifetime", p.lifetime, 0.0, kMaxDuration, " s");
     for (std::size_t i = 0; i < p.attractors.size(); ++i) {
-      require_finite(at + ".attractors[" + std::to_string(i) + "].position",
-                     p.attractors[i].position);
-      require_finite(at + ".attractors[" + std::to_string(i) + "].strength",
-                     p.attractors[i].strength);
+      require_bounded(at + ".attractors[" + std::to_string(i) + "].position",
+                      p.attractors[i].position, kMaxCoordinate, " m");
+      require_range(at + ".attractors[" + std::to_string(i) + "].strength",
+                    p.attractors[i].strength, -kMaxAttractorStrength, kMaxAttractorStrength,
+                    " m³/s²");
       if (scene.planar && p.attractors[i].position.z() != 0.0)
         fail(at + ".attractors[" + std::to_string(i) + "].position[2]",
              "must be 0 in a planar scene");
     }
     for (std::size_t i = 0; i < p.planes.size(); ++i) {
       const std::string plane = at + ".planes[" + std::to_string(i) + "]";
-      require_finite(plane + ".point", p.planes[i].point);
-      require_finite(plane + ".normal", p.planes[i].normal);
+      require_bounded(plane + ".point", p.planes[i].point, kMaxCoordinate, " m");
+      require_bounded(plane + ".normal", p.planes[i].normal, 2.0, "");
       if (std::abs(p.planes[i].normal.norm() - 1.0) > 1e-6)
         fail(plane + ".normal", "must be a unit vector");
       if (scene.planar && p.planes[i].normal.z() != 0.0)
@@ -398,13 +465,41 @@ void validate(const Scene& scene) {
            "bounce holds without drag or attractors, with gravity into the plane");
   }
 
-  require_positive("probe.interval", scene.probe.interval);
-  for (int i = 0; i < static_cast<int>(scene.probe.bodies.size()); ++i) {
-    const int b = scene.probe.bodies[i];
-    if (b < 0 || b >= body_count)
-      fail("probe.bodies[" + std::to_string(i) + "]", "no body " + std::to_string(b));
+  require_range("probe.interval", scene.probe.interval, kMinDt, scene.duration,
+                " s (at most the duration)");
+  {
+    std::map<long, std::size_t> seen;  // entry -> where it first appeared
+    for (std::size_t i = 0; i < scene.probe.bodies.size(); ++i) {
+      const int b = scene.probe.bodies[i];
+      const std::string at = "probe.bodies[" + std::to_string(i) + "]";
+      if (b < 0 || b >= body_count) fail(at, "no body " + std::to_string(b));
+      const auto [first, fresh] = seen.emplace(b, i);
+      if (!fresh)
+        fail(at, "body " + std::to_string(b) + " is listed twice (also at [" +
+                     std::to_string(first->second) + "])");
+    }
+    seen.clear();
+    for (std::size_t i = 0; scene.particles && i < scene.particles->probe.size(); ++i) {
+      const long q = scene.particles->probe[i];
+      const auto [first, fresh] = seen.emplace(q, i);
+      if (!fresh)
+        fail("particles.probe[" + std::to_string(i) + "]",
+             "particle " + std::to_string(q) + " is listed twice (also at [" +
+                 std::to_string(first->second) + "])");
+    }
   }
-  if (scene.reference.dt_divisor < 2) fail("reference.dt_divisor", "must be >= 2");
+  {
+    // every sample holds 13 numbers per probed body and particle, kept in memory and written out
+    const double samples = std::floor(scene.duration / scene.dt / scene.probe_every_steps()) + 1.0;
+    const double size = samples * static_cast<double>(scene.probed_bodies().size());
+    if (size > static_cast<double>(kMaxProbeSamples))
+      fail("probe", "asks for " + show(size) + " body-samples, over the cap of " +
+                        std::to_string(kMaxProbeSamples) +
+                        " (13 numbers each, held in memory and written as JSON by the worker)");
+  }
+  if (scene.reference.dt_divisor < 2 || scene.reference.dt_divisor > kMaxDtDivisor)
+    fail("reference.dt_divisor", "must lie in [2, " + std::to_string(kMaxDtDivisor) + "], got " +
+                                     std::to_string(scene.reference.dt_divisor));
   const bool needs_reference =
       std::any_of(scene.probe.metrics.begin(), scene.probe.metrics.end(),
                   [](Metric m) { return m == Metric::Position || m == Metric::Orientation; });

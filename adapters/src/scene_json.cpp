@@ -1,6 +1,9 @@
 #include "physbench/scene_json.h"
 
+#include <cstdint>
 #include <cstdio>
+#include <limits>
+#include <type_traits>
 #include <filesystem>
 #include <fstream>
 #include <set>
@@ -28,9 +31,29 @@ class Field {
     if (!value_.is_number()) fail("expected a number, got " + type_of());
     return value_.get<double>();
   }
-  int integer() const {
-    if (!value_.is_number_integer()) fail("expected an integer, got " + type_of());
-    return value_.get<int>();
+  // an integer that fits T: a wider one, or a number with a fraction or exponent, is named
+  template <typename T = int>
+  T integer() const {
+    constexpr auto lo = std::numeric_limits<T>::min();
+    constexpr auto hi = std::numeric_limits<T>::max();
+    const auto range = [&] {
+      return "expected an integer in [" + std::to_string(lo) + ", " + std::to_string(hi) +
+             "], got ";
+    };
+    if (value_.is_number_unsigned()) {
+      const auto v = value_.get<std::uint64_t>();
+      if (v > static_cast<std::uint64_t>(hi)) fail(range() + value_.dump());
+      return static_cast<T>(v);
+    }
+    if (value_.is_number_integer()) {
+      const auto v = value_.get<std::int64_t>();
+      if ((std::is_signed_v<T> && v < static_cast<std::int64_t>(lo)) ||
+          (!std::is_signed_v<T> && v < 0) ||
+          (v > 0 && static_cast<std::uint64_t>(v) > static_cast<std::uint64_t>(hi)))
+        fail(range() + value_.dump());
+      return static_cast<T>(v);
+    }
+    fail(range() + (value_.is_number() ? value_.dump() : type_of()));
   }
   bool boolean() const {
     if (!value_.is_boolean()) fail("expected true or false, got " + type_of());
@@ -134,7 +157,7 @@ ParticleSetSpec read_particles(const Field& f) {
             "drag", "wind", "wind_jitter", "attractors", "softening", "planes", "restitution",
             "friction", "lifetime", "seed", "probe"});
   ParticleSetSpec p;
-  p.count = f.member("count").integer();
+  p.count = f.member("count").integer<long>();
   p.spawn_min = f.member("spawn_min").vec3();
   p.spawn_max = f.has("spawn_max") ? f.member("spawn_max").vec3() : p.spawn_min;
   if (f.has("velocity_min")) p.velocity_min = f.member("velocity_min").vec3();
@@ -164,11 +187,12 @@ ParticleSetSpec read_particles(const Field& f) {
   if (f.has("restitution")) p.restitution = f.member("restitution").number();
   if (f.has("friction")) p.friction = f.member("friction").number();
   if (f.has("lifetime")) p.lifetime = f.member("lifetime").number();
-  if (f.has("seed")) p.seed = static_cast<std::uint64_t>(f.member("seed").integer());
+  if (f.has("seed")) p.seed = f.member("seed").integer<std::uint64_t>();
   if (f.has("probe")) {
     p.probe.clear();
     const Field list = f.member("probe");
-    for (std::size_t i = 0; i < list.array().size(); ++i) p.probe.push_back(list.at(i).integer());
+    for (std::size_t i = 0; i < list.array().size(); ++i)
+      p.probe.push_back(list.at(i).integer<long>());
   }
   return p;
 }
@@ -200,6 +224,7 @@ SpringSpec read_spring(const Field& f) {
 
 json to_json(const Scene& scene) {
   json doc;
+  doc["version"] = kSceneFormatVersion;
   doc["name"] = scene.name;
   if (!scene.description.empty()) doc["description"] = scene.description;
   doc["gravity"] = vec(scene.gravity);
@@ -281,8 +306,17 @@ json to_json(const Scene& scene) {
 Scene scene_from_json(const json& document, const std::string& source) {
   try {
     const Field root(document, "");
-    root.object({"name", "description", "gravity", "dt", "duration", "planar", "collisions",
-                 "bodies", "springs", "impulses", "particles", "probe", "reference"});
+    root.object({"version", "name", "description", "gravity", "dt", "duration", "planar",
+                 "collisions", "bodies", "springs", "impulses", "particles", "probe",
+                 "reference"});
+    // a file without a version is read as version 1, the format before it carried one
+    if (root.has("version")) {
+      const Field version = root.member("version");
+      const long v = version.integer<long>();
+      if (v != kSceneFormatVersion)
+        version.fail("this build reads scene format version " +
+                     std::to_string(kSceneFormatVersion) + ", got " + std::to_string(v));
+    }
     Scene scene;
     scene.name = root.member("name").string();
     if (root.has("description")) scene.description = root.member("description").string();
@@ -361,17 +395,160 @@ Scene scene_from_json(const json& document, const std::string& source) {
   }
 }
 
-Scene load_scene_file(const std::string& path) {
-  std::ifstream in(path);
-  if (!in) throw SceneError(path + ": cannot open the scene file");
-  json document;
-  try {
-    document = json::parse(in);
-  } catch (const json::parse_error& e) {
-    // nlohmann names the byte; NaN and Infinity are not JSON and land here too
-    throw SceneError(path + ": not valid JSON: " + e.what());
+namespace {
+
+// Builds the document as nlohmann's own DOM parser does, but knows where it is, so that what the
+// DOM cannot hold is named by its field: a duplicate key (the DOM keeps one of the two silently),
+// a number past the range of a double, one that underflows to zero, nesting past the cap.
+class SceneSax : public nlohmann::json_sax<json> {
+ public:
+  explicit SceneSax(json& root) : root_(root) {}
+
+  const std::string& error() const { return error_; }
+
+  bool null() override { return add(json(nullptr)); }
+  bool boolean(bool v) override { return add(json(v)); }
+  bool number_integer(number_integer_t v) override { return add(json(v)); }
+  bool number_unsigned(number_unsigned_t v) override { return add(json(v)); }
+  bool number_float(number_float_t v, const string_t& text) override {
+    // strtod gives 0 for 1e-400; a mantissa with a non-zero digit did not mean 0
+    const std::string mantissa = text.substr(0, text.find_first_of("eE"));
+    if (v == 0.0 && mantissa.find_first_of("123456789") != std::string::npos)
+      return fail_here("the number " + text + " is too small for a double (it would read as 0)");
+    return add(json(v));
   }
-  return scene_from_json(document, path);
+  bool string(string_t& v) override { return add(json(std::move(v))); }
+  bool binary(binary_t&) override { return fail_here("binary values are not JSON text"); }
+  bool start_object(std::size_t) override { return open(json::object()); }
+  bool key(string_t& k) override {
+    Frame& top = stack_.back();
+    if (top.value->contains(k)) {
+      top.key = k;
+      return fail_here("duplicate key (an object may name each field once)");
+    }
+    top.key = std::move(k);
+    return true;
+  }
+  bool end_object() override { return close(); }
+  bool start_array(std::size_t) override { return open(json::array()); }
+  bool end_array() override { return close(); }
+  bool parse_error(std::size_t, const std::string& token,
+                   const nlohmann::detail::exception& e) override {
+    if (!error_.empty()) return false;  // ours came first
+    const std::string at = path();
+    if (e.id == 406) {  // nlohmann's number overflow: finite in the text, infinite as a double
+      const std::string shown =
+          token.size() <= 40 ? token
+                             : token.substr(0, 20) + "... (" + std::to_string(token.size()) +
+                                   " characters)";
+      error_ = (at.empty() ? "(top level)" : at) + ": the number " + shown +
+               " is past the range of a double (about ±1.8e308)";
+    }
+    else {
+      error_ = (at.empty() ? "" : at + ": ") + "not valid JSON: " + e.what();
+    }
+    return false;
+  }
+
+ private:
+  struct Frame {
+    json* value;
+    std::string key;  // objects: the key being read
+  };
+
+  // the path of the value being read, in the loader's notation: bodies[2].shape.radius
+  std::string path() const {
+    std::string p;
+    for (std::size_t i = 0; i < stack_.size(); ++i) {
+      const Frame& f = stack_[i];
+      if (f.value->is_array()) {
+        // an open child is already in its array; the value being read is not yet
+        const std::size_t n = f.value->size();
+        p += '[';
+        p += std::to_string(i + 1 < stack_.size() && n > 0 ? n - 1 : n);
+        p += ']';
+      } else if (!f.key.empty()) {
+        if (!p.empty()) p += '.';
+        p += f.key;
+      }
+    }
+    return p;
+  }
+  bool fail_here(const std::string& what) {
+    const std::string at = path();
+    error_ = (at.empty() ? "(top level)" : at) + ": " + what;
+    return false;
+  }
+  json* place(json&& v) {
+    if (stack_.empty()) {
+      root_ = std::move(v);
+      return &root_;
+    }
+    json& parent = *stack_.back().value;
+    if (parent.is_array()) {
+      parent.push_back(std::move(v));
+      return &parent.back();
+    }
+    json& slot = parent[stack_.back().key];
+    slot = std::move(v);
+    return &slot;
+  }
+  bool add(json&& v) {
+    place(std::move(v));
+    return true;
+  }
+  bool open(json&& container) {
+    if (static_cast<int>(stack_.size()) >= limits::kNestingDepth)
+      return fail_here("nested deeper than " + std::to_string(limits::kNestingDepth) +
+                       " levels (no scene field needs more than four)");
+    json* at = place(std::move(container));
+    stack_.push_back({at, {}});
+    return true;
+  }
+  bool close() {
+    stack_.pop_back();
+    return true;
+  }
+
+  json& root_;
+  std::vector<Frame> stack_;
+  std::string error_;
+};
+
+}  // namespace
+
+Scene load_scene_text(std::string_view text, const std::string& source) {
+  if (text.size() > limits::kFileBytes)
+    throw SceneError(source + ": the scene is " + std::to_string(text.size()) +
+                     " bytes, over the cap of " + std::to_string(limits::kFileBytes) +
+                     " (the largest built-in scene is under 8 MB)");
+  json document;
+  SceneSax sax(document);
+  bool ok = false;
+  try {
+    ok = json::sax_parse(text.begin(), text.end(), &sax);
+  } catch (const json::exception& e) {
+    throw SceneError(source + ": not valid JSON: " + e.what());
+  }
+  if (!ok)
+    throw SceneError(source + ": " + (sax.error().empty() ? "not valid JSON" : sax.error()));
+  return scene_from_json(document, source);
+}
+
+Scene load_scene_file(const std::string& path) {
+  std::error_code ec;
+  const auto size = std::filesystem::file_size(path, ec);
+  if (ec) throw SceneError(path + ": cannot open the scene file (" + ec.message() + ")");
+  if (size > limits::kFileBytes)
+    throw SceneError(path + ": the file is " + std::to_string(size) + " bytes, over the cap of " +
+                     std::to_string(limits::kFileBytes) +
+                     " (the largest built-in scene is under 8 MB)");
+  std::ifstream in(path, std::ios::binary);
+  if (!in) throw SceneError(path + ": cannot open the scene file");
+  std::string text(static_cast<std::size_t>(size), '\0');
+  in.read(text.data(), static_cast<std::streamsize>(size));
+  text.resize(static_cast<std::size_t>(in.gcount()));
+  return load_scene_text(text, path);
 }
 
 void save_scene_file(const Scene& scene, const std::string& path) {

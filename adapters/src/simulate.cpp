@@ -27,6 +27,7 @@ struct Pass {
   double stepping_seconds = 0.0;
   bool exploded = false;
   double explosion_time = 0.0;
+  std::string reason;  // the engine's own, when it reported the explosion itself
 };
 
 // one run of the whole scene; the trajectory is kept when asked
@@ -45,15 +46,25 @@ Pass run_once(Engine& engine, const Scene& scene, const std::vector<int>& bodies
   for (long done = 0; done < steps;) {
     const long chunk = std::min<long>(every_steps, steps - done);
     const auto start = Clock::now();
-    if (next == due.size()) {
-      for (long i = 0; i < chunk; ++i) engine.step();
-    } else {
-      for (long i = 0; i < chunk; ++i) {
-        for (; next < due.size() && due[next].first == done + i; ++next)
-          engine.apply_impulse(due[next].second->body, due[next].second->impulse,
-                               due[next].second->point);
-        engine.step();
+    long i = 0;  // steps of this chunk taken
+    try {
+      if (next == due.size()) {
+        for (; i < chunk; ++i) engine.step();
+      } else {
+        for (; i < chunk; ++i) {
+          for (; next < due.size() && due[next].first == done + i; ++next)
+            engine.apply_impulse(due[next].second->body, due[next].second->impulse,
+                                 due[next].second->point);
+          engine.step();
+        }
       }
+    } catch (const EngineExploded& e) {
+      // the engine overwrote its own state: nothing sampled after this is the scene's motion
+      pass.stepping_seconds += std::chrono::duration<double>(Clock::now() - start).count();
+      pass.exploded = true;
+      pass.explosion_time = static_cast<double>(done + i + 1) * scene.dt;
+      pass.reason = e.what();
+      return pass;
     }
     pass.stepping_seconds += std::chrono::duration<double>(Clock::now() - start).count();
     done += chunk;
@@ -87,13 +98,15 @@ const char* to_string(Status status) {
       return "error";
     case Status::NotApplicable:
       return "not-applicable";
+    case Status::Diverged:
+      return "diverged";
   }
   return "?";
 }
 
 Status status_from_string(const std::string& name) {
   for (Status s : {Status::Ok, Status::Unsupported, Status::Exploded, Status::Crashed,
-                   Status::Timeout, Status::Error, Status::NotApplicable})
+                   Status::Timeout, Status::Error, Status::NotApplicable, Status::Diverged})
     if (name == to_string(s)) return s;
   return Status::Error;
 }
@@ -140,7 +153,10 @@ RunResult simulate(const EngineInfo& info, const std::string& variant, const Sce
                                options.explosion_distance, &result.trajectory);
     if (pass.exploded) {
       std::ostringstream why;
-      why << "non-finite or runaway state at t = " << pass.explosion_time << " s";
+      if (!pass.reason.empty())
+        why << pass.reason;
+      else
+        why << "non-finite or runaway state at t = " << pass.explosion_time << " s";
       result.status = Status::Exploded;
       result.message = why.str();
       result.wall_seconds.push_back(pass.stepping_seconds);

@@ -1,10 +1,12 @@
 // physbench: run identical scenes on rtp and the peer engines; report speed against error.
 #include <CLI/CLI.hpp>
 #include <chrono>
+#include <csignal>
 #include <ctime>
 #include <filesystem>
 #include <iostream>
 
+#include "physbench/metrics.h"
 #include "physbench/registry.h"
 #include "physbench/runner.h"
 #include "physbench/scenarios.h"
@@ -97,6 +99,13 @@ int main(int argc, char** argv) {
   std::vector<std::string> check_files;
   check->add_option("files", check_files, "scene files")->required();
 
+  // every scene a default run writes, without running it (the scene loader's fuzz seeds)
+  auto* export_scenes = app.add_subcommand(
+      "export-scenes", "write every built-in scene, at each swept step and reference step, as JSON");
+  std::string export_dir;
+  export_scenes->add_option("dir", export_dir, "folder to write into")->required();
+  export_scenes->group("");  // hidden from --help
+
   WorkerJob job;
   auto* worker = add_worker_subcommand(app, job);
   worker->group("");  // hidden from --help
@@ -109,6 +118,36 @@ int main(int argc, char** argv) {
     return 0;
   }
   if (*worker) return run_worker(job);
+  if (*export_scenes) try {
+    fs::create_directories(export_dir);
+    int written = 0;
+    for (const Scenario& s : scenarios()) {
+      std::vector<double> dts = s.sweep_dt;
+      const Scene base = s.build();
+      dts.insert(dts.begin(), base.dt);
+      for (std::size_t i = 0; i < dts.size(); ++i) {
+        Scene scene = base;
+        scene.dt = dts[i];
+        const std::string stem = (fs::path(export_dir) / (scene.name + "." + std::to_string(i))).string();
+        save_scene_file(scene, stem + ".json");
+        load_scene_file(stem + ".json");  // what a run writes, its workers must read
+        ++written;
+        if (scene.reference.kind == ReferenceKind::Converged)
+          for (int factor : {1, 2}) {
+            const int divisor = scene.reference.dt_divisor * factor;
+            const std::string file = stem + ".reference-dt-over-" + std::to_string(divisor) + ".json";
+            save_scene_file(refined(scene, divisor), file);
+            load_scene_file(file);
+            ++written;
+          }
+      }
+    }
+    std::cout << written << " scenes in " << export_dir << "\n";
+    return 0;
+  } catch (const SceneError& e) {
+    std::cerr << "physbench: a built-in scene fails its own checks: " << e.what() << '\n';
+    return 1;
+  }
   if (*check) {
     int bad = 0;
     for (const std::string& f : check_files) {
@@ -126,7 +165,12 @@ int main(int argc, char** argv) {
   if (dt > 0.0) options.dt = dt;
   for (double hz : sweep_hz) options.sweep_dt.push_back(1.0 / hz);
   if (duration > 0.0) options.duration = duration;
-  options.out = out.empty() ? default_out_dir() : out;
+  if (out.empty()) {
+    // two runs started in the same second get two folders
+    out = default_out_dir();
+    for (int n = 2; fs::exists(out); ++n) out = default_out_dir() + "-" + std::to_string(n);
+  }
+  options.out = out;
   for (int i = 0; i < argc; ++i) options.command_line += (i ? " " : "") + std::string(argv[i]);
   try {
     const int failures = run_suite(options, self);
@@ -134,6 +178,13 @@ int main(int argc, char** argv) {
     if (failures)
       std::cerr << failures << " job(s) crashed, timed out or failed: see the status column\n";
     return 0;
+  } catch (const RunInterrupted& e) {
+    std::cerr << "physbench: interrupted (" << e.what() << "); " << options.out.string()
+              << " is marked INCOMPLETE\n";
+    // end as the signal would have ended us, so a calling shell or script sees it
+    std::signal(e.signal, SIG_DFL);
+    std::raise(e.signal);
+    return 128 + e.signal;
   } catch (const RunError& e) {
     std::cerr << "physbench: " << e.what() << '\n';
     return 2;

@@ -1,11 +1,13 @@
 #include "physbench/process.h"
 
 #include <fcntl.h>
+#include <sys/prctl.h>
 #include <signal.h>
 #include <sys/wait.h>
 #include <unistd.h>
 
 #include <chrono>
+#include <csignal>
 #include <cstring>
 #include <deque>
 #include <fstream>
@@ -13,6 +15,22 @@
 #include <thread>
 
 namespace physbench {
+
+namespace {
+volatile std::sig_atomic_t g_interrupt = 0;
+extern "C" void on_interrupt(int signal) { g_interrupt = signal; }
+}  // namespace
+
+void install_interrupt_handlers() {
+  struct sigaction action {};
+  action.sa_handler = on_interrupt;
+  sigemptyset(&action.sa_mask);
+  action.sa_flags = 0;  // no SA_RESTART: the poll loop's sleep returns early
+  sigaction(SIGINT, &action, nullptr);
+  sigaction(SIGTERM, &action, nullptr);
+}
+
+int interrupt_signal() { return g_interrupt; }
 
 std::string ChildOutcome::describe() const {
   std::ostringstream out;
@@ -29,6 +47,10 @@ std::string ChildOutcome::describe() const {
     case Kind::FailedToStart:
       out << "could not start";
       break;
+    case Kind::Interrupted:
+      out << "stopped: the runner was interrupted by signal " << signal << " ("
+          << strsignal(signal) << ")";
+      break;
   }
   return out.str();
 }
@@ -42,6 +64,12 @@ ChildOutcome run_child(const std::vector<std::string>& argv, const std::string& 
   args.push_back(nullptr);
 
   const auto start = Clock::now();
+  if (g_interrupt) {
+    outcome.kind = ChildOutcome::Kind::Interrupted;
+    outcome.signal = g_interrupt;
+    return outcome;
+  }
+  const pid_t parent = getpid();
   const pid_t pid = fork();
   if (pid < 0) {
     outcome.kind = ChildOutcome::Kind::FailedToStart;
@@ -50,6 +78,9 @@ ChildOutcome run_child(const std::vector<std::string>& argv, const std::string& 
   if (pid == 0) {
     // child: own process group (so a timeout kills everything it started), output to the log
     setpgid(0, 0);
+    // should the runner die without killing us (SIGKILL, a crash), die with it
+    prctl(PR_SET_PDEATHSIG, SIGKILL);
+    if (getppid() != parent) _exit(126);
     const int fd = open(log_path.c_str(), O_WRONLY | O_CREAT | O_APPEND, 0644);
     if (fd >= 0) {
       dup2(fd, STDOUT_FILENO);
@@ -68,6 +99,13 @@ ChildOutcome run_child(const std::vector<std::string>& argv, const std::string& 
     const pid_t done = waitpid(pid, &status, WNOHANG);
     outcome.wall_seconds = std::chrono::duration<double>(Clock::now() - start).count();
     if (done == pid) break;
+    if (g_interrupt) {
+      kill(-pid, SIGKILL);
+      waitpid(pid, &status, 0);
+      outcome.kind = ChildOutcome::Kind::Interrupted;
+      outcome.signal = g_interrupt;
+      return outcome;
+    }
     if (outcome.wall_seconds > timeout_seconds) {
       kill(-pid, SIGKILL);
       waitpid(pid, &status, 0);

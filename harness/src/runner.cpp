@@ -4,6 +4,7 @@
 #include <unistd.h>
 
 #include <algorithm>
+#include <cstring>
 #include <chrono>
 #include <cmath>
 #include <ctime>
@@ -50,6 +51,9 @@ std::vector<EngineVariant> engine_catalog(const fs::path& self) {
 }
 
 namespace {
+
+// a finished run whose energy in play grew by more than this fraction reads `diverged`
+constexpr double kDivergedEnergyGrowth = 1.0;
 
 // ---- small helpers --------------------------------------------------------------------------
 
@@ -134,6 +138,8 @@ RunResult run_job(const EngineVariant& ev, const JobPaths& paths, int every_step
                                          "--out",          paths.result.string()};
   fs::remove(paths.result);
   const ChildOutcome outcome = run_child(argv, paths.log.string(), timeout);
+  if (outcome.kind == ChildOutcome::Kind::Interrupted)
+    throw RunInterrupted(outcome.signal, outcome.describe());
   RunResult result;
   result.engine_version = ev.version;
   if (outcome.kind == ChildOutcome::Kind::Exited && outcome.exit_code == 0 &&
@@ -386,6 +392,12 @@ int run_suite(const RunOptions& options, const fs::path& self) {
 
   // ---- the results folder; results.csv appears only when complete
   const fs::path out = options.out;
+  if (fs::exists(out) && (!fs::is_directory(out) || !fs::is_empty(out)))
+    throw RunError("the results folder " + out.string() +
+                   " already holds files (an earlier run?): physbench writes only into a new or "
+                   "empty folder; choose another --out");
+  // from here on SIGINT and SIGTERM stop the running job and leave the folder marked incomplete
+  install_interrupt_handlers();
   fs::create_directories(out / "scenes");
   fs::create_directories(out / "trajectories");
   const fs::path work = out / ".work";
@@ -418,8 +430,9 @@ int run_suite(const RunOptions& options, const fs::path& self) {
   metadata["scenarios"] = json::object();
 
   int failures = 0;
-  std::size_t total = 0, done = 0;
+  std::size_t total = 0, done = 0, rows_written = 0;
   for (const PreparedScene& p : scenes) total += p.dts.size() * jobs_engines.size();
+  try {
   for (const PreparedScene& p : scenes) {
     json& scenario_meta = metadata["scenarios"][p.scene.name];
     scenario_meta = {{"description", p.scene.description},
@@ -549,6 +562,19 @@ int run_suite(const RunOptions& options, const fs::path& self) {
               row["energy_change_final"] = number(*summary.energy_change_final);
             row["stability"] =
                 r.status == Status::Exploded ? "exploded" : stability_of(scene, series);
+            // a finished run whose energy more than doubled is not a success to skim past;
+            // contact scenes are left out: their energy at rest is in joules, not relative
+            if (r.status == Status::Ok && !scene.has_contacts() && !series.energy_change.empty()) {
+              const double grew =
+                  *std::max_element(series.energy_change.begin(), series.energy_change.end());
+              if (!(grew <= kDivergedEnergyGrowth)) {
+                r.status = Status::Diverged;
+                std::ostringstream why;
+                why << "energy grew to " << std::setprecision(3) << 1.0 + grew
+                    << " times the energy in play (over +100 %)";
+                message = why.str() + (message.empty() ? "" : "; " + message);
+              }
+            }
             put("linear_momentum_drift", summary.linear_momentum, false);
             put("angular_momentum_drift", summary.angular_momentum, false);
             put("stack_drift", summary.stack_drift, false);
@@ -595,6 +621,8 @@ int run_suite(const RunOptions& options, const fs::path& self) {
         for (std::size_t i = 0; i < kColumns.size(); ++i)
           csv << (i ? "," : "") << csv_field(row[kColumns[i]]);
         csv << '\n';
+        csv.flush();  // an interrupted run keeps every finished row
+        ++rows_written;
 
         std::cerr << row["status"];
         if (!row["steps_per_s"].empty()) std::cerr << "  " << row["steps_per_s"] << " steps/s";
@@ -612,6 +640,30 @@ int run_suite(const RunOptions& options, const fs::path& self) {
         std::cerr << '\n';
       }
     }
+  }
+
+  } catch (const RunInterrupted& e) {
+    // the rows done so far stay in results.csv.partial; results.csv never appears
+    csv.close();
+    metadata["interrupted"] = {{"signal", e.signal},
+                               {"rows_written", rows_written},
+                               {"jobs_total", total}};
+    {
+      std::ofstream meta(out / "metadata.json.partial");
+      meta << metadata.dump(2) << '\n';
+    }
+    {
+      std::ofstream note(out / "INCOMPLETE");
+      note << "This run was interrupted by signal " << e.signal << " (" << strsignal(e.signal)
+           << ") during job " << done << " of " << total
+           << "; that job's process group was killed.\n"
+              "results.csv.partial holds the "
+           << rows_written
+           << " rows written before it, metadata.json.partial the metadata. No results.csv was "
+              "written.\n";
+    }
+    fs::remove_all(work);
+    throw;
   }
 
   csv.close();

@@ -8,6 +8,8 @@
 #include <map>
 #include <sstream>
 
+#include <nlohmann/json.hpp>
+
 #include "physbench/process.h"
 
 namespace {
@@ -179,8 +181,9 @@ TEST(Runner, RunawaySceneIsRecordedAsExploded) {
   const fs::path dir = fresh_dir("exploded");
   std::ofstream(dir / "runaway.json")
       << R"({"name": "runaway", "dt": 0.01, "duration": 1, "collisions": false,
-    "bodies": [{"shape": {"type": "sphere", "radius": 0.1}, "mass": 1, "linear_velocity": [1e8, 0, 0]}],
-    "probe": {"metrics": ["energy"]}})";
+    "bodies": [{"shape": {"type": "sphere", "radius": 0.1}, "mass": 1e-3, "position": [1, 0, 0]}],
+    "springs": [{"body_a": 0, "body_b": -1, "point_b": [0, 0, 0], "stiffness": 1e12}],
+    "probe": {"metrics": ["energy"]}})";  // omega dt = 3e5: every explicit integrator overflows
   const Invocation inv = physbench({"run", "--scene", (dir / "runaway.json").string(), "-e", "rtp",
                                     "--out", (dir / "r").string()},
                                    dir);
@@ -191,6 +194,59 @@ TEST(Runner, RunawaySceneIsRecordedAsExploded) {
     EXPECT_EQ(row.at("status"), "exploded");
     EXPECT_TRUE(row.at("steps_per_s").empty()) << "an early stop has no comparable speed";
   }
+}
+
+TEST(Runner, EnergyGrowthOverAHundredPercentReadsDivergedNotOk) {
+  // a spring at ω dt = 5/6: the midpoint method gains (ω dt)⁴/4 = 12 % of its energy a step and
+  // ends finite (some 30 m out) but 10³ times higher; symplectic Euler's energy stays bounded
+  const fs::path dir = fresh_dir("diverged");
+  std::ofstream(dir / "spring.json")
+      << R"({"name": "spring", "dt": 0.03333333333333333, "duration": 2, "collisions": false,
+    "gravity": [0, 0, 0],
+    "bodies": [{"shape": {"type": "sphere", "radius": 0.1}, "mass": 1, "position": [1, 0, 0]}],
+    "springs": [{"body_a": 0, "body_b": -1, "point_b": [0, 0, 0], "stiffness": 625}],
+    "probe": {"metrics": ["energy"]}})";
+  const Invocation inv =
+      physbench({"run", "--scene", (dir / "spring.json").string(), "-e", "rtp", "--variant",
+                 "midpoint,symplectic", "--budget", "0", "--out", (dir / "r").string()},
+                dir);
+  ASSERT_EQ(inv.outcome.exit_code, 0) << inv.output;
+  const auto rows = read_rows(dir / "r" / "results.csv");
+  const auto* euler = find_row(rows, "rtp", "midpoint");
+  const auto* symplectic = find_row(rows, "rtp", "symplectic");
+  ASSERT_TRUE(euler && symplectic);
+  EXPECT_EQ(euler->at("status"), "diverged") << euler->at("message");
+  EXPECT_GT(std::stod(euler->at("energy_drift_max")), 1.0);
+  EXPECT_NE(euler->at("message").find("energy grew to"), std::string::npos) << euler->at("message");
+  EXPECT_FALSE(euler->at("steps_per_s").empty()) << "it finished: its speed is a measurement";
+  EXPECT_EQ(symplectic->at("status"), "ok") << symplectic->at("message");
+}
+
+// rtp's determinism across processes (in-process repeats and threads: validation's Determinism
+// tests): the worker's result holds every sample at full precision, so equal files are equal bits
+TEST(Runner, RtpStackGivesTheSameBitsInSeparateProcessesAtOneAndTwoThreads) {
+  const fs::path dir = fresh_dir("determinism");
+  ASSERT_EQ(physbench({"export-scenes", (dir / "scenes").string()}, dir).outcome.exit_code, 0);
+  // tower-10 for 1 s of its 10
+  std::ifstream in(dir / "scenes" / "tower-10.0.json");
+  nlohmann::json scene = nlohmann::json::parse(in);
+  scene["duration"] = 1.0;
+  std::ofstream(dir / "tower.json") << scene.dump();
+  std::vector<nlohmann::json> samples;
+  for (const char* variant : {"soft-step", "soft-step", "soft-step-2t", "soft-step-2t"}) {
+    const fs::path out = dir / (std::string(variant) + std::to_string(samples.size()) + ".json");
+    const Invocation inv = physbench({"worker", "--scene", (dir / "tower.json").string(),
+                                      "--engine", "rtp", "--variant", variant, "--budget", "0",
+                                      "--out", out.string()},
+                                     dir);
+    ASSERT_EQ(inv.outcome.exit_code, 0) << inv.output;
+    std::ifstream result(out);
+    const nlohmann::json doc = nlohmann::json::parse(result);
+    ASSERT_EQ(doc.at("status"), "ok") << doc.at("message");
+    samples.push_back(doc.at("samples"));
+  }
+  ASSERT_GT(samples[0].size(), 10u);
+  for (std::size_t i = 1; i < samples.size(); ++i) EXPECT_EQ(samples[i], samples[0]) << "run " << i;
 }
 
 TEST(Runner, UnknownEngineIsAClearErrorAndWritesNothing) {

@@ -9,6 +9,7 @@
 #include <functional>
 #include <memory>
 #include <optional>
+#include <stdexcept>
 #include <string>
 #include <vector>
 
@@ -30,6 +31,14 @@ struct Setting {
   std::string name;
   std::string value;
   std::string why;
+};
+
+// Thrown by an adapter's step() when its engine reset or overwrote its state on its own (MuJoCo's
+// reset after a bad-acceleration warning): the trajectory up to the last sample before it is kept,
+// and the row reads `exploded` with this reason. Dropped contacts and clamped motion, which leave
+// a trajectory that is not the scene's, are std::runtime_error: an `error` row.
+struct EngineExploded : std::runtime_error {
+  using std::runtime_error::runtime_error;
 };
 
 class Engine {

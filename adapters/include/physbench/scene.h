@@ -8,6 +8,7 @@
 
 #include <Eigen/Core>
 #include <Eigen/Geometry>
+#include <cstddef>
 #include <cstdint>
 #include <optional>
 #include <stdexcept>
@@ -181,6 +182,40 @@ Vec3 principal_inertia(const Shape& shape, double mass);
 // the body axis (0, 1, 2) of a symmetric top — the one whose moment differs from the two equal
 // others, any axis when all three are equal — or nullopt when all three differ
 std::optional<int> symmetry_axis(const Vec3& principal_inertia);
+
+// The scene format's version and its caps (docs/scene-format.md gives each one's reason). A cap
+// bounds what one scene can ask of the harness: memory, time or file size; ranges keep every value
+// where the engines' double or float arithmetic means something.
+inline constexpr int kSceneFormatVersion = 1;
+namespace limits {
+inline constexpr std::uintmax_t kFileBytes = 64u << 20;  // a scene file, bytes
+inline constexpr int kNestingDepth = 16;                 // JSON arrays and objects inside each other
+inline constexpr std::size_t kNameLength = 100;          // scene and body names, bytes
+inline constexpr std::size_t kDescriptionLength = 10000; // bytes
+inline constexpr double kMinDt = 1e-7, kMaxDt = 1.0;     // s
+inline constexpr double kMaxDuration = 3600.0;           // s
+inline constexpr long kMaxSteps = 100'000'000;           // duration / dt
+inline constexpr std::size_t kMaxBodies = 50'000;
+inline constexpr std::size_t kMaxSprings = 50'000;
+inline constexpr std::size_t kMaxImpulses = 100'000;
+inline constexpr long kMaxParticles = 10'000'000;
+inline constexpr std::size_t kMaxAttractors = 1'000;
+inline constexpr std::size_t kMaxParticlePlanes = 1'000;
+inline constexpr long kMaxProbeSamples = 10'000'000;     // samples x probed bodies and particles
+inline constexpr int kMaxDtDivisor = 1'024;
+inline constexpr double kMaxCoordinate = 1e6;            // m, any position or point component
+inline constexpr double kMinSize = 1e-4, kMaxSize = 1e4; // m, half extents and radii
+inline constexpr double kMinMass = 1e-9, kMaxMass = 1e9; // kg (a dynamic body; 0 is static)
+inline constexpr double kMaxSpeed = 1e5;                 // m/s, any velocity component
+inline constexpr double kMaxAngularSpeed = 1e5;          // rad/s, any component
+inline constexpr double kMaxGravity = 1e4;               // m/s², any component
+inline constexpr double kMaxFriction = 10.0;
+inline constexpr double kMaxStiffness = 1e12;            // N/m
+inline constexpr double kMaxDamping = 1e12;              // N s/m
+inline constexpr double kMaxImpulse = 1e9;               // N s, any component
+inline constexpr double kMaxAttractorStrength = 1e15;    // m³/s², magnitude
+inline constexpr double kMaxDrag = 1e4;                  // 1/s
+}  // namespace limits
 
 // Throws SceneError naming the first invalid field ("bodies[2].mass: must be >= 0, got -1").
 void validate(const Scene& scene);

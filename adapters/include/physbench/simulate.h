@@ -10,7 +10,9 @@
 namespace physbench {
 
 // NotApplicable: the variant would not differ from another on this scene; the run makes no row
-enum class Status { Ok, Unsupported, Exploded, Crashed, Timeout, Error, NotApplicable };
+// Diverged: the run finished with finite state, but its energy grew by more than 100 % of the energy
+// in play (docs/metrics.md, "Status"): a result, but not one to read as success
+enum class Status { Ok, Unsupported, Exploded, Crashed, Timeout, Error, NotApplicable, Diverged };
 const char* to_string(Status status);
 Status status_from_string(const std::string& name);
 

@@ -7,7 +7,8 @@
 namespace physbench {
 
 struct ChildOutcome {
-  enum class Kind { Exited, Signalled, TimedOut, FailedToStart } kind = Kind::Exited;
+  // Interrupted: the runner itself got SIGINT or SIGTERM, and killed the child's group
+  enum class Kind { Exited, Signalled, TimedOut, FailedToStart, Interrupted } kind = Kind::Exited;
   int exit_code = 0;  // Exited
   int signal = 0;     // Signalled
   double wall_seconds = 0.0;
@@ -15,9 +16,17 @@ struct ChildOutcome {
 };
 
 // Runs argv[0] with argv, its stdout and stderr appended to log_path; kills it (SIGKILL, whole
-// process group) once timeout_seconds have passed.
+// process group) once timeout_seconds have passed, or as soon as this process is interrupted
+// (install_interrupt_handlers). The child also gets SIGKILL should this process die first.
 ChildOutcome run_child(const std::vector<std::string>& argv, const std::string& log_path,
                        double timeout_seconds);
+
+// SIGINT and SIGTERM set a flag instead of ending this process, so that run_child can kill the
+// running child's process group (it does not share the terminal's group, so Ctrl-C never reaches
+// it) and the caller can leave its output marked incomplete. interrupt_signal() is the signal
+// received, 0 while none has been.
+void install_interrupt_handlers();
+int interrupt_signal();
 
 // the last lines of a text file, for error messages
 std::string tail_of_file(const std::string& path, int lines);

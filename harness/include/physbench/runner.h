@@ -41,7 +41,16 @@ struct RunError : std::runtime_error {
   using std::runtime_error::runtime_error;
 };
 
+// SIGINT or SIGTERM during a run: the running job's process group is killed, the results folder
+// keeps results.csv.partial and metadata.json.partial beside an INCOMPLETE file saying so, and
+// run_suite throws this
+struct RunInterrupted : std::runtime_error {
+  RunInterrupted(int signal, const std::string& what) : std::runtime_error(what), signal(signal) {}
+  int signal;
+};
+
 // Checks every name and scene file before any job runs (RunError names the culprit), then runs.
+// Refuses a results folder that already holds files, so an earlier run is never written into.
 // Returns the number of jobs that ended in crash, timeout or error.
 int run_suite(const RunOptions& options, const std::filesystem::path& self);
 
