@@ -43,6 +43,9 @@ struct ContactBlock {
     LaneMask starts_apart;    // a speculative point at the step's start
   } points[4];
 };
+// 144 floats a lane: 29 for the manifold, 28 for each of four points, 3 for the indices (576 bytes
+// a manifold, 144 a point)
+static_assert(sizeof(ContactBlock) == 144 * sizeof(float) * kBlockLanes);
 inline constexpr std::uint32_t kNoContact = ~std::uint32_t{0};
 
 struct ContactLanes {
