@@ -75,8 +75,8 @@ using LaneIndex = LaneMask;  // 32-bit integer lanes
 // each lane's body as the offset of its first float in the body array
 LaneIndex body_offsets(const std::array<std::uint32_t, W>& bodies) {
   LaneIndex index;
-  std::memcpy(&index, bodies.data(), sizeof index);
-  return index * kBodyFloats;
+  for (std::size_t i = 0; i < W; ++i) index[i] = std::int32_t(bodies[i] * kBodyFloats);
+  return index;
 }
 V3 gather3(const float* base, LaneIndex index) {
   return {simd::gather<Lane>(base, index), simd::gather<Lane>(base + 1, index),
