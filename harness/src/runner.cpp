@@ -223,6 +223,7 @@ const std::vector<std::string> kColumns = {"scenario",
                                            "tunnelled",
                                            "escaped",
                                            "reference",
+                                           "reference_status",
                                            "reference_self_error",
                                            "trajectory",
                                            "message"};
@@ -264,6 +265,8 @@ void write_trajectory_csv(const fs::path& path, const Trajectory& run, const Err
 
 struct ReferenceRun {
   bool available = false;
+  // converged, not available: the failed run's status ("timeout", "error", …) and why
+  std::string failed_status;
   std::string failure;
   Trajectory trajectory;             // converged: the dt/divisor run
   double self_error = std::nan("");  // converged: difference to the dt/(2·divisor) run
@@ -301,8 +304,10 @@ ReferenceRun converged_reference(const Scene& scene, const std::string& tag, con
     const RunResult r = run_job(rtp_rk4, {file, work / "reference.json", work / "reference.log"},
                                 scene.probe_every_steps() * divisor, 0.0, timeout);
     if (r.status != Status::Ok) {
+      reference.failed_status = to_string(r.status);
       reference.failure = "reference run (rtp rk4 at dt/" + std::to_string(divisor) + ") " +
                           to_string(r.status) + ": " + r.message;
+      std::cerr << "  reference for " << tag << " failed: " << reference.failure << "\n";
       return reference;
     }
     runs.push_back(r.trajectory);
@@ -463,6 +468,8 @@ int run_suite(const RunOptions& options, const fs::path& self) {
       if (scene.reference.kind == ReferenceKind::Converged)
         reference = converged_reference(scene, tag, out, work, self, options.timeout_seconds);
       scenario_meta["reference_self_error"][number(dt)] = reference.self_error;
+      if (!reference.failure.empty())
+        scenario_meta["reference_failure"][number(dt)] = reference.failure;
       scenario_meta["scene_file"][number(dt)] = fs::relative(scene_file, out).string();
 
       int dynamic_bodies = 0;
@@ -505,6 +512,9 @@ int run_suite(const RunOptions& options, const fs::path& self) {
         row["steps"] = std::to_string(scene.step_count());
         row["bodies"] = std::to_string(dynamic_bodies);
         row["reference"] = to_string(scene.reference.kind);
+        // a converged reference is a job of its own: whether it ran is on every row that needs it
+        if (scene.reference.kind == ReferenceKind::Converged)
+          row["reference_status"] = reference.available ? "ok" : reference.failed_status;
         row["reference_self_error"] = number(reference.self_error);
         std::string message = r.message;
 
@@ -537,7 +547,8 @@ int run_suite(const RunOptions& options, const fs::path& self) {
               if (reference.available)
                 against = &reference.trajectory;
               else
-                message += (message.empty() ? "" : "; ") + reference.failure;
+                message += (message.empty() ? "" : "; ") +
+                           std::string("no position or orientation error: ") + reference.failure;
             }
             Scene measured = scene;
             if (!against) {

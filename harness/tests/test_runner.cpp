@@ -5,6 +5,7 @@
 #include <algorithm>
 #include <filesystem>
 #include <fstream>
+#include <iomanip>
 #include <map>
 #include <sstream>
 
@@ -220,6 +221,78 @@ TEST(Runner, EnergyGrowthOverAHundredPercentReadsDivergedNotOk) {
   EXPECT_NE(euler->at("message").find("energy grew to"), std::string::npos) << euler->at("message");
   EXPECT_FALSE(euler->at("steps_per_s").empty()) << "it finished: its speed is a measurement";
   EXPECT_EQ(symplectic->at("status"), "ok") << symplectic->at("message");
+}
+
+// a body on a spring compared with the converged reference (rtp RK4 at dt / divisor)
+std::string converged_spring_scene(const std::string& name, double dt, double duration,
+                                   int divisor) {
+  std::ostringstream scene;
+  scene << std::setprecision(17) << R"({"name": ")" << name << R"(", "dt": )" << dt
+        << R"(, "duration": )" << duration << R"(, "collisions": false, "gravity": [0, 0, 0],
+    "bodies": [{"shape": {"type": "box", "half_extents": [0.1, 0.2, 0.3]}, "mass": 1,
+                "position": [1, 0, 0], "angular_velocity": [0, 1, 0]}],
+    "springs": [{"body_a": 0, "body_b": -1, "local_point_a": [0.1, 0, 0], "stiffness": 100}],
+    "probe": {"metrics": ["position", "orientation", "energy"]},
+    "reference": {"kind": "converged", "dt_divisor": )"
+        << divisor << "}}";
+  return scene.str();
+}
+
+TEST(Runner, ConvergedReferenceThatFailsOrTimesOutIsNamedOnEveryRowThatNeededIt) {
+  const fs::path dir = fresh_dir("reference_failure");
+  // 10⁵ steps: the reference at dt/1,024 would be 1.02·10⁸, over the step cap of 10⁸, so its
+  // worker rejects the refined scene (an error)
+  std::ofstream(dir / "capped.json") << converged_spring_scene("capped", 1e-3, 100.0, 1024);
+  // 9·10⁴ steps (some 0.05 s a run) against 9.2·10⁷ for the reference (tens of seconds): only
+  // the reference outlasts the 5 s timeout
+  std::ofstream(dir / "slow.json") << converged_spring_scene("slow", 1e-3, 90.0, 1024);
+  // a reference that runs: the control
+  std::ofstream(dir / "fine.json") << converged_spring_scene("fine", 1e-3, 1.0, 4);
+  const Invocation inv =
+      physbench({"run", "--scene", (dir / "capped.json").string(), "--scene",
+                 (dir / "slow.json").string(), "--scene", (dir / "fine.json").string(), "-e", "rtp",
+                 "--variant", "rk4,euler", "--budget", "0", "--timeout", "5", "--out",
+                 (dir / "r").string()},
+                dir);
+  ASSERT_EQ(inv.outcome.exit_code, 0) << inv.output;
+  const auto rows = read_rows(dir / "r" / "results.csv");
+  ASSERT_EQ(rows.size(), 6u) << inv.output;
+  const std::map<std::string, std::string> expected = {
+      {"capped", "error"}, {"slow", "timeout"}, {"fine", "ok"}};
+  for (const auto& row : rows) {
+    const std::string what = row.at("scenario") + " " + row.at("variant");
+    const std::string& want = expected.at(row.at("scenario"));
+    // the engine's own run was fine; the reference's fate is a column of its own
+    EXPECT_EQ(row.at("status"), "ok") << what << ": " << row.at("message");
+    EXPECT_EQ(row.at("reference"), "converged") << what;
+    EXPECT_EQ(row.at("reference_status"), want) << what << ": " << row.at("message");
+    EXPECT_FALSE(row.at("energy_drift_max").empty()) << what << ": invariants need no reference";
+    if (want == "ok") {
+      EXPECT_FALSE(row.at("position_err_max").empty()) << what;
+      EXPECT_FALSE(row.at("orientation_err_max").empty()) << what;
+      EXPECT_FALSE(row.at("reference_self_error").empty()) << what;
+      EXPECT_EQ(row.at("message").find("reference"), std::string::npos) << row.at("message");
+      continue;
+    }
+    EXPECT_TRUE(row.at("position_err_max").empty()) << what;
+    EXPECT_TRUE(row.at("orientation_err_max").empty()) << what;
+    EXPECT_TRUE(row.at("reference_self_error").empty()) << what;
+    EXPECT_NE(row.at("message").find("no position or orientation error: reference run (rtp rk4 "
+                                     "at dt/1024) " +
+                                     want),
+              std::string::npos)
+        << what << ": " << row.at("message");
+  }
+  // the reason is in the metadata too, per step, for the report's section
+  std::ifstream in(dir / "r" / "metadata.json");
+  const nlohmann::json meta = nlohmann::json::parse(in);
+  EXPECT_NE(meta.at("scenarios").at("capped").at("reference_failure").dump().find("over the cap"),
+            std::string::npos)
+      << meta.at("scenarios").at("capped").dump();
+  EXPECT_NE(meta.at("scenarios").at("slow").at("reference_failure").dump().find("timed out"),
+            std::string::npos)
+      << meta.at("scenarios").at("slow").dump();
+  EXPECT_FALSE(meta.at("scenarios").at("fine").contains("reference_failure"));
 }
 
 // rtp's determinism across processes (in-process repeats and threads: validation's Determinism

@@ -402,3 +402,31 @@ def test_rain_verdicts_are_coloured_by_what_they_mean():
     cells = {r["label"]: r["cells"][0] for r in table["rows"]}
     assert cells == {"rtp/soft-step": ("contained", "stable"), "bullet/float": ("escaped", "unstable"),
                      "ode/quickstep": ("unsettled", "unstable"), "mujoco/euler": ("error", "unstable")}
+
+
+def test_a_failed_reference_is_shown_on_its_rows_and_its_section(tmp_path):
+    if not PHYSBENCH:
+        pytest.skip("PHYSBENCH_EXE is not set (CTest sets it)")
+    # 10⁵ steps of dt: the converged reference at dt/1,024 is over the step cap, so it fails
+    scene = {"name": "capped", "dt": 1e-3, "duration": 100.0, "collisions": False, "gravity": [0, 0, 0],
+             "bodies": [{"shape": {"type": "sphere", "radius": 0.1}, "mass": 1, "position": [1, 0, 0]}],
+             "springs": [{"body_a": 0, "body_b": -1, "stiffness": 100}],
+             "probe": {"metrics": ["position", "energy"]},
+             "reference": {"kind": "converged", "dt_divisor": 1024}}
+    (tmp_path / "capped.json").write_text(json.dumps(scene))
+    out = tmp_path / "r"
+    subprocess.run([PHYSBENCH, "run", "--scene", str(tmp_path / "capped.json"), "-e", "rtp", "--variant", "rk4",
+                    "--budget", "0", "--out", str(out)], check=True, capture_output=True)
+    (row,) = pd.read_csv(out / "results.csv").to_dict("records")
+    assert row["reference_status"] == "error"
+    assert build_report.reference_failed(row) == "error"
+    page = build_report.build_report(out).read_text()
+    summary = page.split("<h2>Summary</h2>")[1].split("</table>")[0]
+    assert re.search(r'<td class="l ok">ok<br><span class="error">reference error</span></td>', summary)
+    section = page.split("<h2>capped</h2>")[1]
+    assert "the reference at dt 0.001 s did not run" in section
+    assert "over the cap" in section
+    # a row whose reference ran carries no such note
+    assert build_report.reference_failed({"reference_status": "ok"}) == ""
+    assert build_report.reference_failed({"reference_status": float("nan")}) == ""
+
