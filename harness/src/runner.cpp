@@ -37,7 +37,7 @@ std::vector<EngineVariant> engine_catalog(const fs::path& self) {
   std::vector<EngineVariant> catalog;
   for (const EngineInfo& info : linked_engines())
     for (const std::string& v : info.variants)
-      catalog.push_back({info.name, v, info.version, self});
+      catalog.push_back({info.name, v, info.version, self, info.test_only});
 #ifdef PHYSBENCH_HAVE_BULLET64
   // the double-precision Bullet build lives in its own executable beside this one
   for (std::size_t i = 0; i < catalog.size(); ++i)
@@ -330,7 +330,7 @@ int run_suite(const RunOptions& options, const fs::path& self) {
   auto known_engines = [&] {
     std::string names;
     for (const EngineVariant& ev : catalog)
-      if (names.find(ev.engine) == std::string::npos)
+      if (!ev.test_only && names.find(ev.engine) == std::string::npos)
         names += (names.empty() ? "" : ", ") + ev.engine;
     return names;
   };
@@ -391,7 +391,9 @@ int run_suite(const RunOptions& options, const fs::path& self) {
 
   std::vector<EngineVariant> jobs_engines;
   for (const EngineVariant& ev : catalog)
-    if (selected(options.engines, ev.engine) && selected(options.variants, ev.variant))
+    // a test-only engine runs only when named: "every engine" never includes it
+    if (selected(options.engines, ev.engine) && selected(options.variants, ev.variant) &&
+        (!ev.test_only || !options.engines.empty()))
       jobs_engines.push_back(ev);
   if (jobs_engines.empty()) throw RunError("no engine variant matches the filters given");
 

@@ -197,6 +197,76 @@ TEST(Runner, RunawaySceneIsRecordedAsExploded) {
   }
 }
 
+// one suite: a scene that sends rtp to infinity, and the test-only engine whose adapter aborts or
+// hangs in its first step, beside a normal scene; every failure is its own row and the jobs after
+// each (the normal scene's rtp job runs after both faults on the runaway scene) still finish
+TEST(Runner, ExplodedHungAndAbortingJobsAreRowsAndTheOthersStillComplete) {
+  const fs::path dir = fresh_dir("faults");
+  std::ofstream(dir / "runaway.json")
+      << R"({"name": "runaway", "dt": 0.01, "duration": 1, "collisions": false,
+    "bodies": [{"shape": {"type": "sphere", "radius": 0.1}, "mass": 1e-3, "position": [1, 0, 0]}],
+    "springs": [{"body_a": 0, "body_b": -1, "point_b": [0, 0, 0], "stiffness": 1e12}],
+    "probe": {"metrics": ["energy"]}})";  // omega dt = 3e5: RK4 overflows to inf, then NaN
+  std::ofstream(dir / "normal.json")
+      << R"({"name": "normal", "dt": 0.01, "duration": 1, "collisions": false,
+    "bodies": [{"shape": {"type": "sphere", "radius": 0.1}, "mass": 1, "position": [1, 0, 0]}],
+    "springs": [{"body_a": 0, "body_b": -1, "point_b": [0, 0, 0], "stiffness": 10}],
+    "probe": {"metrics": ["energy"]}})";
+  const Invocation inv = physbench(
+      {"run", "--scene", (dir / "runaway.json").string(), "--scene", (dir / "normal.json").string(),
+       "-e", "rtp,test-fault", "--variant", "rk4,abort,hang", "--budget", "0", "--timeout", "3",
+       "--out", (dir / "r").string()},
+      dir);
+  ASSERT_EQ(inv.outcome.kind, ChildOutcome::Kind::Exited) << inv.output;
+  ASSERT_EQ(inv.outcome.exit_code, 0) << inv.output;
+  EXPECT_NE(inv.output.find("4 job(s) crashed, timed out or failed"), std::string::npos)
+      << inv.output;
+  const auto rows = read_rows(dir / "r" / "results.csv");
+  ASSERT_EQ(rows.size(), 6u) << inv.output;
+  auto status_of = [&](const std::string& scenario, const std::string& variant) {
+    for (const auto& r : rows)
+      if (r.at("scenario") == scenario && r.at("variant") == variant) return r;
+    ADD_FAILURE() << "no row for " << scenario << " " << variant;
+    return std::map<std::string, std::string>{{"status", ""}, {"message", ""}};
+  };
+  const auto exploded = status_of("runaway", "rk4");
+  EXPECT_EQ(exploded.at("status"), "exploded") << exploded.at("message");
+  EXPECT_NE(exploded.at("message").find("non-finite or runaway state"), std::string::npos)
+      << exploded.at("message");
+  for (const std::string scenario : {"runaway", "normal"}) {
+    const auto crashed = status_of(scenario, "abort");
+    EXPECT_EQ(crashed.at("status"), "crashed") << crashed.at("message");
+    EXPECT_NE(crashed.at("message").find("killed by signal 6"), std::string::npos)
+        << crashed.at("message");
+    const auto hung = status_of(scenario, "hang");
+    EXPECT_EQ(hung.at("status"), "timeout") << hung.at("message");
+    EXPECT_NE(hung.at("message").find("timed out after"), std::string::npos) << hung.at("message");
+  }
+  const auto normal = status_of("normal", "rk4");
+  EXPECT_EQ(normal.at("status"), "ok") << normal.at("message");
+  EXPECT_FALSE(normal.at("steps_per_s").empty());
+  EXPECT_FALSE(normal.at("energy_drift_max").empty());
+  EXPECT_TRUE(fs::exists(dir / "r" / normal.at("trajectory")));
+  EXPECT_FALSE(fs::exists(dir / "r" / ".work")) << "no worker's files are left behind";
+}
+
+TEST(Runner, TestOnlyEngineIsNeitherListedNorRunByDefault) {
+  const fs::path dir = fresh_dir("test_only");
+  const Invocation list = physbench({"list"}, dir);
+  ASSERT_EQ(list.outcome.exit_code, 0) << list.output;
+  EXPECT_EQ(list.output.find("test-fault"), std::string::npos) << list.output;
+  // every engine, every variant: not the test-only one
+  const Invocation inv =
+      physbench({"run", "-s", "projectile", "--budget", "0", "--out", (dir / "r").string()}, dir);
+  ASSERT_EQ(inv.outcome.exit_code, 0) << inv.output;
+  for (const auto& row : read_rows(dir / "r" / "results.csv"))
+    EXPECT_NE(row.at("engine"), "test-fault");
+  // an unknown engine's message lists the real engines only
+  const Invocation bad = physbench({"run", "-e", "havok", "--out", (dir / "x").string()}, dir);
+  EXPECT_EQ(bad.outcome.exit_code, 2);
+  EXPECT_EQ(bad.output.find("test-fault"), std::string::npos) << bad.output;
+}
+
 TEST(Runner, EnergyGrowthOverAHundredPercentReadsDivergedNotOk) {
   // a spring at ω dt = 5/6: the midpoint method gains (ω dt)⁴/4 = 12 % of its energy a step and
   // ends finite (some 30 m out) but 10³ times higher; symplectic Euler's energy stays bounded

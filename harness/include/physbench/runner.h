@@ -17,6 +17,7 @@ struct EngineVariant {
   std::string variant;
   std::string version;
   std::filesystem::path host;
+  bool test_only = false;  // test-fault: not listed, and scheduled only when -e names it
 };
 
 // every engine variant this build can run; self is this executable's path
