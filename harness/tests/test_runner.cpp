@@ -8,6 +8,7 @@
 #include <iomanip>
 #include <map>
 #include <sstream>
+#include <tuple>
 
 #include <nlohmann/json.hpp>
 
@@ -390,6 +391,83 @@ TEST(Runner, RtpStackGivesTheSameBitsInSeparateProcessesAtOneAndTwoThreads) {
   }
   ASSERT_GT(samples[0].size(), 10u);
   for (std::size_t i = 1; i < samples.size(); ++i) EXPECT_EQ(samples[i], samples[0]) << "run " << i;
+}
+
+// each peer adapter gives the same results twice: two worker processes on the same scene, every
+// sample compared as the worker writes it (shortest round-trip text of each double, so equal text
+// is equal bits); a free scene with springs and a contact scene where every box starts in contact
+TEST(Runner, EveryEngineGivesTheSameBitsTwiceInSeparateProcesses) {
+  const fs::path dir = fresh_dir("repeatability");
+  ASSERT_EQ(physbench({"export-scenes", (dir / "scenes").string()}, dir).outcome.exit_code, 0);
+  struct Job {
+    std::string engine, variant;
+    fs::path host;
+    bool contacts_only = false;  // a variant that only applies where bodies touch
+  };
+  const fs::path bullet64 = fs::path(PHYSBENCH_EXE).parent_path() / "physbench-bullet64";
+  const std::vector<Job> peers = {
+#ifdef PHYSBENCH_HAVE_BULLET
+      {"bullet", "float", PHYSBENCH_EXE},
+      {"bullet", "double", bullet64},
+#endif
+#ifdef PHYSBENCH_HAVE_ODE
+      {"ode", "quickstep", PHYSBENCH_EXE},  // shuffles its rows with ODE's global generator
+      {"ode", "step", PHYSBENCH_EXE},
+#endif
+#ifdef PHYSBENCH_HAVE_BOX2D
+      {"box2d", "default", PHYSBENCH_EXE},
+#endif
+#ifdef PHYSBENCH_HAVE_MUJOCO
+      {"mujoco", "euler", PHYSBENCH_EXE},
+      {"mujoco", "pgs-10", PHYSBENCH_EXE, true},
+#endif
+  };
+  // (scene, seconds of it, rtp's variant for it)
+  const std::vector<std::tuple<std::string, double, std::string>> scenes = {
+      {"spring-chain", 2.0, "rk4"}, {"overlap-recovery", 1.0, "soft-step"}};
+  for (const auto& [name, seconds, rtp_variant] : scenes) {
+    std::ifstream in(dir / "scenes" / (name + ".0.json"));
+    ASSERT_TRUE(in) << "export-scenes wrote no " << name << ".0.json";
+    nlohmann::json scene = nlohmann::json::parse(in);
+    scene["duration"] = seconds;
+    const fs::path file = dir / (name + ".json");
+    std::ofstream(file) << scene.dump();
+    std::vector<Job> jobs = {{"rtp", rtp_variant, PHYSBENCH_EXE}};
+    jobs.insert(jobs.end(), peers.begin(), peers.end());
+    for (const Job& job : jobs) {
+      if (job.contacts_only && !scene.value("collisions", true)) continue;
+      const std::string what = name + " " + job.engine + "/" + job.variant;
+      std::vector<nlohmann::json> docs;
+      for (int run = 0; run < 2; ++run) {
+        const fs::path out =
+            dir / (name + "." + job.engine + "." + job.variant + "." + std::to_string(run) + ".json");
+        std::vector<std::string> argv = {job.host.string(), "worker", "--scene", file.string(),
+                                         "--engine", job.engine, "--variant", job.variant,
+                                         "--budget", "0", "--out", out.string()};
+        const ChildOutcome outcome = run_child(argv, (dir / "worker.log").string(), 300.0);
+        ASSERT_EQ(outcome.kind, ChildOutcome::Kind::Exited) << what << ": " << outcome.describe();
+        ASSERT_EQ(outcome.exit_code, 0) << what << ": " << tail_of_file((dir / "worker.log").string(), 3);
+        std::ifstream result(out);
+        docs.push_back(nlohmann::json::parse(result));
+      }
+      EXPECT_NE(docs[0].at("status"), "unsupported") << what << ": " << docs[0].at("message");
+      EXPECT_EQ(docs[0].at("status"), docs[1].at("status")) << what;
+      EXPECT_EQ(docs[0].at("message"), docs[1].at("message")) << what;
+      ASSERT_GT(docs[0].at("samples").size(), 10u) << what << ": " << docs[0].at("message");
+      // text, not values: -0 and 0 differ here as they do in bits
+      const std::string first = docs[0].at("samples").dump(), second = docs[1].at("samples").dump();
+      EXPECT_TRUE(first == second) << what << ": the two runs differ, first at sample "
+                                   << [&] {
+                                        const auto& a = docs[0].at("samples");
+                                        const auto& b = docs[1].at("samples");
+                                        std::size_t k = 0;
+                                        while (k < a.size() && k < b.size() &&
+                                               a[k].dump() == b[k].dump())
+                                          ++k;
+                                        return k;
+                                      }();
+    }
+  }
 }
 
 TEST(Runner, UnknownEngineIsAClearErrorAndWritesNothing) {
