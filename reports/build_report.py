@@ -32,7 +32,7 @@ SERIES = [
     ("angular_momentum_drift", "Relative angular momentum drift |L − L₀| / |L₀|", "", "angular_momentum_drift_max"),
 ]
 
-STATUS_ORDER = ["ok", "exploded", "unsupported", "timeout", "crashed", "error"]
+STATUS_ORDER = ["ok", "diverged", "exploded", "unsupported", "timeout", "crashed", "error"]
 
 # the contact table of a contact scenario: results.csv column, heading (docs/metrics.md, "Contact")
 CONTACT_COLUMNS = [
@@ -671,7 +671,7 @@ TEMPLATE = jinja2.Template("""<!doctype html>
  table { border-collapse: collapse; margin: 0.5em 0 1.5em; font-size: 0.9em; }
  th, td { border: 1px solid #ccc; padding: 3px 7px; text-align: right; vertical-align: top; }
  th { background: #f0f0f0; } td.l, th.l { text-align: left; }
- .ok { color: #176a17; } .exploded, .crashed, .timeout, .error { color: #b00; font-weight: bold; }
+ .ok { color: #176a17; } .exploded, .diverged, .crashed, .timeout, .error { color: #b00; font-weight: bold; }
  .unsupported { color: #777; } .note { color: #555; font-size: 0.9em; }
  td.stable { background: #dff0d8; } td.unstable, td.exploded { background: #f2dede; }
  td.over-damped { background: #fcf8e3; }
