@@ -46,8 +46,8 @@ EngineInfo fault_engine_info() {
   };
   info.settings = [](const std::string& variant) {
     return std::vector<Setting>{{"failure", variant,
-                                 "test-only engine: fails on purpose so the harness's handling of a "
-                                 "crashed or hung adapter can be tested"}};
+                                 "test-only engine: fails on purpose, so that the harness's "
+                                 "handling of a crashed or hung adapter can be tested"}};
   };
   return info;
 }

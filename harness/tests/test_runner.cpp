@@ -439,14 +439,15 @@ TEST(Runner, EveryEngineGivesTheSameBitsTwiceInSeparateProcesses) {
       const std::string what = name + " " + job.engine + "/" + job.variant;
       std::vector<nlohmann::json> docs;
       for (int run = 0; run < 2; ++run) {
-        const fs::path out =
-            dir / (name + "." + job.engine + "." + job.variant + "." + std::to_string(run) + ".json");
+        const fs::path out = dir / (name + "." + job.engine + "." + job.variant + "." +
+                                    std::to_string(run) + ".json");
         std::vector<std::string> argv = {job.host.string(), "worker", "--scene", file.string(),
                                          "--engine", job.engine, "--variant", job.variant,
                                          "--budget", "0", "--out", out.string()};
         const ChildOutcome outcome = run_child(argv, (dir / "worker.log").string(), 300.0);
         ASSERT_EQ(outcome.kind, ChildOutcome::Kind::Exited) << what << ": " << outcome.describe();
-        ASSERT_EQ(outcome.exit_code, 0) << what << ": " << tail_of_file((dir / "worker.log").string(), 3);
+        ASSERT_EQ(outcome.exit_code, 0)
+            << what << ": " << tail_of_file((dir / "worker.log").string(), 3);
         std::ifstream result(out);
         docs.push_back(nlohmann::json::parse(result));
       }
