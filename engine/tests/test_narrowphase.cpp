@@ -517,5 +517,41 @@ TEST(SeparatingAxes, NearlyParallelBoxesApartAlongTheSecondBoxsAxisDoNotTouch) {
   EXPECT_GT(m.normal.y(), 0.99);
 }
 
+// ---- shapes name their hulls by index ----
+
+// a shape holds an index, not an address: the pool may grow and move between calls
+TEST(HullPool, ShapesKeepTheirHullsWhenThePoolMoves) {
+  std::vector<ConvexHull> hulls;
+  hulls.push_back(make_box_hull({0.5, 0.5, 0.5}));
+  const Shape box = Shape::box(0, {0.5, 0.5, 0.5}), convex = Shape::convex(0);
+  const Pose a({0, 0, 0}, Quat::Identity());
+  const Pose b({0.2, 0.98, 0.1}, Quat(Eigen::AngleAxisd(0.25, Vec3::UnitY())));
+  Manifold before, after;
+  ASSERT_TRUE(collide(hulls, box, a, convex, b, before));
+  const ConvexHull* first = hulls.data();
+  for (int i = 0; i < 64; ++i) hulls.push_back(make_box_hull({1, 1, 1}));
+  ASSERT_NE(hulls.data(), first);  // moved
+  ASSERT_TRUE(collide(hulls, box, a, convex, b, after));
+  EXPECT_EQ(before.count, after.count);
+  EXPECT_EQ(before.depth, after.depth);
+  EXPECT_EQ(before.normal, after.normal);
+  for (int i = 0; i < before.count; ++i) EXPECT_EQ(before.points[i].point, after.points[i].point);
+  EXPECT_EQ(Shape::sphere(0.5).hull, kNoHull);
+  EXPECT_EQ(Shape::plane(Vec3::UnitY(), 0.0).hull, kNoHull);
+}
+
+#ifndef NDEBUG
+// an index outside the pool is the owner's bug: a debug build stops on it rather than read past
+// the pool
+TEST(HullPoolDeathTest, AnIndexOutsideThePoolAssertsInDebugBuilds) {
+  const std::vector<ConvexHull> hulls = {make_box_hull({0.5, 0.5, 0.5})};
+  const Pose a({0, 0, 0}, Quat::Identity()), b({0.5, 0.5, 0.5}, Quat::Identity());
+  Manifold m;
+  EXPECT_DEATH(collide(hulls, Shape::convex(1), a, Shape::convex(0), b, m), "Shape::hull");
+  EXPECT_DEATH(collide(hulls, Shape::sphere(0.5), a, Shape::convex(kNoHull), b, m),
+               "Shape::hull");
+}
+#endif
+
 }  // namespace
 }  // namespace rtp
