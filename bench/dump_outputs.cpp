@@ -60,14 +60,15 @@ void dump_narrowphase(std::FILE* out) {
         const rtp::Shape& a = set.shapes[pair.shape_a];
         const rtp::Shape& b = set.shapes[pair.shape_b];
         rtp::Manifold m;
-        print_manifold(out, rtp::collide(a, pair.pose_a, b, pair.pose_b, m), m);
+        print_manifold(out, rtp::collide(set.hulls, a, pair.pose_a, b, pair.pose_b, m), m);
         // the reverse order: the mirrored table entries
         rtp::Manifold r;
-        print_manifold(out, rtp::collide(b, pair.pose_b, a, pair.pose_a, r), r);
+        print_manifold(out, rtp::collide(set.hulls, b, pair.pose_b, a, pair.pose_a, r), r);
         if (kind == NarrowphaseShapes::BoxBox) {
           rtp::Manifold h;
-          const rtp::Shape ha = rtp::Shape::convex(*a.hull), hb = rtp::Shape::convex(*b.hull);
-          print_manifold(out, rtp::collide_hulls(ha, pair.pose_a, hb, pair.pose_b, h), h);
+          const rtp::Shape ha = rtp::Shape::convex(a.hull), hb = rtp::Shape::convex(b.hull);
+          print_manifold(out, rtp::collide_hulls(set.hulls, ha, pair.pose_a, hb, pair.pose_b, h),
+                         h);
         }
       }
     }

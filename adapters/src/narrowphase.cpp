@@ -34,7 +34,7 @@ std::vector<rtp::Vec3> ellipsoid_points(std::mt19937_64& random) {
 }
 
 // a bound on the distance from a shape's origin to its surface (m)
-double bounding_radius(const rtp::Shape& shape) {
+double bounding_radius(std::span<const rtp::ConvexHull> hulls, const rtp::Shape& shape) {
   switch (shape.kind) {
     case rtp::ShapeKind::Sphere:
       return shape.radius;
@@ -42,7 +42,7 @@ double bounding_radius(const rtp::Shape& shape) {
       return shape.half_extents.norm();
     case rtp::ShapeKind::Hull: {
       double r = 0.0;
-      for (const rtp::Vec3& v : shape.hull->vertices) r = std::max(r, v.norm());
+      for (const rtp::Vec3& v : rtp::hull_of(shape, hulls).vertices) r = std::max(r, v.norm());
       return r;
     }
     case rtp::ShapeKind::Plane:
@@ -53,12 +53,13 @@ double bounding_radius(const rtp::Shape& shape) {
 
 // the penetration along a unit direction n, first → second: the overlap of the two shapes'
 // extents on n (the minimum over all n is the penetration depth)
-double overlap_along(const rtp::Shape& shape_a, const rtp::Pose& a, const rtp::Shape& shape_b,
-                     const rtp::Pose& b, const rtp::Vec3& n) {
-  auto support = [](const rtp::Shape& s, const rtp::Pose& pose, const rtp::Vec3& d) {
+double overlap_along(std::span<const rtp::ConvexHull> hulls, const rtp::Shape& shape_a,
+                     const rtp::Pose& a, const rtp::Shape& shape_b, const rtp::Pose& b,
+                     const rtp::Vec3& n) {
+  auto support = [hulls](const rtp::Shape& s, const rtp::Pose& pose, const rtp::Vec3& d) {
     if (s.kind == rtp::ShapeKind::Sphere) return d.dot(pose.position) + s.radius;
     double best = -std::numeric_limits<double>::infinity();
-    for (const rtp::Vec3& v : s.hull->vertices)
+    for (const rtp::Vec3& v : rtp::hull_of(s, hulls).vertices)
       best = std::max(best, d.dot(pose.position + pose.rotation * v));
     return best;
   };
@@ -68,10 +69,10 @@ double overlap_along(const rtp::Shape& shape_a, const rtp::Pose& a, const rtp::S
 // the exact verdict: the largest separation over every candidate axis of two polyhedra (all
 // face normals, all edge-pair cross products, both signs — no pruning), or the centre's distance
 // from the hull minus the radius for a sphere; positive when apart, ≤ 0 when touching
-double exact_separation(const rtp::Shape& a, const rtp::Pose& pose_a, const rtp::Shape& b,
-                        const rtp::Pose& pose_b) {
-  if (b.kind == rtp::ShapeKind::Sphere) return exact_separation(b, pose_b, a, pose_a);
-  const rtp::ConvexHull& hull_b = *b.hull;
+double exact_separation(std::span<const rtp::ConvexHull> hulls, const rtp::Shape& a,
+                        const rtp::Pose& pose_a, const rtp::Shape& b, const rtp::Pose& pose_b) {
+  if (b.kind == rtp::ShapeKind::Sphere) return exact_separation(hulls, b, pose_b, a, pose_a);
+  const rtp::ConvexHull& hull_b = rtp::hull_of(b, hulls);
   auto world = [](const rtp::Pose& pose, const rtp::Vec3& v) {
     return rtp::Vec3(pose.position + pose.rotation * v);
   };
@@ -93,11 +94,11 @@ double exact_separation(const rtp::Shape& a, const rtp::Pose& pose_a, const rtp:
     }
     return nearest - a.radius;
   }
-  const rtp::ConvexHull& hull_a = *a.hull;
+  const rtp::ConvexHull& hull_a = rtp::hull_of(a, hulls);
   double largest = -std::numeric_limits<double>::infinity();
   auto axis = [&](const rtp::Vec3& n) {
-    largest = std::max(largest, -overlap_along(a, pose_a, b, pose_b, n));
-    largest = std::max(largest, -overlap_along(a, pose_a, b, pose_b, -n));
+    largest = std::max(largest, -overlap_along(hulls, a, pose_a, b, pose_b, n));
+    largest = std::max(largest, -overlap_along(hulls, a, pose_a, b, pose_b, -n));
   };
   for (const rtp::HullFace& f : hull_a.faces) axis(pose_a.rotation * f.normal);
   for (const rtp::HullFace& f : hull_b.faces) axis(pose_b.rotation * f.normal);
@@ -113,9 +114,10 @@ double exact_separation(const rtp::Shape& a, const rtp::Pose& pose_a, const rtp:
 
 // signed distance of a point from a shape's surface where the point is inside or on it; a lower
 // bound outside (what "on the surface within tolerance" needs)
-double surface_distance(const rtp::Shape& shape, const rtp::Pose& pose, const rtp::Vec3& p) {
+double surface_distance(std::span<const rtp::ConvexHull> hulls, const rtp::Shape& shape,
+                        const rtp::Pose& pose, const rtp::Vec3& p) {
   if (shape.kind == rtp::ShapeKind::Sphere) return (p - pose.position).norm() - shape.radius;
-  return rtp::face_plane_distance(*shape.hull, pose, p);
+  return rtp::face_plane_distance(rtp::hull_of(shape, hulls), pose, p);
 }
 
 }  // namespace
@@ -162,12 +164,12 @@ NarrowphaseSet make_narrowphase_set(NarrowphaseShapes shapes, NarrowphaseRegime 
 
   auto add_box = [&] {
     const rtp::Vec3 h(half_extent(random), half_extent(random), half_extent(random));
+    set.shapes.push_back(rtp::Shape::box(std::uint32_t(set.hulls.size()), h));
     set.hulls.push_back(rtp::make_box_hull(h));
-    set.shapes.push_back(rtp::Shape::box(set.hulls.back(), h));
   };
   auto add_hull = [&] {
+    set.shapes.push_back(rtp::Shape::convex(std::uint32_t(set.hulls.size())));
     set.hulls.push_back(rtp::make_convex_hull(ellipsoid_points(random)));
-    set.shapes.push_back(rtp::Shape::convex(set.hulls.back()));
   };
   auto add_sphere = [&] { set.shapes.push_back(rtp::Shape::sphere(radius(random))); };
 
@@ -204,11 +206,13 @@ NarrowphaseSet make_narrowphase_set(NarrowphaseShapes shapes, NarrowphaseRegime 
 
     // the touching distance along a random direction, by bisection on the verdict
     const rtp::Vec3 direction = random_direction(random);
-    double inside = 0.0, outside = 1.01 * (bounding_radius(a) + bounding_radius(b));
+    double inside = 0.0,
+           outside = 1.01 * (bounding_radius(set.hulls, a) + bounding_radius(set.hulls, b));
     for (int step = 0; step < 32; ++step) {
       const double middle = 0.5 * (inside + outside);
       pair.pose_b.position = middle * direction;
-      (rtp::collide(a, pair.pose_a, b, pair.pose_b, manifold) ? inside : outside) = middle;
+      const bool touching = rtp::collide(set.hulls, a, pair.pose_a, b, pair.pose_b, manifold);
+      (touching ? inside : outside) = middle;
     }
     double fraction = 1.0;
     switch (regime) {
@@ -243,7 +247,7 @@ NarrowphaseAgreement compare_narrowphase(const NarrowphaseSet& set, NarrowphaseP
     const NarrowphasePair& pair = set.pairs[i];
     const rtp::Shape& a = set.shapes[pair.shape_a];
     const rtp::Shape& b = set.shapes[pair.shape_b];
-    const bool touching = rtp::collide(a, pair.pose_a, b, pair.pose_b, manifold);
+    const bool touching = rtp::collide(set.hulls, a, pair.pose_a, b, pair.pose_b, manifold);
     const PeerContact theirs = peer.collide(i);
     ++agreement.pairs;
     bool failed = false, refuted = false;
@@ -253,9 +257,9 @@ NarrowphaseAgreement compare_narrowphase(const NarrowphaseSet& set, NarrowphaseP
       const rtp::ContactPoint& p = manifold.points[k];
       ++agreement.points;
       const double on_a =
-          surface_distance(a, pair.pose_a, p.point + 0.5 * p.depth * manifold.normal);
+          surface_distance(set.hulls, a, pair.pose_a, p.point + 0.5 * p.depth * manifold.normal);
       const double on_b =
-          surface_distance(b, pair.pose_b, p.point - 0.5 * p.depth * manifold.normal);
+          surface_distance(set.hulls, b, pair.pose_b, p.point - 0.5 * p.depth * manifold.normal);
       if (std::abs(on_a) <= tolerances.surface && std::abs(on_b) <= tolerances.surface)
         ++agreement.points_on_both;
       else
@@ -273,7 +277,7 @@ NarrowphaseAgreement compare_narrowphase(const NarrowphaseSet& set, NarrowphaseP
       ++agreement.verdict_agree;
     } else if (  // the exact separation sides with rtp, and the peer's own figure is off it by
                  // more than the band (where the peer gives none, the exact one is beyond it)
-        const double exact = exact_separation(a, pair.pose_a, b, pair.pose_b);
+        const double exact = exact_separation(set.hulls, a, pair.pose_a, b, pair.pose_b);
         (exact <= 0.0) == touching &&
         std::abs(exact - (theirs.touching || theirs.distance_known ? -theirs.depth : 0.0)) >=
             tolerances.verdict_band) {
@@ -291,8 +295,10 @@ NarrowphaseAgreement compare_narrowphase(const NarrowphaseSet& set, NarrowphaseP
           tolerances.depth_absolute + tolerances.depth_relative * theirs.depth;
       // rtp's answer is exact when its depth is the overlap along its own normal and the peer's
       // normal allows no less; a peer that disagrees with an exact answer is wrong
-      const double along_ours = overlap_along(a, pair.pose_a, b, pair.pose_b, manifold.normal);
-      const double along_theirs = overlap_along(a, pair.pose_a, b, pair.pose_b, theirs.normal);
+      const double along_ours =
+          overlap_along(set.hulls, a, pair.pose_a, b, pair.pose_b, manifold.normal);
+      const double along_theirs =
+          overlap_along(set.hulls, a, pair.pose_a, b, pair.pose_b, theirs.normal);
       const bool ours_exact =
           std::abs(along_ours - manifold.depth) <= 1e-9 * (1.0 + manifold.depth) &&
           manifold.depth <= along_theirs + depth_tolerance;
@@ -332,12 +338,13 @@ class RtpNarrowphase final : public NarrowphasePeer {
     shapes_ = set.shapes;
     if (boxes_as_hulls)
       for (rtp::Shape& s : shapes_)
-        if (s.kind == rtp::ShapeKind::Box) s = rtp::Shape::convex(*s.hull);
+        if (s.kind == rtp::ShapeKind::Box) s = rtp::Shape::convex(s.hull);
   }
   PeerContact collide(std::size_t index) override {
     const NarrowphasePair& p = set_.pairs[index];
     const bool touching =
-        rtp::collide(shapes_[p.shape_a], p.pose_a, shapes_[p.shape_b], p.pose_b, manifold_);
+        rtp::collide(set_.hulls, shapes_[p.shape_a], p.pose_a, shapes_[p.shape_b], p.pose_b,
+                     manifold_);
     return rtp_contact(manifold_, touching);
   }
 

@@ -58,7 +58,8 @@ class BulletNarrowphase final : public NarrowphasePeer {
         }
         case rtp::ShapeKind::Hull: {
           auto hull = std::make_unique<btConvexHullShape>();
-          for (const rtp::Vec3& v : shape.hull->vertices) hull->addPoint(to_bullet(v), false);
+          for (const rtp::Vec3& v : rtp::hull_of(shape, set.hulls).vertices)
+            hull->addPoint(to_bullet(v), false);
           hull->recalcLocalAabb();
           hull->setMargin(0);
           shapes_.push_back(std::move(hull));

@@ -92,24 +92,24 @@ void ContactPipeline::add_body(BodyId id, const ShapeDef& def, double friction,
     case BodyShape::Box: {
       const Vec3 half = def.half_extents.array() + grow;
       // boxes of one size share one hull
-      const ConvexHull* hull = nullptr;
+      std::uint32_t hull = kNoHull;
       for (const BodyShapeData& other : shapes_)
         if (other.kind == BodyShape::Box && other.shape.half_extents == half)
           hull = other.shape.hull;
-      if (!hull) {
-        hulls_.push_back(std::make_unique<ConvexHull>(make_box_hull(half)));
-        hull = hulls_.back().get();
+      if (hull == kNoHull) {
+        hull = std::uint32_t(hulls_.size());
+        hulls_.push_back(make_box_hull(half));
       }
-      data.shape = Shape::box(*hull, half);
+      data.shape = Shape::box(hull, half);
       data.reach = def.half_extents.norm();
       data.thinnest = def.half_extents.minCoeff();
       break;
     }
     case BodyShape::Hull:
-      hulls_.push_back(std::make_unique<ConvexHull>(
-          make_convex_hull(offset_vertices(make_convex_hull(def.hull_points), grow))));
-      data.shape = Shape::convex(*hulls_.back());
-      for (const Vec3& v : hulls_.back()->vertices) data.reach = std::max(data.reach, v.norm());
+      data.shape = Shape::convex(std::uint32_t(hulls_.size()));
+      hulls_.push_back(
+          make_convex_hull(offset_vertices(make_convex_hull(def.hull_points), grow)));
+      for (const Vec3& v : hulls_.back().vertices) data.reach = std::max(data.reach, v.norm());
       break;
     case BodyShape::Plane:
       if (!is_static) throw std::invalid_argument("rtp: a plane must be static");
@@ -163,7 +163,7 @@ void ContactPipeline::update_bounds(std::span<const BodyState> states, double dt
         box = bounds_of_box(data.shape.half_extents.array() + extra, s.position, s.orientation);
         break;
       case BodyShape::Hull:
-        box = bounds_of_points(data.shape.hull->vertices, s.position, s.orientation);
+        box = bounds_of_points(hull_of(data.shape, hulls_).vertices, s.position, s.orientation);
         break;
     }
     broad_phase_->move(data.proxy, box);
@@ -224,7 +224,7 @@ void ContactPipeline::collide_pairs(std::span<const BodyState> states) {
       ++reused;
       continue;
     }
-    if (!collide(grown_a, poses_[a], grown_b, poses_[b], manifolds_[k]))
+    if (!collide(hulls_, grown_a, poses_[a], grown_b, poses_[b], manifolds_[k]))
       manifolds_[k].count = 0;
     // only pairs found apart are cached: a touching pair moved with its bodies keeps points a
     // sliding contact has left (a 1,275-box pyramid drifted 2.2 cm in 10 s with touching pairs

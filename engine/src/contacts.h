@@ -112,7 +112,7 @@ class ContactPipeline {
                    Shape& grown_b) const;
   const ContactSettings settings_;
   std::vector<BodyShapeData> shapes_;  // per body
-  std::vector<std::unique_ptr<ConvexHull>> hulls_;  // the grown hulls shapes point at
+  std::vector<ConvexHull> hulls_;      // the grown hulls: the pool Shape::hull indexes
   std::unique_ptr<BroadPhase> broad_phase_;
   std::vector<BodyId> proxy_body_;     // proxy id → body
   std::vector<BodyId> planes_;

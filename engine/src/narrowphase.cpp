@@ -2,6 +2,7 @@
 // from a table indexed by the two kinds (as MuJoCo's mjCOLLISIONFUNC does). The families are one
 // file each (narrowphase_internal.h lists them); the design is in rtp/collision.h.
 #include <cstdint>
+#include <span>
 
 #include "narrowphase_internal.h"
 
@@ -12,15 +13,16 @@ namespace {
 // the table holds each pair once in the order written; the mirrored entries swap the shapes
 // and turn the normal round
 template <CollideFunction function>
-bool mirrored(const Shape& a, const Pose& pose_a, const Shape& b, const Pose& pose_b,
-              Manifold& out) {
-  const bool touching = function(b, pose_b, a, pose_a, out);
+bool mirrored(std::span<const ConvexHull> hulls, const Shape& a, const Pose& pose_a,
+              const Shape& b, const Pose& pose_b, Manifold& out) {
+  const bool touching = function(hulls, b, pose_b, a, pose_a, out);
   out.normal = -out.normal;
   for (std::uint8_t i = 0; i < out.count; ++i) out.points[i].feature.flipped ^= 1;
   return touching;
 }
 
-bool never(const Shape&, const Pose&, const Shape&, const Pose&, Manifold& out) {
+bool never(std::span<const ConvexHull>, const Shape&, const Pose&, const Shape&, const Pose&,
+           Manifold& out) {
   return no_contact(out);
 }
 
@@ -42,18 +44,18 @@ Shape Shape::sphere(double radius) {
   return s;
 }
 
-Shape Shape::box(const ConvexHull& box_hull, const Vec3& half_extents) {
+Shape Shape::box(std::uint32_t box_hull, const Vec3& half_extents) {
   Shape s;
   s.kind = ShapeKind::Box;
   s.half_extents = half_extents;
-  s.hull = &box_hull;
+  s.hull = box_hull;
   return s;
 }
 
-Shape Shape::convex(const ConvexHull& hull) {
+Shape Shape::convex(std::uint32_t hull) {
   Shape s;
   s.kind = ShapeKind::Hull;
-  s.hull = &hull;
+  s.hull = hull;
   return s;
 }
 
@@ -65,10 +67,10 @@ Shape Shape::plane(const Vec3& normal, double offset) {
   return s;
 }
 
-bool collide(const Shape& a, const Pose& pose_a, const Shape& b, const Pose& pose_b,
-             Manifold& out) {
+bool collide(std::span<const ConvexHull> hulls, const Shape& a, const Pose& pose_a, const Shape& b,
+             const Pose& pose_b, Manifold& out) {
   out.axes_tested = 0;
-  return kCollide[std::size_t(a.kind)][std::size_t(b.kind)](a, pose_a, b, pose_b, out);
+  return kCollide[std::size_t(a.kind)][std::size_t(b.kind)](hulls, a, pose_a, b, pose_b, out);
 }
 
 }  // namespace rtp

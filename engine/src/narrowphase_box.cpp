@@ -41,8 +41,8 @@ inline void transpose3(const Double4 rows[3], Double4 columns[3]) {
 
 }  // namespace
 
-bool collide_boxes(const Shape& a, const Pose& pose_a, const Shape& b, const Pose& pose_b,
-                   Manifold& out) {
+bool collide_boxes(std::span<const ConvexHull>, const Shape& a, const Pose& pose_a,
+                   const Shape& b, const Pose& pose_b, Manifold& out) {
   const Vec3& ha = a.half_extents;
   const Vec3& hb = b.half_extents;
   // B's axes and centre in A's frame, c(i, j) = a_i · b_j and t = Aᵀ(p_b − p_a), in 4-lane

@@ -88,10 +88,10 @@ using PointLanes = Lanes<PairColumns<Capacity>>;
 
 }  // namespace
 
-bool collide_hulls(const Shape& a, const Pose& pose_a, const Shape& b, const Pose& pose_b,
-                   Manifold& out) {
-  const ConvexHull& hull_a = *a.hull;
-  const ConvexHull& hull_b = *b.hull;
+bool collide_hulls(std::span<const ConvexHull> hulls, const Shape& a, const Pose& pose_a,
+                   const Shape& b, const Pose& pose_b, Manifold& out) {
+  const ConvexHull& hull_a = hull_of(a, hulls);
+  const ConvexHull& hull_b = hull_of(b, hulls);
   // B in A's frame: x_a = rotation · x_b + translation
   const Mat3 rotation = pose_a.rotation.transpose() * pose_b.rotation;
   const Vec3 translation = pose_a.rotation.transpose() * (pose_b.position - pose_a.position);

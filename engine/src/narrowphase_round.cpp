@@ -29,8 +29,8 @@ bool sphere_contact(double radius, const Pose& sphere_pose, const Pose& solid_po
 
 }  // namespace
 
-bool collide_spheres(const Shape& a, const Pose& pose_a, const Shape& b, const Pose& pose_b,
-                     Manifold& out) {
+bool collide_spheres(std::span<const ConvexHull>, const Shape& a, const Pose& pose_a,
+                     const Shape& b, const Pose& pose_b, Manifold& out) {
   const Vec3 d = pose_b.position - pose_a.position;
   const double distance = d.norm(), reach = a.radius + b.radius;
   if (distance > reach) return no_contact(out);
@@ -41,8 +41,8 @@ bool collide_spheres(const Shape& a, const Pose& pose_a, const Shape& b, const P
   return single_contact(normal, reach - distance, 0.5 * (surface_a + surface_b), out);
 }
 
-bool collide_sphere_box(const Shape& a, const Pose& pose_a, const Shape& b, const Pose& pose_b,
-                        Manifold& out) {
+bool collide_sphere_box(std::span<const ConvexHull>, const Shape& a, const Pose& pose_a,
+                        const Shape& b, const Pose& pose_b, Manifold& out) {
   // the sphere's centre in the box frame, and the closest point of the box to it
   const Vec3 centre = pose_b.rotation.transpose() * (pose_a.position - pose_b.position);
   const Vec3 closest = centre.cwiseMax(-b.half_extents).cwiseMin(b.half_extents);
@@ -70,9 +70,9 @@ bool collide_sphere_box(const Shape& a, const Pose& pose_a, const Shape& b, cons
   return sphere_contact(a.radius, pose_a, pose_b, normal_in_box, surface_in_box, distance, out);
 }
 
-bool collide_sphere_hull(const Shape& a, const Pose& pose_a, const Shape& b, const Pose& pose_b,
-                         Manifold& out) {
-  const ConvexHull& hull = *b.hull;
+bool collide_sphere_hull(std::span<const ConvexHull> hulls, const Shape& a, const Pose& pose_a,
+                         const Shape& b, const Pose& pose_b, Manifold& out) {
+  const ConvexHull& hull = hull_of(b, hulls);
   const Vec3 centre = pose_b.rotation.transpose() * (pose_a.position - pose_b.position);
   // the face plane farthest from the centre: beyond the radius, separated
   double largest = -std::numeric_limits<double>::infinity();
@@ -113,8 +113,8 @@ bool collide_sphere_hull(const Shape& a, const Pose& pose_a, const Shape& b, con
   return sphere_contact(a.radius, pose_a, pose_b, normal_in_hull, surface_in_hull, distance, out);
 }
 
-bool collide_sphere_plane(const Shape& a, const Pose& pose_a, const Shape& b, const Pose& pose_b,
-                          Manifold& out) {
+bool collide_sphere_plane(std::span<const ConvexHull>, const Shape& a, const Pose& pose_a,
+                          const Shape& b, const Pose& pose_b, Manifold& out) {
   const Vec3 plane_normal = pose_b.rotation * b.plane_normal;
   const double plane_offset = b.plane_offset + plane_normal.dot(pose_b.position);
   const double height = plane_normal.dot(pose_a.position) - plane_offset;
@@ -124,9 +124,9 @@ bool collide_sphere_plane(const Shape& a, const Pose& pose_a, const Shape& b, co
   return single_contact(-plane_normal, a.radius - height, 0.5 * (surface_a + surface_b), out);
 }
 
-bool collide_hull_plane(const Shape& a, const Pose& pose_a, const Shape& b, const Pose& pose_b,
-                        Manifold& out) {
-  const ConvexHull& hull = *a.hull;
+bool collide_hull_plane(std::span<const ConvexHull> hulls, const Shape& a, const Pose& pose_a,
+                        const Shape& b, const Pose& pose_b, Manifold& out) {
+  const ConvexHull& hull = hull_of(a, hulls);
   const Vec3 plane_normal = pose_b.rotation * b.plane_normal;
   const double plane_offset = b.plane_offset + plane_normal.dot(pose_b.position);
   // every vertex on or below the plane, then the four that span the most

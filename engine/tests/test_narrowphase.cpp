@@ -6,7 +6,9 @@
 #include <cmath>
 #include <limits>
 #include <random>
+#include <span>
 #include <stdexcept>
+#include <vector>
 
 #include "rtp/collision.h"
 
@@ -222,34 +224,36 @@ void expect_points_on_both(const Manifold& m, const ConvexHull& a, const Pose& p
 TEST(SeparatingAxes, TwoRotatedBoxesTestFifteenAxesAlignedBoxesThree) {
   const Vec3 h(0.5, 0.5, 0.5);
   const ConvexHull hull = make_box_hull(h);
-  const Shape box = Shape::box(hull, h);
+  const std::span<const ConvexHull> hulls(&hull, 1);
+  const Shape box = Shape::box(0, h);
   Manifold m;
   // overlapping, so no axis exits early
   const Pose a({0, 0, 0}, Quat::Identity());
   const Pose rotated({0.3, 0.2, 0.1}, Quat(Eigen::AngleAxisd(0.4, Vec3(1, 2, 3).normalized())));
-  ASSERT_TRUE(collide(box, a, box, rotated, m));
+  ASSERT_TRUE(collide(hulls, box, a, box, rotated, m));
   EXPECT_EQ(m.axes_tested, 15);
   const Pose aligned({0.3, 0.2, 0.1}, Quat::Identity());
-  ASSERT_TRUE(collide(box, a, box, aligned, m));
+  ASSERT_TRUE(collide(hulls, box, a, box, aligned, m));
   EXPECT_EQ(m.axes_tested, 3);
   // the general hull test prunes the same duplicates
-  const Shape convex = Shape::convex(hull);
-  ASSERT_TRUE(collide(convex, a, convex, aligned, m));
+  const Shape convex = Shape::convex(0);
+  ASSERT_TRUE(collide(hulls, convex, a, convex, aligned, m));
   EXPECT_EQ(m.axes_tested, 3);
 }
 
 TEST(SeparatingAxes, BoxRestingOnBoxGivesFourPointsAtTheRightDepth) {
-  const ConvexHull big_hull = make_box_hull({2, 0.5, 2}),
-                   small_hull = make_box_hull({0.5, 0.5, 0.5});
-  const Shape ground = Shape::box(big_hull, {2, 0.5, 2});
-  const Shape box = Shape::box(small_hull, {0.5, 0.5, 0.5});
+  const std::vector<ConvexHull> hulls = {make_box_hull({2, 0.5, 2}),
+                                         make_box_hull({0.5, 0.5, 0.5})};
+  const ConvexHull &big_hull = hulls[0], &small_hull = hulls[1];
+  const Shape ground = Shape::box(0, {2, 0.5, 2});
+  const Shape box = Shape::box(1, {0.5, 0.5, 0.5});
   const Pose below({0, 0, 0}, Quat::Identity());
   const Pose above({0.1, 0.99, -0.2}, Quat(Eigen::AngleAxisd(0.3, Vec3::UnitY())));
   for (const bool general : {false, true}) {
     Manifold m;
-    const Shape a = general ? Shape::convex(big_hull) : ground;
-    const Shape b = general ? Shape::convex(small_hull) : box;
-    ASSERT_TRUE(collide(a, below, b, above, m));
+    const Shape a = general ? Shape::convex(0) : ground;
+    const Shape b = general ? Shape::convex(1) : box;
+    ASSERT_TRUE(collide(hulls, a, below, b, above, m));
     EXPECT_EQ(m.count, 4);
     EXPECT_NEAR(m.depth, 0.01, 1e-12);
     EXPECT_LT((m.normal - Vec3::UnitY()).norm(), 1e-12);
@@ -266,7 +270,8 @@ TEST(SeparatingAxes, BoxRestingOnBoxGivesFourPointsAtTheRightDepth) {
 struct PosePair {
   Pose a, b;
 };
-PosePair random_pose_pair(std::mt19937_64& rng, const Shape& a, const Shape& b, double fraction) {
+PosePair random_pose_pair(std::mt19937_64& rng, std::span<const ConvexHull> hulls, const Shape& a,
+                          const Shape& b, double fraction) {
   PosePair pair{Pose({0, 0, 0}, random_orientation(rng)), Pose({0, 0, 0}, random_orientation(rng))};
   const Vec3 direction = random_vector(rng, 1).normalized();
   double inside = 0.0, outside = 10.0;
@@ -274,7 +279,7 @@ PosePair random_pose_pair(std::mt19937_64& rng, const Shape& a, const Shape& b, 
   for (int i = 0; i < 60; ++i) {
     const double mid = 0.5 * (inside + outside);
     pair.b.position = mid * direction;
-    (collide(a, pair.a, b, pair.b, m) ? inside : outside) = mid;
+    (collide(hulls, a, pair.a, b, pair.b, m) ? inside : outside) = mid;
   }
   pair.b.position = fraction * outside * direction;
   return pair;
@@ -286,13 +291,14 @@ TEST(SeparatingAxes, ClosedFormBoxTestAgreesWithTheGaussMapHullTest) {
   int contacts = 0, edge_contacts = 0, compared_face_points = 0;
   for (int trial = 0; trial < 3000; ++trial) {
     const Vec3 ha(size(rng), size(rng), size(rng)), hb(size(rng), size(rng), size(rng));
-    const ConvexHull hull_a = make_box_hull(ha), hull_b = make_box_hull(hb);
-    const Shape box_a = Shape::box(hull_a, ha), box_b = Shape::box(hull_b, hb);
-    const PosePair pose = random_pose_pair(rng, box_a, box_b, fraction(rng));
+    const std::vector<ConvexHull> hulls = {make_box_hull(ha), make_box_hull(hb)};
+    const ConvexHull &hull_a = hulls[0], &hull_b = hulls[1];
+    const Shape box_a = Shape::box(0, ha), box_b = Shape::box(1, hb);
+    const PosePair pose = random_pose_pair(rng, hulls, box_a, box_b, fraction(rng));
     Manifold closed_form, general;
-    const bool touching = collide(box_a, pose.a, box_b, pose.b, closed_form);
+    const bool touching = collide(hulls, box_a, pose.a, box_b, pose.b, closed_form);
     ASSERT_EQ(touching,
-              collide_hulls(Shape::convex(hull_a), pose.a, Shape::convex(hull_b), pose.b, general))
+              collide_hulls(hulls, Shape::convex(0), pose.a, Shape::convex(1), pose.b, general))
         << "trial " << trial;
     if (!touching) continue;
     ++contacts;
@@ -336,16 +342,18 @@ TEST(SeparatingAxes, DepthIsTheLeastOverlapOverSampledDirections) {
   std::mt19937_64 rng(23);
   std::vector<Vec3> cloud;
   for (int i = 0; i < 32; ++i) cloud.push_back(random_vector(rng, 0.6));
-  const ConvexHull hull_a = make_convex_hull(cloud);
+  std::vector<ConvexHull> hulls;
+  hulls.push_back(make_convex_hull(cloud));
   cloud.clear();
   for (int i = 0; i < 32; ++i) cloud.push_back(random_vector(rng, 0.4));
-  const ConvexHull hull_b = make_convex_hull(cloud);
-  const Shape a = Shape::convex(hull_a), b = Shape::convex(hull_b);
+  hulls.push_back(make_convex_hull(cloud));
+  const ConvexHull &hull_a = hulls[0], &hull_b = hulls[1];
+  const Shape a = Shape::convex(0), b = Shape::convex(1);
   std::uniform_real_distribution<double> fraction(0.2, 0.99);
   for (int trial = 0; trial < 200; ++trial) {
-    const PosePair pose = random_pose_pair(rng, a, b, fraction(rng));
+    const PosePair pose = random_pose_pair(rng, hulls, a, b, fraction(rng));
     Manifold m;
-    ASSERT_TRUE(collide(a, pose.a, b, pose.b, m));
+    ASSERT_TRUE(collide(hulls, a, pose.a, b, pose.b, m));
     const double along_normal = overlap_along(hull_a, pose.a, hull_b, pose.b, m.normal);
     EXPECT_NEAR(along_normal, m.depth, 1e-9);
     for (int k = 0; k < 500; ++k) {
@@ -361,13 +369,14 @@ TEST(SeparatingAxes, DepthIsTheLeastOverlapOverSampledDirections) {
 // and edges in range (the debug build's bounds checks and sanitizers catch a stray index)
 TEST(SeparatingAxes, NonFinitePosesKeepTheBoxTestInBounds) {
   const ConvexHull hull = make_box_hull({0.5, 0.5, 0.5});
-  const Shape box = Shape::box(hull, {0.5, 0.5, 0.5});
+  const std::span<const ConvexHull> hulls(&hull, 1);
+  const Shape box = Shape::box(0, {0.5, 0.5, 0.5});
   const Pose a({0, 0, 0}, Quat(Eigen::AngleAxisd(0.3, Vec3(1, 2, 3).normalized())));
   const double nan = std::numeric_limits<double>::quiet_NaN();
   for (const Vec3& position : {Vec3(nan, 0, 0), Vec3(0.2, nan, 0.1), Vec3(nan, nan, nan)}) {
     const Pose b(position, Quat(Eigen::AngleAxisd(0.7, Vec3(3, 1, 2).normalized())));
     Manifold m;
-    collide(box, a, box, b, m);
+    collide(hulls, box, a, box, b, m);
     EXPECT_LE(m.count, 4);
     EXPECT_LE(m.axes_tested, 15);
     for (int i = 0; i < m.count; ++i) EXPECT_LT(m.points[i].feature.reference, 12);
@@ -376,13 +385,14 @@ TEST(SeparatingAxes, NonFinitePosesKeepTheBoxTestInBounds) {
 
 TEST(SeparatingAxes, FeatureIdsPersistWhileTheFeaturesDo) {
   const ConvexHull hull = make_box_hull({0.5, 0.5, 0.5});
-  const Shape box = Shape::box(hull, {0.5, 0.5, 0.5});
+  const std::span<const ConvexHull> hulls(&hull, 1);
+  const Shape box = Shape::box(0, {0.5, 0.5, 0.5});
   const Pose a({0, 0, 0}, Quat::Identity());
   Manifold before, after;
   Pose b({0.2, 0.98, 0.1}, Quat(Eigen::AngleAxisd(0.25, Vec3::UnitY())));
-  ASSERT_TRUE(collide(box, a, box, b, before));
+  ASSERT_TRUE(collide(hulls, box, a, box, b, before));
   b.position += Vec3(0.001, -0.0005, 0.002);
-  ASSERT_TRUE(collide(box, a, box, b, after));
+  ASSERT_TRUE(collide(hulls, box, a, box, b, after));
   ASSERT_EQ(before.count, after.count);
   for (int i = 0; i < before.count; ++i) {
     int matches = 0;
@@ -396,31 +406,32 @@ TEST(SeparatingAxes, FeatureIdsPersistWhileTheFeaturesDo) {
 
 TEST(RoundShapes, SpheresAgainstEveryShapeMatchClosedForms) {
   const ConvexHull hull = make_box_hull({1, 1, 1});
+  const std::span<const ConvexHull> hulls(&hull, 1);
   const Shape sphere = Shape::sphere(0.5);
   Manifold m;
   // sphere–sphere: centres 0.8 apart along x
-  ASSERT_TRUE(collide(sphere, Pose({0, 0, 0}, Quat::Identity()), sphere,
+  ASSERT_TRUE(collide(hulls, sphere, Pose({0, 0, 0}, Quat::Identity()), sphere,
                       Pose({0.8, 0, 0}, Quat::Identity()), m));
   EXPECT_NEAR(m.depth, 0.2, 1e-12);
   EXPECT_LT((m.normal - Vec3::UnitX()).norm(), 1e-12);
   EXPECT_LT((m.points[0].point - Vec3(0.4, 0, 0)).norm(), 1e-12);
   // sphere above a box's corner: the normal runs from the corner to the centre
-  for (const Shape& solid : {Shape::box(hull, {1, 1, 1}), Shape::convex(hull)}) {
+  for (const Shape& solid : {Shape::box(0, {1, 1, 1}), Shape::convex(0)}) {
     const Vec3 centre = Vec3(1, 1, 1) + 0.4 * Vec3(1, 1, 1).normalized();
-    ASSERT_TRUE(collide(Shape::sphere(0.5), Pose(centre, Quat::Identity()), solid,
+    ASSERT_TRUE(collide(hulls, Shape::sphere(0.5), Pose(centre, Quat::Identity()), solid,
                         Pose({0, 0, 0}, Quat::Identity()), m));
     EXPECT_NEAR(m.depth, 0.1, 1e-12);
     EXPECT_LT((m.normal + Vec3(1, 1, 1).normalized()).norm(), 1e-12);
     // and the box first: the normal turns round
-    ASSERT_TRUE(collide(solid, Pose({0, 0, 0}, Quat::Identity()), Shape::sphere(0.5),
+    ASSERT_TRUE(collide(hulls, solid, Pose({0, 0, 0}, Quat::Identity()), Shape::sphere(0.5),
                         Pose(centre, Quat::Identity()), m));
     EXPECT_LT((m.normal - Vec3(1, 1, 1).normalized()).norm(), 1e-12);
     // a centre inside the box leaves through the nearest face
-    ASSERT_TRUE(collide(Shape::sphere(0.5), Pose({0.2, 0.9, 0.1}, Quat::Identity()), solid,
+    ASSERT_TRUE(collide(hulls, Shape::sphere(0.5), Pose({0.2, 0.9, 0.1}, Quat::Identity()), solid,
                         Pose({0, 0, 0}, Quat::Identity()), m));
     EXPECT_NEAR(m.depth, 0.6, 1e-12);
     EXPECT_LT((m.normal + Vec3::UnitY()).norm(), 1e-12);
-    EXPECT_FALSE(collide(Shape::sphere(0.5), Pose({1.3, 1.3, 1.3}, Quat::Identity()), solid,
+    EXPECT_FALSE(collide(hulls, Shape::sphere(0.5), Pose({1.3, 1.3, 1.3}, Quat::Identity()), solid,
                          Pose({0, 0, 0}, Quat::Identity()), m));
     EXPECT_EQ(m.count, 0);
   }
@@ -428,22 +439,23 @@ TEST(RoundShapes, SpheresAgainstEveryShapeMatchClosedForms) {
 
 TEST(Planes, BoxOnATiltedPlaneTouchesWithItsLowestVertices) {
   const ConvexHull hull = make_box_hull({0.5, 0.5, 0.5});
+  const std::span<const ConvexHull> hulls(&hull, 1);
   const Quat tilt(Eigen::AngleAxisd(0.2, Vec3::UnitZ()));
   const Shape plane = Shape::plane(Vec3::UnitY(), 0.0);
   // the box sits on the plane tilted with it, sunk 1 cm
   const Pose plane_pose({0, 0, 0}, tilt);
   const Pose box_pose(tilt * Vec3(0, 0.49, 0), tilt);
   Manifold m;
-  ASSERT_TRUE(collide(Shape::box(hull, {0.5, 0.5, 0.5}), box_pose, plane, plane_pose, m));
+  ASSERT_TRUE(collide(hulls, Shape::box(0, {0.5, 0.5, 0.5}), box_pose, plane, plane_pose, m));
   EXPECT_EQ(m.count, 4);
   for (int i = 0; i < 4; ++i) EXPECT_NEAR(m.points[i].depth, 0.01, 1e-12);
   EXPECT_LT((m.normal + tilt * Vec3::UnitY()).norm(), 1e-12);
   // a sphere resting on it, and a plane never meets a plane
-  ASSERT_TRUE(
-      collide(plane, plane_pose, Shape::sphere(0.3), Pose(tilt * Vec3(0, 0.25, 0), tilt), m));
+  ASSERT_TRUE(collide(hulls, plane, plane_pose, Shape::sphere(0.3),
+                      Pose(tilt * Vec3(0, 0.25, 0), tilt), m));
   EXPECT_NEAR(m.depth, 0.05, 1e-12);
   EXPECT_LT((m.normal - tilt * Vec3::UnitY()).norm(), 1e-12);
-  EXPECT_FALSE(collide(plane, plane_pose, plane, plane_pose, m));
+  EXPECT_FALSE(collide(hulls, plane, plane_pose, plane, plane_pose, m));
 }
 
 
@@ -455,7 +467,8 @@ TEST(Planes, BoxOnATiltedPlaneTouchesWithItsLowestVertices) {
 TEST(BoxClip, EqualStackedBoxesKeepOnePointAtEachCorner) {
   const Vec3 half(0.5, 0.5, 0.5);
   const ConvexHull hull = make_box_hull(half);
-  const Shape box = Shape::box(hull, half);
+  const std::span<const ConvexHull> hulls(&hull, 1);
+  const Shape box = Shape::box(0, half);
   std::mt19937 rng(7);
   std::normal_distribution<double> normal(0.0, 1.0);
   auto nudged = [&](double height) {
@@ -467,7 +480,7 @@ TEST(BoxClip, EqualStackedBoxesKeepOnePointAtEachCorner) {
   for (int trial = 0; trial < 2000; ++trial) {
     const Pose lower = nudged(0.5), upper = nudged(1.498);  // 2 mm deep: all four corners below
     Manifold m;
-    ASSERT_TRUE(collide(box, lower, box, upper, m));
+    ASSERT_TRUE(collide(hulls, box, lower, box, upper, m));
     ASSERT_EQ(m.count, 4);
     for (int corner = 0; corner < 4; ++corner) {
       const double x = corner & 1 ? 0.5 : -0.5, z = corner & 2 ? 0.5 : -0.5;
@@ -489,19 +502,56 @@ TEST(BoxClip, EqualStackedBoxesKeepOnePointAtEachCorner) {
 TEST(SeparatingAxes, NearlyParallelBoxesApartAlongTheSecondBoxsAxisDoNotTouch) {
   const Vec3 half(0.5, 0.5, 0.5);
   const ConvexHull hull = make_box_hull(half);
+  const std::span<const ConvexHull> hulls(&hull, 1);
   const Pose a({5.515986, 6.494237, -0.006368},
                Quat(0.9999992, -0.0007194, -0.0001775, 0.0010387).normalized());
   const Pose b({6.020064, 7.495297, -0.007590},
                Quat(0.9999992, -0.0007185, -0.0001750, 0.0010269).normalized());
   Manifold m;
-  EXPECT_FALSE(collide(Shape::box(hull, half), a, Shape::box(hull, half), b, m));
-  EXPECT_FALSE(collide(Shape::convex(hull), a, Shape::convex(hull), b, m));
+  EXPECT_FALSE(collide(hulls, Shape::box(0, half), a, Shape::box(0, half), b, m));
+  EXPECT_FALSE(collide(hulls, Shape::convex(0), a, Shape::convex(0), b, m));
   // pressed 1 mm together along the upper box's y axis they touch, and no deeper than that
   const Pose pressed(b.position - 0.001 * b.rotation.col(1), Quat(b.rotation));
-  ASSERT_TRUE(collide(Shape::box(hull, half), a, Shape::box(hull, half), pressed, m));
+  ASSERT_TRUE(collide(hulls, Shape::box(0, half), a, Shape::box(0, half), pressed, m));
   EXPECT_LT(m.depth, 0.002);
   EXPECT_GT(m.normal.y(), 0.99);
 }
+
+// ---- shapes name their hulls by index ----
+
+// a shape holds an index, not an address: the pool may grow and move between calls
+TEST(HullPool, ShapesKeepTheirHullsWhenThePoolMoves) {
+  std::vector<ConvexHull> hulls;
+  hulls.push_back(make_box_hull({0.5, 0.5, 0.5}));
+  const Shape box = Shape::box(0, {0.5, 0.5, 0.5}), convex = Shape::convex(0);
+  const Pose a({0, 0, 0}, Quat::Identity());
+  const Pose b({0.2, 0.98, 0.1}, Quat(Eigen::AngleAxisd(0.25, Vec3::UnitY())));
+  Manifold before, after;
+  ASSERT_TRUE(collide(hulls, box, a, convex, b, before));
+  const ConvexHull* first = hulls.data();
+  for (int i = 0; i < 64; ++i) hulls.push_back(make_box_hull({1, 1, 1}));
+  ASSERT_NE(hulls.data(), first);  // moved
+  ASSERT_TRUE(collide(hulls, box, a, convex, b, after));
+  EXPECT_EQ(before.count, after.count);
+  EXPECT_EQ(before.depth, after.depth);
+  EXPECT_EQ(before.normal, after.normal);
+  for (int i = 0; i < before.count; ++i) EXPECT_EQ(before.points[i].point, after.points[i].point);
+  EXPECT_EQ(Shape::sphere(0.5).hull, kNoHull);
+  EXPECT_EQ(Shape::plane(Vec3::UnitY(), 0.0).hull, kNoHull);
+}
+
+#ifndef NDEBUG
+// an index outside the pool is the owner's bug: a debug build stops on it rather than read past
+// the pool
+TEST(HullPoolDeathTest, AnIndexOutsideThePoolAssertsInDebugBuilds) {
+  const std::vector<ConvexHull> hulls = {make_box_hull({0.5, 0.5, 0.5})};
+  const Pose a({0, 0, 0}, Quat::Identity()), b({0.5, 0.5, 0.5}, Quat::Identity());
+  Manifold m;
+  EXPECT_DEATH(collide(hulls, Shape::convex(1), a, Shape::convex(0), b, m), "Shape::hull");
+  EXPECT_DEATH(collide(hulls, Shape::sphere(0.5), a, Shape::convex(kNoHull), b, m),
+               "Shape::hull");
+}
+#endif
 
 }  // namespace
 }  // namespace rtp

@@ -4,7 +4,6 @@
 #include <cmath>
 #include <limits>
 #include <map>
-#include <memory>
 #include <numeric>
 #include <sstream>
 #include <stdexcept>
@@ -109,8 +108,8 @@ class PenetrationGauge {
       const BodySpec& b = scene.bodies[i];
       if (b.mass > 0.0 && !slot_.count(i)) continue;
       if (b.shape.kind == ShapeKind::Box) {
-        hulls_.push_back(std::make_unique<rtp::ConvexHull>(rtp::make_box_hull(b.shape.half_extents)));
-        shapes_.push_back(rtp::Shape::box(*hulls_.back(), b.shape.half_extents));
+        shapes_.push_back(rtp::Shape::box(std::uint32_t(hulls_.size()), b.shape.half_extents));
+        hulls_.push_back(rtp::make_box_hull(b.shape.half_extents));
       } else if (b.shape.kind == ShapeKind::Sphere) {
         shapes_.push_back(rtp::Shape::sphere(b.shape.radius));
       } else {
@@ -147,7 +146,7 @@ class PenetrationGauge {
     double worst = 0.0;
     rtp::Manifold manifold;
     auto test = [&](std::size_t a, std::size_t b) {
-      if (!rtp::collide(shapes_[a], poses[a], shapes_[b], poses[b], manifold)) return;
+      if (!rtp::collide(hulls_, shapes_[a], poses[a], shapes_[b], poses[b], manifold)) return;
       double depth = manifold.count ? manifold.depth : 0.0;
       for (std::uint8_t p = 0; p < manifold.count; ++p)
         depth = std::max(depth, manifold.points[p].depth);
@@ -195,7 +194,7 @@ class PenetrationGauge {
   const Scene& scene_;
   std::map<int, std::size_t> slot_;  // scene body → index in a sample
   std::vector<int> bodies_;          // the scene bodies measured
-  std::vector<std::unique_ptr<rtp::ConvexHull>> hulls_;
+  std::vector<rtp::ConvexHull> hulls_;
   std::vector<rtp::Shape> shapes_;   // one per bodies_ entry
 };
 

@@ -45,8 +45,8 @@ TEST_P(AgainstBullet, VerdictDepthNormalAndSurfaceAgree) {
       const std::size_t i = a.disagreements[k];
       const NarrowphasePair& p = set.pairs[i];
       rtp::Manifold m;
-      const bool touching =
-          rtp::collide(set.shapes[p.shape_a], p.pose_a, set.shapes[p.shape_b], p.pose_b, m);
+      const bool touching = rtp::collide(set.hulls, set.shapes[p.shape_a], p.pose_a,
+                                         set.shapes[p.shape_b], p.pose_b, m);
       const PeerContact theirs = engine->collide(i);
       std::ostringstream line;
       line << "\n  pair " << i << ": rtp " << (touching ? "touching" : "apart") << " depth "
@@ -112,11 +112,11 @@ TEST(NarrowPhaseSets, RegimesPlaceThePairsWhereTheySay) {
     const NarrowphaseSet apart = make_narrowphase_set(shapes, NarrowphaseRegime::Separated, 200, 3);
     const NarrowphaseSet deep = make_narrowphase_set(shapes, NarrowphaseRegime::Deep, 200, 3);
     for (const NarrowphasePair& p : apart.pairs)
-      EXPECT_FALSE(
-          rtp::collide(apart.shapes[p.shape_a], p.pose_a, apart.shapes[p.shape_b], p.pose_b, m));
+      EXPECT_FALSE(rtp::collide(apart.hulls, apart.shapes[p.shape_a], p.pose_a,
+                                apart.shapes[p.shape_b], p.pose_b, m));
     for (const NarrowphasePair& p : deep.pairs) {
-      ASSERT_TRUE(
-          rtp::collide(deep.shapes[p.shape_a], p.pose_a, deep.shapes[p.shape_b], p.pose_b, m));
+      ASSERT_TRUE(rtp::collide(deep.hulls, deep.shapes[p.shape_a], p.pose_a,
+                               deep.shapes[p.shape_b], p.pose_b, m));
       EXPECT_GT(m.depth, 0.01);
     }
   }

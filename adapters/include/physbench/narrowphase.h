@@ -12,7 +12,6 @@
 #include <rtp/collision.h>
 
 #include <cstdint>
-#include <deque>
 #include <functional>
 #include <memory>
 #include <optional>
@@ -48,7 +47,7 @@ struct NarrowphasePair {
 struct NarrowphaseSet {
   NarrowphaseShapes shapes_kind = NarrowphaseShapes::BoxBox;
   NarrowphaseRegime regime = NarrowphaseRegime::Touching;
-  std::deque<rtp::ConvexHull> hulls;  // a deque: shapes point into it
+  std::vector<rtp::ConvexHull> hulls;  // the pool the shapes' hull indices refer to
   std::vector<rtp::Shape> shapes;
   std::vector<NarrowphasePair> pairs;
   std::string name() const;  // "box-box/touching"

@@ -35,6 +35,7 @@
 
 #include <algorithm>
 #include <array>
+#include <cassert>
 #include <cstdint>
 #include <limits>
 #include <span>
@@ -135,20 +136,34 @@ ConvexHull make_convex_hull(std::span<const Vec3> points);
 enum class ShapeKind : std::uint8_t { Sphere, Box, Hull, Plane };
 inline constexpr std::size_t kShapeKinds = 4;
 
-// one collision shape in its body frame; a hull is owned by the caller and outlives the shape
+// A box or hull shape names its hull by index: Shape::hull is a position in a pool of hulls that
+// the shape's owner keeps (World's contact stage, NarrowphaseSet, a test's local vector) and
+// hands to collide() with the shape. Nothing points into the pool, so it may be a plain
+// std::vector that grows and moves; the owner keeps each index valid for the pool it passes.
+// Spheres and planes have no hull (kNoHull). An index outside the pool is a bug in the owner:
+// debug builds assert on it (hull_of), release builds do not check.
+inline constexpr std::uint32_t kNoHull = ~std::uint32_t{0};
+
+// one collision shape in its body frame
 struct Shape {
   ShapeKind kind = ShapeKind::Sphere;
   double radius = 0.0;                // sphere (m)
   Vec3 half_extents = Vec3::Zero();   // box (m)
-  const ConvexHull* hull = nullptr;   // box (its make_box_hull) and hull
+  std::uint32_t hull = kNoHull;       // box (a make_box_hull) and hull: index into the pool
   Vec3 plane_normal = Vec3::UnitY();  // plane: the solid side is below normal · x = offset
   double plane_offset = 0.0;          // (m)
 
   static Shape sphere(double radius);
-  static Shape box(const ConvexHull& box_hull, const Vec3& half_extents);
-  static Shape convex(const ConvexHull& hull);
+  static Shape box(std::uint32_t box_hull, const Vec3& half_extents);
+  static Shape convex(std::uint32_t hull);
   static Shape plane(const Vec3& normal, double offset);
 };
+
+// the hull a box or hull shape names in the owner's pool (asserted in range in debug builds)
+inline const ConvexHull& hull_of(const Shape& shape, std::span<const ConvexHull> hulls) {
+  assert(shape.hull < hulls.size() && "Shape::hull outside the pool passed with it");
+  return hulls[shape.hull];
+}
 
 // ---- contacts ----
 
@@ -190,27 +205,30 @@ struct Manifold {
   std::uint16_t axes_tested = 0;  // separating axes evaluated (polyhedra; 0 otherwise)
 };
 
-// one collision function per pair of kinds; true when the shapes touch (touching counts)
-using CollideFunction = bool (*)(const Shape& a, const Pose& pose_a, const Shape& b,
-                                 const Pose& pose_b, Manifold& out);
+// one collision function per pair of kinds; true when the shapes touch (touching counts). hulls is
+// the pool the shapes' hull indices refer to (empty will do for spheres and planes)
+using CollideFunction = bool (*)(std::span<const ConvexHull> hulls, const Shape& a,
+                                 const Pose& pose_a, const Shape& b, const Pose& pose_b,
+                                 Manifold& out);
 
 // dispatch on the two kinds; a plane against a plane never collides (planes are static)
-bool collide(const Shape& a, const Pose& pose_a, const Shape& b, const Pose& pose_b, Manifold& out);
+bool collide(std::span<const ConvexHull> hulls, const Shape& a, const Pose& pose_a, const Shape& b,
+             const Pose& pose_b, Manifold& out);
 
-bool collide_spheres(const Shape& a, const Pose& pose_a, const Shape& b, const Pose& pose_b,
-                     Manifold& out);
-bool collide_sphere_box(const Shape& a, const Pose& pose_a, const Shape& b, const Pose& pose_b,
-                        Manifold& out);
-bool collide_sphere_hull(const Shape& a, const Pose& pose_a, const Shape& b, const Pose& pose_b,
-                         Manifold& out);
-bool collide_sphere_plane(const Shape& a, const Pose& pose_a, const Shape& b, const Pose& pose_b,
-                          Manifold& out);
-bool collide_boxes(const Shape& a, const Pose& pose_a, const Shape& b, const Pose& pose_b,
-                   Manifold& out);
-bool collide_hulls(const Shape& a, const Pose& pose_a, const Shape& b, const Pose& pose_b,
-                   Manifold& out);
-bool collide_hull_plane(const Shape& a, const Pose& pose_a, const Shape& b, const Pose& pose_b,
-                        Manifold& out);
+bool collide_spheres(std::span<const ConvexHull> hulls, const Shape& a, const Pose& pose_a,
+                     const Shape& b, const Pose& pose_b, Manifold& out);
+bool collide_sphere_box(std::span<const ConvexHull> hulls, const Shape& a, const Pose& pose_a,
+                        const Shape& b, const Pose& pose_b, Manifold& out);
+bool collide_sphere_hull(std::span<const ConvexHull> hulls, const Shape& a, const Pose& pose_a,
+                         const Shape& b, const Pose& pose_b, Manifold& out);
+bool collide_sphere_plane(std::span<const ConvexHull> hulls, const Shape& a, const Pose& pose_a,
+                          const Shape& b, const Pose& pose_b, Manifold& out);
+bool collide_boxes(std::span<const ConvexHull> hulls, const Shape& a, const Pose& pose_a,
+                   const Shape& b, const Pose& pose_b, Manifold& out);
+bool collide_hulls(std::span<const ConvexHull> hulls, const Shape& a, const Pose& pose_a,
+                   const Shape& b, const Pose& pose_b, Manifold& out);
+bool collide_hull_plane(std::span<const ConvexHull> hulls, const Shape& a, const Pose& pose_a,
+                        const Shape& b, const Pose& pose_b, Manifold& out);
 
 // the signed distance from a world point to a hull's surface where it is inside or on it
 // (≤ 0), and a lower bound of the distance where it is outside: the largest face-plane distance
