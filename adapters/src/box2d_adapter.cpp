@@ -25,9 +25,10 @@ constexpr float kGroundHalfLength = 1000.0f;
 constexpr std::uint16_t kPlaneCategory = 0x0001, kParticleCategory = 0x0002;
 // a plane is an edge this long each way from its point (m): far beyond any particle scene
 constexpr float kPlaneHalfLength = 100.0f;
-// bounces below this normal speed are still restituted (Box2D's default, 1 m/s, would stop the
-// bounce scene's particle after a few apexes)
-constexpr float kRestitutionThreshold = 1e-3f;
+// particles: bounces below this normal speed are still restituted (Box2D's default, 1 m/s, would
+// stop the bounce scene's particle after a few apexes); rigid bodies take the scene's
+// kRestitutionThreshold, as every engine does
+constexpr float kParticleRestitutionThreshold = 1e-3f;
 
 double angle_about_z(const Quat& q) { return 2.0 * std::atan2(q.z(), q.w()); }
 
@@ -110,7 +111,7 @@ class Box2dEngine final : public Engine {
       fixture.shape = &edge;
       fixture.friction = float(p.friction);
       fixture.restitution = 0.0f;  // Box2D keeps the larger of the two: the particle's
-      fixture.restitutionThreshold = kRestitutionThreshold;
+      fixture.restitutionThreshold = kParticleRestitutionThreshold;
       fixture.filter.categoryBits = kPlaneCategory;
       fixture.filter.maskBits = kParticleCategory;
       ground->CreateFixture(&fixture);
@@ -137,7 +138,7 @@ class Box2dEngine final : public Engine {
       fixture.shape = &circle;
       fixture.friction = float(p.friction);  // Box2D mixes frictions as √(a b): the scene's
       fixture.restitution = float(p.restitution);
-      fixture.restitutionThreshold = kRestitutionThreshold;
+      fixture.restitutionThreshold = kParticleRestitutionThreshold;
       fixture.filter.categoryBits = kParticleCategory;
       fixture.filter.maskBits = kPlaneCategory;
       body->CreateFixture(&fixture);

@@ -29,11 +29,7 @@ struct ContactBlock {
   Lane bias_rate, mass_scale, impulse_scale;  // the soft step's stiffness (Catto, b2MakeSoft)
   LaneMask fresh;  // a point without a warm start, or hitting: the manifold is solved locally
   struct Point {
-    Lane anchor_a[3], anchor_b[3];
-    // the normal row's angular parts, r × n on each body and their response I⁻¹ (r × n): the
-    // row every pass reads most, computed once a step (the tangent rows are computed as read)
-    Lane normal_angular_a[3], normal_angular_b[3];
-    Lane normal_response_a[3], normal_response_b[3];
+    Lane anchor_a[3], anchor_b[3];  // the rows are computed from these as read
     Lane base_separation;  // at the step's start, less n·(anchor_b − anchor_a) (m)
     Lane normal_mass, tangent_mass[2];  // 1 / the velocity change per unit impulse (kg); 0 for
                                         // an empty point
@@ -43,9 +39,9 @@ struct ContactBlock {
     LaneMask starts_apart;    // a speculative point at the step's start
   } points[4];
 };
-// 144 floats a lane: 29 for the manifold, 28 for each of four points, 3 for the indices (576 bytes
-// a manifold, 144 a point)
-static_assert(sizeof(ContactBlock) == 144 * sizeof(float) * kBlockLanes);
+// 96 floats a lane: 29 for the manifold, 16 for each of four points, 3 for the indices (384 bytes
+// a manifold, 96 a point)
+static_assert(sizeof(ContactBlock) == 96 * sizeof(float) * kBlockLanes);
 inline constexpr std::uint32_t kNoContact = ~std::uint32_t{0};
 
 struct ContactLanes {

@@ -45,7 +45,6 @@ V3 cross(const V3& a, const V3& b) {
   return {a.y * b.z - a.z * b.y, a.z * b.x - a.x * b.z, a.x * b.y - a.y * b.x};
 }
 V3 load3(const Lane (&v)[3]) { return {v[0], v[1], v[2]}; }
-void store3(Lane (&to)[3], const V3& v) { to[0] = v.x, to[1] = v.y, to[2] = v.z; }
 
 // a symmetric 3×3 in six lanes (xx, yy, zz, xy, xz, yz) times a vector
 V3 times(const Lane (&m)[6], const V3& v) {
@@ -83,6 +82,19 @@ V3 gather3(const float* base, LaneIndex index) {
           simd::gather<Lane>(base + 2, index)};
 }
 
+// a point's normal row: the angular parts r × n on each body and their response I⁻¹ (r × n).
+// Computed where read rather than kept in the block: the solve at a large pyramid is bound by the
+// bytes it streams, and these 12 lanes a point cost more to load than to compute
+struct NormalRow {
+  V3 angular_a, angular_b, response_a, response_b;
+
+  NormalRow(const ContactBlock& c, const ContactBlock::Point& p, const V3& n)
+      : angular_a(cross(load3(p.anchor_a), n)),
+        angular_b(cross(load3(p.anchor_b), n)),
+        response_a(times(c.inverse_inertia_a, angular_a)),
+        response_b(times(c.inverse_inertia_b, angular_b)) {}
+};
+
 // the two bodies of each lane, gathered from the body array, and scattered back
 struct LanePair {
   V3 va, wa, vb, wb;
@@ -113,18 +125,16 @@ struct LanePair {
   V3 relative_velocity(const ContactBlock::Point& p) const {
     return (vb + cross(wb, load3(p.anchor_b))) - (va + cross(wa, load3(p.anchor_a)));
   }
-  // the relative velocity along the normal, by the point's precomputed row
-  Lane normal_velocity(const V3& n, const ContactBlock::Point& p) const {
-    return dot(n, vb - va) + dot(wb, load3(p.normal_angular_b)) -
-           dot(wa, load3(p.normal_angular_a));
+  // the relative velocity along the normal, by the point's row
+  Lane normal_velocity(const V3& n, const NormalRow& row) const {
+    return dot(n, vb - va) + dot(wb, row.angular_b) - dot(wa, row.angular_a);
   }
-  // an impulse λ n on b at its anchor, and its opposite on a, by the precomputed row
-  void apply_normal(const ContactBlock& c, const ContactBlock::Point& p, const V3& n,
-                    Lane impulse) {
+  // an impulse λ n on b at its anchor, and its opposite on a, by the point's row
+  void apply_normal(const ContactBlock& c, const NormalRow& row, const V3& n, Lane impulse) {
     va = va - (c.inverse_mass_a * impulse) * n;
-    wa = wa - impulse * load3(p.normal_response_a);
+    wa = wa - impulse * row.response_a;
     vb = vb + (c.inverse_mass_b * impulse) * n;
-    wb = wb + impulse * load3(p.normal_response_b);
+    wb = wb + impulse * row.response_b;
   }
   // an impulse P on b at its anchor, and −P on a
   void apply(const ContactBlock& c, const ContactBlock::Point& p, const V3& impulse) {
@@ -403,19 +413,13 @@ void ContactPipeline::prepare_lanes(ContactBlock& c, const std::array<LaneMask, 
     const Lane separation = p.base_separation;
     // the separation is tracked from here: s = base + n·(motion of b's anchor − a's)
     p.base_separation = separation - dot(n, rb - ra);
-    const V3 ja = cross(ra, n), jb = cross(rb, n);
-    const V3 response_a = times(c.inverse_inertia_a, ja), response_b = times(c.inverse_inertia_b, jb);
-    store3(p.normal_angular_a, ja);
-    store3(p.normal_angular_b, jb);
-    store3(p.normal_response_a, response_a);
-    store3(p.normal_response_b, response_b);
     p.normal_mass = effective_mass(ra, rb, n, exists[j]);
     p.tangent_mass[0] = effective_mass(ra, rb, load3(c.tangent[0]), exists[j]);
     p.tangent_mass[1] = effective_mass(ra, rb, load3(c.tangent[1]), exists[j]);
     // a point still apart hits, if it hits this step, at the speed free flight gives it over the
     // gap: v² = v₀² − 2 a s₀ with a the relative acceleration gravity gives along n (the speed
     // the solve sees is one a speculative push has already slowed)
-    const Lane approach = pair.normal_velocity(n, p);
+    const Lane approach = pair.normal_velocity(n, NormalRow(c, p, n));
     p.starts_apart = exists[j] & (separation > zero);
     const Lane squared = approach * approach - splat(2.0f) * acceleration * separation;
     p.approach_velocity = simd::select(p.starts_apart, zero - simd::sqrt(simd::max(squared, zero)),
@@ -456,7 +460,7 @@ void ContactPipeline::solve(double h, bool bias) {
       const LaneMask unread = (p.max_normal_impulse == zero) & ~p.starts_apart;
       if (simd::any_of(unread))
         p.approach_velocity =
-            simd::select(unread, pair.normal_velocity(n, p), p.approach_velocity);
+            simd::select(unread, pair.normal_velocity(n, NormalRow(c, p, n)), p.approach_velocity);
     }
     const NormalMotion motion(bodies_, c);
     // non-penetration: the normal impulse accumulates and stays ≥ 0 (Catto GDC 2006). A
@@ -468,7 +472,8 @@ void ContactPipeline::solve(double h, bool bias) {
       const LaneMask active = round == 0 ? LaneMask(zero == zero) : c.fresh;
       for (ContactBlock::Point& p : c.points) {
         const Lane s = motion.separation(p);
-        const Lane vn = pair.normal_velocity(n, p);
+        const NormalRow row(c, p, n);
+        const Lane vn = pair.normal_velocity(n, row);
         const LaneMask apart = s > zero;
         // speculative: the bodies may close the gap in this step, no more
         Lane velocity_bias = s * inverse_h, mass_scale = one, impulse_scale = zero;
@@ -491,7 +496,7 @@ void ContactPipeline::solve(double h, bool bias) {
         const Lane applied = accumulated - p.normal_impulse;
         p.normal_impulse = accumulated;
         p.max_normal_impulse = simd::max(p.max_normal_impulse, applied);
-        pair.apply_normal(c, p, n, applied);
+        pair.apply_normal(c, row, n, applied);
       }
     }
     // Coulomb friction: the friction impulse accumulates on the two tangents and its length
@@ -535,11 +540,12 @@ void ContactPipeline::restitution() {
           const LaneMask hit = (p.approach_velocity < threshold) &
                                (p.max_normal_impulse > zero) & (c.restitution > zero);
           if (!simd::any_of(hit)) continue;
-          const Lane vn = pair.normal_velocity(n, p);
+          const NormalRow row(c, p, n);
+          const Lane vn = pair.normal_velocity(n, row);
           const Lane impulse = zero - p.normal_mass * (vn + c.restitution * p.approach_velocity);
           const Lane accumulated =
               simd::select(hit, simd::max(p.normal_impulse + impulse, zero), p.normal_impulse);
-          pair.apply_normal(c, p, n, accumulated - p.normal_impulse);
+          pair.apply_normal(c, row, n, accumulated - p.normal_impulse);
           p.normal_impulse = accumulated;
         }
       pair.store(bodies_, c);

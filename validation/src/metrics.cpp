@@ -598,10 +598,7 @@ std::optional<BodyOnPlane> body_on_plane(const Scene& scene, const Trajectory& r
 void judge_bounce(const Scene& scene, const Trajectory& run, ContactSummary& out) {
   const auto found = body_on_plane(scene, run);
   if (!found) return;
-  const BodySpec& b = found->body;
-  const BodySpec& plane = found->plane;
-  const int slot = found->slot;
-  const Vec3 n = found->n;
+  const auto& [b, plane, slot, n] = *found;
   const double g = -scene.gravity.dot(n);
   auto clearance = [&](const SampledState& s) {
     return (s.position - plane.position).dot(n) - support_extent(b, s.orientation, n);
@@ -650,10 +647,7 @@ void judge_bounce(const Scene& scene, const Trajectory& run, ContactSummary& out
 void judge_incline(const Scene& scene, const Trajectory& run, ContactSummary& out) {
   const auto found = body_on_plane(scene, run);
   if (!found) return;
-  const BodySpec& b = found->body;
-  const BodySpec& plane = found->plane;
-  const int slot = found->slot;
-  const Vec3 n = found->n;
+  const auto& [b, plane, slot, n] = *found;
   const Vec3 along = scene.gravity - scene.gravity.dot(n) * n;
   if (along.norm() < 1e-12 * scene.gravity.norm()) return;  // a level plane has no downhill
   const Vec3 downhill = along.normalized();
