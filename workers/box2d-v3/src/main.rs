@@ -100,7 +100,6 @@ impl Engine for Box2dV3 {
                 let body = b2CreateBody(world, &bd);
                 let mut sd = b2DefaultShapeDef();
                 sd.density = 0.0;
-                sd.updateBodyMass = false;
                 sd.material.friction = b.friction as f32;
                 sd.material.restitution = b.restitution as f32;
                 if !scene.collisions {
