@@ -126,7 +126,8 @@ TEST(WorkerConformance, FreeFlightFollowsTheClosedForm) {
       EXPECT_LT((s.bodies[0].linear_velocity - (b.linear_velocity + scene.gravity * t)).norm(),
                 1e-3 * (1.0 + b.linear_velocity.norm()))
           << w.engine << " at t = " << t;
-      EXPECT_NEAR(s.bodies[0].angular_velocity.z(), 3.0, 1e-4) << w.engine;
+      // single precision engines: the spin within 10⁻³ rad/s
+      EXPECT_NEAR(s.bodies[0].angular_velocity.z(), 3.0, 1e-3) << w.engine;
       // the turn about z: θ = 3 t, as a unit quaternion (either sign)
       const Quat expected(Eigen::AngleAxisd(3.0 * t, Vec3::UnitZ()));
       EXPECT_GT(std::abs(s.bodies[0].orientation.dot(expected)), 1.0 - 1e-4)
@@ -185,7 +186,9 @@ TEST(WorkerConformance, AnswersWhatItCannotDo) {
     spatial.bodies[0].angular_velocity = Vec3(0.5, 2.0, 1.5);
     const RunResult r = run(w, spatial);
     EXPECT_TRUE(r.status == Status::Ok || r.status == Status::Unsupported) << w.engine;
-    if (r.status == Status::Unsupported) EXPECT_FALSE(r.message.empty()) << w.engine;
+    if (r.status == Status::Unsupported) {
+      EXPECT_FALSE(r.message.empty()) << w.engine;
+    }
   }
 }
 

@@ -53,6 +53,9 @@ impl Engine for Box2dV3 {
             setting("springs", "external force at the attachment points, from the state at the \
                      start of each step", "the same method as the other peers' springs"),
         ];
+        s.push(setting("subStepCount on springs without contacts", 1,
+                       "the spring force is held over the step, so one substep makes it \
+                        semi-implicit Euler, as for the other peers"));
         s.push(setting("subStepCount", substeps(variant),
                        if variant == "iterations-10" {
                            "equal iterations (default 4): v3's substep is its iteration"
@@ -132,7 +135,8 @@ impl Engine for Box2dV3 {
                 }
                 bodies.push(body);
             }
-            Ok(Box::new(Box2dWorld { world, bodies, dt: scene.dt as f32, substeps: substeps(variant) }))
+            let substeps = if scene.springs_without_contacts() { 1 } else { substeps(variant) };
+            Ok(Box::new(Box2dWorld { world, bodies, dt: scene.dt as f32, substeps }))
         }
     }
 }

@@ -88,6 +88,14 @@ impl Scene {
     pub fn has_contacts(&self) -> bool {
         self.collisions && self.bodies.len() > 1
     }
+    /// Springs reach the engines as an external force held over the whole step. An engine that
+    /// substeps would advance its positions through the step's substeps under that stale force
+    /// (a mix of explicit and semi-implicit Euler: the conformance spring's energy doubled in
+    /// 5 s); substeps serve only contacts, so a scene with springs and no contacts is stepped in
+    /// one substep, which makes it the same semi-implicit Euler as the other peers' springs.
+    pub fn springs_without_contacts(&self) -> bool {
+        !self.springs.is_empty() && !self.has_contacts()
+    }
     /// every body shares one friction and one restitution
     pub fn one_material(&self) -> bool {
         self.bodies.windows(2).all(|w| {

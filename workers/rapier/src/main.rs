@@ -37,6 +37,9 @@ impl Engine for Rapier {
             setting("plane", "a HalfSpace collider, normal the body's local +y",
                     "the scene's plane is its body's local y = 0 surface, solid below"),
         ];
+        s.push(setting("num_solver_iterations on springs without contacts", 1,
+                       "Rapier's iterations are substeps; the spring force is held over the step, \
+                        so one substep makes it semi-implicit Euler, as for the other peers"));
         if variant == "iterations-10" {
             s.push(setting("num_solver_iterations", EQUAL_ITERATIONS,
                            "equal iterations (default 4): Rapier's iterations are substeps"));
@@ -61,6 +64,9 @@ impl Engine for Rapier {
         world.integration_parameters.dt = scene.dt as f32;
         if variant == "iterations-10" {
             world.integration_parameters.num_solver_iterations = EQUAL_ITERATIONS;
+        }
+        if scene.springs_without_contacts() {
+            world.integration_parameters.num_solver_iterations = 1;
         }
         let mut handles = Vec::with_capacity(scene.bodies.len());
         for b in &scene.bodies {
