@@ -32,7 +32,7 @@ SERIES = [
     ("angular_momentum_drift", "Relative angular momentum drift |L − L₀| / |L₀|", "", "angular_momentum_drift_max"),
 ]
 
-STATUS_ORDER = ["ok", "exploded", "unsupported", "timeout", "crashed", "error"]
+STATUS_ORDER = ["ok", "diverged", "exploded", "unsupported", "timeout", "crashed", "error"]
 
 # the contact table of a contact scenario: results.csv column, heading (docs/metrics.md, "Contact")
 CONTACT_COLUMNS = [
@@ -671,7 +671,7 @@ TEMPLATE = jinja2.Template("""<!doctype html>
  table { border-collapse: collapse; margin: 0.5em 0 1.5em; font-size: 0.9em; }
  th, td { border: 1px solid #ccc; padding: 3px 7px; text-align: right; vertical-align: top; }
  th { background: #f0f0f0; } td.l, th.l { text-align: left; }
- .ok { color: #176a17; } .exploded, .crashed, .timeout, .error { color: #b00; font-weight: bold; }
+ .ok { color: #176a17; } .exploded, .diverged, .crashed, .timeout, .error { color: #b00; font-weight: bold; }
  .unsupported { color: #777; } .note { color: #555; font-size: 0.9em; }
  td.stable { background: #dff0d8; } td.unstable, td.exploded { background: #f2dede; }
  td.over-damped { background: #fcf8e3; }
@@ -688,7 +688,7 @@ TEMPLATE = jinja2.Template("""<!doctype html>
 <th>steps/s (median)</th><th>min–max</th><th>body-steps/s</th><th>real-time ×</th>
 {% for col, title in summary_columns %}<th>{{ title }}</th>{% endfor %}<th class="l">message</th></tr>
 {% for r in summary_rows %}<tr><td class="l">{{ r.scenario }}</td><td class="l">{{ r.label }}</td>
-<td class="l {{ r.status }}">{{ r.status }}</td><td>{{ r.dt }}</td><td>{{ r.sps }}</td><td>{{ r.spread }}</td>
+<td class="l {{ r.status }}">{{ r.status }}{% if r.reference_failed %}<br><span class="error">reference {{ r.reference_failed }}</span>{% endif %}</td><td>{{ r.dt }}</td><td>{{ r.sps }}</td><td>{{ r.spread }}</td>
 <td>{{ r.bsps }}</td><td>{{ r.rtf }}</td>{% for v in r.errors %}<td>{{ v }}</td>{% endfor %}
 <td class="l">{{ r.message }}</td></tr>{% endfor %}</table>
 
@@ -696,6 +696,7 @@ TEMPLATE = jinja2.Template("""<!doctype html>
 <p>{{ s.description }}<br><em>{{ s.question }}</em></p>
 <p class="note">dt {{ s.dt }} s · {{ s.duration }} s simulated · reference: {{ s.reference }}
 {% if s.self_error %} · reference changes by at most {{ s.self_error }} when its step is halved (its own error){% endif %}
+{% for f in s.reference_failures %}<br><span class="error">the reference at dt {{ f.dt }} s did not run, so rows at that step have no position or orientation error: {{ f.why }}</span>{% endfor %}
 {% if s.sweep %}<br>speed against error swept over dt = {{ s.sweep }} s; the charts above the sweep use dt {{ s.dt }} s{% endif %}
  · scene files in <code>scenes/</code></p>
 {% for t in s.contact %}<table><tr><th class="l">engine/variant</th><th class="l">status</th><th>ms per step</th>
@@ -849,6 +850,13 @@ over all rounds, its spread the least and largest ratio over consecutive blocks 
 """, autoescape=True)
 
 
+def reference_failed(row) -> str:
+    """The status of the converged reference a row needed when that reference did not run
+    ("timeout", "error", …), else "": such a row has no position or orientation error."""
+    status = row.get("reference_status")
+    return status if isinstance(status, str) and status and status != "ok" else ""
+
+
 def build_report(folder: Path) -> Path:
     results, meta = load_results(folder)
     present = [(c, t) for c, t, _, summary in SERIES if summary in results and results[summary].notna().any()]
@@ -869,6 +877,7 @@ def build_report(folder: Path) -> Path:
             sps=fmt(r["steps_per_s"]), spread=spread, bsps=fmt(r.get("body_steps_per_s")),
             rtf=fmt(r.get("realtime_factor")),
             errors=[fmt(r.get(f"{c}_max")) for c, _ in present],
+            reference_failed=reference_failed(r),
             message=r["message"] if isinstance(r.get("message"), str) else ""))
 
     scenarios = []
@@ -905,6 +914,8 @@ def build_report(folder: Path) -> Path:
             name=name, description=info.get("description", ""), question=info.get("question", ""),
             dt=fmt(info.get("dt")), duration=fmt(info.get("duration")), reference=info.get("reference", ""),
             self_error=fmt(self_error) if self_error is not None else "",
+            reference_failures=[dict(dt=fmt(float(dt)), why=why)
+                                for dt, why in (info.get("reference_failure") or {}).items()],
             sweep=", ".join(f"1/{1 / dt:.0f}" for dt in sweep) if len(sweep) > 1 else "",
             charts=charts, front=front, contact=contact_table(own),
             unsupported=[f"{r['label']}: {r['message']}" for _, r in own.iterrows() if r["status"] == "unsupported"]))

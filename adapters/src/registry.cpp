@@ -21,6 +21,9 @@ const std::vector<EngineInfo>& linked_engines() {
 #ifdef PHYSBENCH_HAVE_MUJOCO
     list.push_back(mujoco_engine_info());
 #endif
+#ifdef PHYSBENCH_HAVE_TEST_FAULT
+    list.push_back(fault_engine_info());
+#endif
     return list;
   }();
   return engines;

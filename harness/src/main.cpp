@@ -41,6 +41,7 @@ void print_list(const fs::path& self) {
   std::cout << "engines (variants; the first is the default):\n";
   std::string current;
   for (const EngineVariant& ev : engine_catalog(self)) {
+    if (ev.test_only) continue;  // test-fault is for the harness's own tests
     if (ev.engine != current) {
       current = ev.engine;
       std::cout << "\n  " << ev.engine << "  " << ev.version << "\n     ";

@@ -88,7 +88,7 @@ std::vector<EngineVariant> engine_catalog(const fs::path& self) {
   std::vector<EngineVariant> catalog;
   for (const EngineInfo& info : linked_engines())
     for (const std::string& v : info.variants)
-      catalog.push_back({info.name, v, info.version, self});
+      catalog.push_back({info.name, v, info.version, self, info.test_only});
 #ifdef PHYSBENCH_HAVE_BULLET64
   // the double-precision Bullet build lives in its own executable beside this one
   for (std::size_t i = 0; i < catalog.size(); ++i)
@@ -102,7 +102,8 @@ std::vector<EngineVariant> engine_catalog(const fs::path& self) {
   for (const CatalogEntry& entry : read_worker_catalog(worker_catalog_file(), default_workers_dir()))
     if (entry.missing.empty())
       for (const std::string& v : entry.variants)
-        catalog.push_back({entry.engine, v, "external worker", entry.command[0], entry.command});
+        catalog.push_back(
+            {entry.engine, v, "external worker", entry.command[0], false, entry.command});
   return catalog;
 }
 
@@ -295,6 +296,7 @@ const std::vector<std::string> kColumns = {"scenario",
                                            "tunnelled",
                                            "escaped",
                                            "reference",
+                                           "reference_status",
                                            "reference_self_error",
                                            "trajectory",
                                            "message"};
@@ -336,6 +338,8 @@ void write_trajectory_csv(const fs::path& path, const Trajectory& run, const Err
 
 struct ReferenceRun {
   bool available = false;
+  // converged, not available: the failed run's status ("timeout", "error", …) and why
+  std::string failed_status;
   std::string failure;
   Trajectory trajectory;             // converged: the dt/divisor run
   double self_error = std::nan("");  // converged: difference to the dt/(2·divisor) run
@@ -373,8 +377,10 @@ ReferenceRun converged_reference(const Scene& scene, const std::string& tag, con
     const RunResult r = run_job(rtp_rk4, {file, work / "reference.json", work / "reference.log"},
                                 scene.probe_every_steps() * divisor, 0.0, timeout);
     if (r.status != Status::Ok) {
+      reference.failed_status = to_string(r.status);
       reference.failure = "reference run (rtp rk4 at dt/" + std::to_string(divisor) + ") " +
                           to_string(r.status) + ": " + r.message;
+      std::cerr << "  reference for " << tag << " failed: " << reference.failure << "\n";
       return reference;
     }
     runs.push_back(r.trajectory);
@@ -397,7 +403,7 @@ int run_suite(const RunOptions& options, const fs::path& self) {
   auto known_engines = [&] {
     std::string names;
     for (const EngineVariant& ev : catalog)
-      if (names.find(ev.engine) == std::string::npos)
+      if (!ev.test_only && names.find(ev.engine) == std::string::npos)
         names += (names.empty() ? "" : ", ") + ev.engine;
     return names;
   };
@@ -458,7 +464,9 @@ int run_suite(const RunOptions& options, const fs::path& self) {
 
   std::vector<EngineVariant> jobs_engines;
   for (const EngineVariant& ev : catalog)
-    if (selected(options.engines, ev.engine) && selected(options.variants, ev.variant))
+    // a test-only engine runs only when named: "every engine" never includes it
+    if (selected(options.engines, ev.engine) && selected(options.variants, ev.variant) &&
+        (!ev.test_only || !options.engines.empty()))
       jobs_engines.push_back(ev);
   if (jobs_engines.empty()) throw RunError("no engine variant matches the filters given");
 
@@ -535,6 +543,8 @@ int run_suite(const RunOptions& options, const fs::path& self) {
       if (scene.reference.kind == ReferenceKind::Converged)
         reference = converged_reference(scene, tag, out, work, self, options.timeout_seconds);
       scenario_meta["reference_self_error"][number(dt)] = reference.self_error;
+      if (!reference.failure.empty())
+        scenario_meta["reference_failure"][number(dt)] = reference.failure;
       scenario_meta["scene_file"][number(dt)] = fs::relative(scene_file, out).string();
 
       int dynamic_bodies = 0;
@@ -577,6 +587,9 @@ int run_suite(const RunOptions& options, const fs::path& self) {
         row["steps"] = std::to_string(scene.step_count());
         row["bodies"] = std::to_string(dynamic_bodies);
         row["reference"] = to_string(scene.reference.kind);
+        // a converged reference is a job of its own: whether it ran is on every row that needs it
+        if (scene.reference.kind == ReferenceKind::Converged)
+          row["reference_status"] = reference.available ? "ok" : reference.failed_status;
         row["reference_self_error"] = number(reference.self_error);
         std::string message = r.message;
 
@@ -609,7 +622,8 @@ int run_suite(const RunOptions& options, const fs::path& self) {
               if (reference.available)
                 against = &reference.trajectory;
               else
-                message += (message.empty() ? "" : "; ") + reference.failure;
+                message += (message.empty() ? "" : "; ") +
+                           std::string("no position or orientation error: ") + reference.failure;
             }
             Scene measured = scene;
             if (!against) {

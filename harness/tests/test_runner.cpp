@@ -5,8 +5,10 @@
 #include <algorithm>
 #include <filesystem>
 #include <fstream>
+#include <iomanip>
 #include <map>
 #include <sstream>
+#include <tuple>
 
 #include <nlohmann/json.hpp>
 
@@ -196,6 +198,76 @@ TEST(Runner, RunawaySceneIsRecordedAsExploded) {
   }
 }
 
+// one suite: a scene that sends rtp to infinity, and the test-only engine whose adapter aborts or
+// hangs in its first step, beside a normal scene; every failure is its own row and the jobs after
+// each (the normal scene's rtp job runs after both faults on the runaway scene) still finish
+TEST(Runner, ExplodedHungAndAbortingJobsAreRowsAndTheOthersStillComplete) {
+  const fs::path dir = fresh_dir("faults");
+  std::ofstream(dir / "runaway.json")
+      << R"({"name": "runaway", "dt": 0.01, "duration": 1, "collisions": false,
+    "bodies": [{"shape": {"type": "sphere", "radius": 0.1}, "mass": 1e-3, "position": [1, 0, 0]}],
+    "springs": [{"body_a": 0, "body_b": -1, "point_b": [0, 0, 0], "stiffness": 1e12}],
+    "probe": {"metrics": ["energy"]}})";  // omega dt = 3e5: RK4 overflows to inf, then NaN
+  std::ofstream(dir / "normal.json")
+      << R"({"name": "normal", "dt": 0.01, "duration": 1, "collisions": false,
+    "bodies": [{"shape": {"type": "sphere", "radius": 0.1}, "mass": 1, "position": [1, 0, 0]}],
+    "springs": [{"body_a": 0, "body_b": -1, "point_b": [0, 0, 0], "stiffness": 10}],
+    "probe": {"metrics": ["energy"]}})";
+  const Invocation inv = physbench(
+      {"run", "--scene", (dir / "runaway.json").string(), "--scene", (dir / "normal.json").string(),
+       "-e", "rtp,test-fault", "--variant", "rk4,abort,hang", "--budget", "0", "--timeout", "3",
+       "--out", (dir / "r").string()},
+      dir);
+  ASSERT_EQ(inv.outcome.kind, ChildOutcome::Kind::Exited) << inv.output;
+  ASSERT_EQ(inv.outcome.exit_code, 0) << inv.output;
+  EXPECT_NE(inv.output.find("4 job(s) crashed, timed out or failed"), std::string::npos)
+      << inv.output;
+  const auto rows = read_rows(dir / "r" / "results.csv");
+  ASSERT_EQ(rows.size(), 6u) << inv.output;
+  auto status_of = [&](const std::string& scenario, const std::string& variant) {
+    for (const auto& r : rows)
+      if (r.at("scenario") == scenario && r.at("variant") == variant) return r;
+    ADD_FAILURE() << "no row for " << scenario << " " << variant;
+    return std::map<std::string, std::string>{{"status", ""}, {"message", ""}};
+  };
+  const auto exploded = status_of("runaway", "rk4");
+  EXPECT_EQ(exploded.at("status"), "exploded") << exploded.at("message");
+  EXPECT_NE(exploded.at("message").find("non-finite or runaway state"), std::string::npos)
+      << exploded.at("message");
+  for (const std::string scenario : {"runaway", "normal"}) {
+    const auto crashed = status_of(scenario, "abort");
+    EXPECT_EQ(crashed.at("status"), "crashed") << crashed.at("message");
+    EXPECT_NE(crashed.at("message").find("killed by signal 6"), std::string::npos)
+        << crashed.at("message");
+    const auto hung = status_of(scenario, "hang");
+    EXPECT_EQ(hung.at("status"), "timeout") << hung.at("message");
+    EXPECT_NE(hung.at("message").find("timed out after"), std::string::npos) << hung.at("message");
+  }
+  const auto normal = status_of("normal", "rk4");
+  EXPECT_EQ(normal.at("status"), "ok") << normal.at("message");
+  EXPECT_FALSE(normal.at("steps_per_s").empty());
+  EXPECT_FALSE(normal.at("energy_drift_max").empty());
+  EXPECT_TRUE(fs::exists(dir / "r" / normal.at("trajectory")));
+  EXPECT_FALSE(fs::exists(dir / "r" / ".work")) << "no worker's files are left behind";
+}
+
+TEST(Runner, TestOnlyEngineIsNeitherListedNorRunByDefault) {
+  const fs::path dir = fresh_dir("test_only");
+  const Invocation list = physbench({"list"}, dir);
+  ASSERT_EQ(list.outcome.exit_code, 0) << list.output;
+  EXPECT_EQ(list.output.find("test-fault"), std::string::npos) << list.output;
+  // every engine, every variant: not the test-only one
+  const Invocation inv =
+      physbench({"run", "-s", "projectile", "--budget", "0", "--out", (dir / "r").string()}, dir);
+  ASSERT_EQ(inv.outcome.exit_code, 0) << inv.output;
+  for (const auto& row : read_rows(dir / "r" / "results.csv"))
+    EXPECT_NE(row.at("engine"), "test-fault");
+  // an unknown engine's message lists the real engines only
+  const Invocation bad = physbench({"run", "-e", "havok", "--out", (dir / "x").string()}, dir);
+  EXPECT_EQ(bad.outcome.exit_code, 2);
+  EXPECT_EQ(bad.output.find("test-fault"), std::string::npos) << bad.output;
+}
+
 TEST(Runner, EnergyGrowthOverAHundredPercentReadsDivergedNotOk) {
   // a spring at ω dt = 5/6: the midpoint method gains (ω dt)⁴/4 = 12 % of its energy a step and
   // ends finite (some 30 m out) but 10³ times higher; symplectic Euler's energy stays bounded
@@ -220,6 +292,78 @@ TEST(Runner, EnergyGrowthOverAHundredPercentReadsDivergedNotOk) {
   EXPECT_NE(euler->at("message").find("energy grew to"), std::string::npos) << euler->at("message");
   EXPECT_FALSE(euler->at("steps_per_s").empty()) << "it finished: its speed is a measurement";
   EXPECT_EQ(symplectic->at("status"), "ok") << symplectic->at("message");
+}
+
+// a body on a spring compared with the converged reference (rtp RK4 at dt / divisor)
+std::string converged_spring_scene(const std::string& name, double dt, double duration,
+                                   int divisor) {
+  std::ostringstream scene;
+  scene << std::setprecision(17) << R"({"name": ")" << name << R"(", "dt": )" << dt
+        << R"(, "duration": )" << duration << R"(, "collisions": false, "gravity": [0, 0, 0],
+    "bodies": [{"shape": {"type": "box", "half_extents": [0.1, 0.2, 0.3]}, "mass": 1,
+                "position": [1, 0, 0], "angular_velocity": [0, 1, 0]}],
+    "springs": [{"body_a": 0, "body_b": -1, "local_point_a": [0.1, 0, 0], "stiffness": 100}],
+    "probe": {"metrics": ["position", "orientation", "energy"]},
+    "reference": {"kind": "converged", "dt_divisor": )"
+        << divisor << "}}";
+  return scene.str();
+}
+
+TEST(Runner, ConvergedReferenceThatFailsOrTimesOutIsNamedOnEveryRowThatNeededIt) {
+  const fs::path dir = fresh_dir("reference_failure");
+  // 10⁵ steps: the reference at dt/1,024 would be 1.02·10⁸, over the step cap of 10⁸, so its
+  // worker rejects the refined scene (an error)
+  std::ofstream(dir / "capped.json") << converged_spring_scene("capped", 1e-3, 100.0, 1024);
+  // 9·10⁴ steps (some 0.05 s a run) against 9.2·10⁷ for the reference (tens of seconds): only
+  // the reference outlasts the 5 s timeout
+  std::ofstream(dir / "slow.json") << converged_spring_scene("slow", 1e-3, 90.0, 1024);
+  // a reference that runs: the control
+  std::ofstream(dir / "fine.json") << converged_spring_scene("fine", 1e-3, 1.0, 4);
+  const Invocation inv =
+      physbench({"run", "--scene", (dir / "capped.json").string(), "--scene",
+                 (dir / "slow.json").string(), "--scene", (dir / "fine.json").string(), "-e", "rtp",
+                 "--variant", "rk4,euler", "--budget", "0", "--timeout", "5", "--out",
+                 (dir / "r").string()},
+                dir);
+  ASSERT_EQ(inv.outcome.exit_code, 0) << inv.output;
+  const auto rows = read_rows(dir / "r" / "results.csv");
+  ASSERT_EQ(rows.size(), 6u) << inv.output;
+  const std::map<std::string, std::string> expected = {
+      {"capped", "error"}, {"slow", "timeout"}, {"fine", "ok"}};
+  for (const auto& row : rows) {
+    const std::string what = row.at("scenario") + " " + row.at("variant");
+    const std::string& want = expected.at(row.at("scenario"));
+    // the engine's own run was fine; the reference's fate is a column of its own
+    EXPECT_EQ(row.at("status"), "ok") << what << ": " << row.at("message");
+    EXPECT_EQ(row.at("reference"), "converged") << what;
+    EXPECT_EQ(row.at("reference_status"), want) << what << ": " << row.at("message");
+    EXPECT_FALSE(row.at("energy_drift_max").empty()) << what << ": invariants need no reference";
+    if (want == "ok") {
+      EXPECT_FALSE(row.at("position_err_max").empty()) << what;
+      EXPECT_FALSE(row.at("orientation_err_max").empty()) << what;
+      EXPECT_FALSE(row.at("reference_self_error").empty()) << what;
+      EXPECT_EQ(row.at("message").find("reference"), std::string::npos) << row.at("message");
+      continue;
+    }
+    EXPECT_TRUE(row.at("position_err_max").empty()) << what;
+    EXPECT_TRUE(row.at("orientation_err_max").empty()) << what;
+    EXPECT_TRUE(row.at("reference_self_error").empty()) << what;
+    EXPECT_NE(row.at("message").find("no position or orientation error: reference run (rtp rk4 "
+                                     "at dt/1024) " +
+                                     want),
+              std::string::npos)
+        << what << ": " << row.at("message");
+  }
+  // the reason is in the metadata too, per step, for the report's section
+  std::ifstream in(dir / "r" / "metadata.json");
+  const nlohmann::json meta = nlohmann::json::parse(in);
+  EXPECT_NE(meta.at("scenarios").at("capped").at("reference_failure").dump().find("over the cap"),
+            std::string::npos)
+      << meta.at("scenarios").at("capped").dump();
+  EXPECT_NE(meta.at("scenarios").at("slow").at("reference_failure").dump().find("timed out"),
+            std::string::npos)
+      << meta.at("scenarios").at("slow").dump();
+  EXPECT_FALSE(meta.at("scenarios").at("fine").contains("reference_failure"));
 }
 
 // rtp's determinism across processes (in-process repeats and threads: validation's Determinism
@@ -247,6 +391,84 @@ TEST(Runner, RtpStackGivesTheSameBitsInSeparateProcessesAtOneAndTwoThreads) {
   }
   ASSERT_GT(samples[0].size(), 10u);
   for (std::size_t i = 1; i < samples.size(); ++i) EXPECT_EQ(samples[i], samples[0]) << "run " << i;
+}
+
+// each peer adapter gives the same results twice: two worker processes on the same scene, every
+// sample compared as the worker writes it (shortest round-trip text of each double, so equal text
+// is equal bits); a free scene with springs and a contact scene where every box starts in contact
+TEST(Runner, EveryEngineGivesTheSameBitsTwiceInSeparateProcesses) {
+  const fs::path dir = fresh_dir("repeatability");
+  ASSERT_EQ(physbench({"export-scenes", (dir / "scenes").string()}, dir).outcome.exit_code, 0);
+  struct Job {
+    std::string engine, variant;
+    fs::path host;
+    bool contacts_only = false;  // a variant that only applies where bodies touch
+  };
+  const fs::path bullet64 = fs::path(PHYSBENCH_EXE).parent_path() / "physbench-bullet64";
+  const std::vector<Job> peers = {
+#ifdef PHYSBENCH_HAVE_BULLET
+      {"bullet", "float", PHYSBENCH_EXE},
+      {"bullet", "double", bullet64},
+#endif
+#ifdef PHYSBENCH_HAVE_ODE
+      {"ode", "quickstep", PHYSBENCH_EXE},  // shuffles its rows with ODE's global generator
+      {"ode", "step", PHYSBENCH_EXE},
+#endif
+#ifdef PHYSBENCH_HAVE_BOX2D
+      {"box2d", "default", PHYSBENCH_EXE},
+#endif
+#ifdef PHYSBENCH_HAVE_MUJOCO
+      {"mujoco", "euler", PHYSBENCH_EXE},
+      {"mujoco", "pgs-10", PHYSBENCH_EXE, true},
+#endif
+  };
+  // (scene, seconds of it, rtp's variant for it)
+  const std::vector<std::tuple<std::string, double, std::string>> scenes = {
+      {"spring-chain", 2.0, "rk4"}, {"overlap-recovery", 1.0, "soft-step"}};
+  for (const auto& [name, seconds, rtp_variant] : scenes) {
+    std::ifstream in(dir / "scenes" / (name + ".0.json"));
+    ASSERT_TRUE(in) << "export-scenes wrote no " << name << ".0.json";
+    nlohmann::json scene = nlohmann::json::parse(in);
+    scene["duration"] = seconds;
+    const fs::path file = dir / (name + ".json");
+    std::ofstream(file) << scene.dump();
+    std::vector<Job> jobs = {{"rtp", rtp_variant, PHYSBENCH_EXE}};
+    jobs.insert(jobs.end(), peers.begin(), peers.end());
+    for (const Job& job : jobs) {
+      if (job.contacts_only && !scene.value("collisions", true)) continue;
+      const std::string what = name + " " + job.engine + "/" + job.variant;
+      std::vector<nlohmann::json> docs;
+      for (int run = 0; run < 2; ++run) {
+        const fs::path out = dir / (name + "." + job.engine + "." + job.variant + "." +
+                                    std::to_string(run) + ".json");
+        std::vector<std::string> argv = {job.host.string(), "worker", "--scene", file.string(),
+                                         "--engine", job.engine, "--variant", job.variant,
+                                         "--budget", "0", "--out", out.string()};
+        const ChildOutcome outcome = run_child(argv, (dir / "worker.log").string(), 300.0);
+        ASSERT_EQ(outcome.kind, ChildOutcome::Kind::Exited) << what << ": " << outcome.describe();
+        ASSERT_EQ(outcome.exit_code, 0)
+            << what << ": " << tail_of_file((dir / "worker.log").string(), 3);
+        std::ifstream result(out);
+        docs.push_back(nlohmann::json::parse(result));
+      }
+      EXPECT_NE(docs[0].at("status"), "unsupported") << what << ": " << docs[0].at("message");
+      EXPECT_EQ(docs[0].at("status"), docs[1].at("status")) << what;
+      EXPECT_EQ(docs[0].at("message"), docs[1].at("message")) << what;
+      ASSERT_GT(docs[0].at("samples").size(), 10u) << what << ": " << docs[0].at("message");
+      // text, not values: -0 and 0 differ here as they do in bits
+      const std::string first = docs[0].at("samples").dump(), second = docs[1].at("samples").dump();
+      EXPECT_TRUE(first == second) << what << ": the two runs differ, first at sample "
+                                   << [&] {
+                                        const auto& a = docs[0].at("samples");
+                                        const auto& b = docs[1].at("samples");
+                                        std::size_t k = 0;
+                                        while (k < a.size() && k < b.size() &&
+                                               a[k].dump() == b[k].dump())
+                                          ++k;
+                                        return k;
+                                      }();
+    }
+  }
 }
 
 TEST(Runner, UnknownEngineIsAClearErrorAndWritesNothing) {

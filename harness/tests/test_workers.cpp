@@ -30,7 +30,7 @@ fs::path scratch(const std::string& name) {
 std::vector<EngineVariant> built_workers() {
   std::vector<EngineVariant> workers;
   for (const CatalogEntry& e : read_worker_catalog(worker_catalog_file(), default_workers_dir()))
-    if (e.missing.empty()) workers.push_back({e.engine, e.variants[0], "", e.command[0], e.command});
+    if (e.missing.empty()) workers.push_back({e.engine, e.variants[0], "", e.command[0], false, e.command});
   return workers;
 }
 
@@ -198,7 +198,7 @@ TEST(WorkerProtocol, ACrashingOrSilentWorkerIsNeverOk) {
   const fs::path scene = scratch("crash.json");
   save_scene_file(free_flight(), scene.string());
   auto job = [&](std::vector<std::string> command) {
-    EngineVariant ev{"stand-in", "default", "", command[0], command};
+    EngineVariant ev{"stand-in", "default", "", command[0], false, command};
     return run_worker_job(ev, scene, scratch("crash.result.json"), scratch("crash.log"), 1, 0.0,
                           30.0);
   };

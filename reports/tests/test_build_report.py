@@ -402,3 +402,56 @@ def test_rain_verdicts_are_coloured_by_what_they_mean():
     cells = {r["label"]: r["cells"][0] for r in table["rows"]}
     assert cells == {"rtp/soft-step": ("contained", "stable"), "bullet/float": ("escaped", "unstable"),
                      "ode/quickstep": ("unsettled", "unstable"), "mujoco/euler": ("error", "unstable")}
+
+
+def test_a_failed_reference_is_shown_on_its_rows_and_its_section(tmp_path):
+    if not PHYSBENCH:
+        pytest.skip("PHYSBENCH_EXE is not set (CTest sets it)")
+    # 10⁵ steps of dt: the converged reference at dt/1,024 is over the step cap, so it fails
+    scene = {"name": "capped", "dt": 1e-3, "duration": 100.0, "collisions": False, "gravity": [0, 0, 0],
+             "bodies": [{"shape": {"type": "sphere", "radius": 0.1}, "mass": 1, "position": [1, 0, 0]}],
+             "springs": [{"body_a": 0, "body_b": -1, "stiffness": 100}],
+             "probe": {"metrics": ["position", "energy"]},
+             "reference": {"kind": "converged", "dt_divisor": 1024}}
+    (tmp_path / "capped.json").write_text(json.dumps(scene))
+    out = tmp_path / "r"
+    subprocess.run([PHYSBENCH, "run", "--scene", str(tmp_path / "capped.json"), "-e", "rtp", "--variant", "rk4",
+                    "--budget", "0", "--out", str(out)], check=True, capture_output=True)
+    (row,) = pd.read_csv(out / "results.csv").to_dict("records")
+    assert row["reference_status"] == "error"
+    assert build_report.reference_failed(row) == "error"
+    page = build_report.build_report(out).read_text()
+    summary = page.split("<h2>Summary</h2>")[1].split("</table>")[0]
+    assert re.search(r'<td class="l ok">ok<br><span class="error">reference error</span></td>', summary)
+    section = page.split("<h2>capped</h2>")[1]
+    assert "the reference at dt 0.001 s did not run" in section
+    assert "over the cap" in section
+    # a row whose reference ran carries no such note
+    assert build_report.reference_failed({"reference_status": "ok"}) == ""
+    assert build_report.reference_failed({"reference_status": float("nan")}) == ""
+
+
+def sweep_row(variant, dt, status, error, steps_per_s=1e5):
+    """A row of a swept scenario as results.csv has it: exploded rows carry no speed."""
+    exploded = status == "exploded"
+    return dict(scenario="spring", engine="rtp", variant=variant, label=f"rtp/{variant}", status=status, dt=dt,
+                duration=1.0, steps_per_s=float("nan") if exploded else steps_per_s,
+                wall_s_median=float("nan") if exploded else 1.0 / (dt * steps_per_s), position_err_max=error)
+
+
+def test_speed_against_error_leaves_out_diverged_rows_as_it_does_exploded_ones(monkeypatch):
+    rows = pd.DataFrame([
+        sweep_row("rk4", 1 / 30, "ok", 1e-3), sweep_row("rk4", 1 / 60, "ok", 6e-5),
+        sweep_row("rk4", 1 / 120, "ok", 4e-6),
+        # midpoint at 1/30 s: finished, finite, its energy x1000: diverged, with a speed and an error
+        sweep_row("midpoint", 1 / 30, "diverged", 30.0, steps_per_s=1e7), sweep_row("midpoint", 1 / 60, "ok", 1e-2),
+        sweep_row("midpoint", 1 / 120, "ok", 2e-3),
+        sweep_row("euler", 1 / 30, "exploded", 1e9), sweep_row("euler", 1 / 60, "ok", 0.2),
+    ])
+    monkeypatch.setattr(build_report, "figure_html", lambda fig: fig)  # the figure, not its HTML
+    fig, front = build_report.speed_error(rows)
+    curves = {trace.name.split(" (")[0]: list(trace.y) for trace in fig.data if trace.name != "Pareto front"}
+    assert curves == {"rtp/rk4": [1e-3, 6e-5, 4e-6], "rtp/midpoint": [1e-2, 2e-3], "rtp/euler": [0.2]}
+    # the diverged point is the cheapest of all: were it plotted, it would open the front
+    assert all(p["error"] not in (build_report.fmt(30.0), build_report.fmt(1e9)) for p in front)
+    assert {p["label"] for p in front} <= {"rtp/rk4", "rtp/midpoint", "rtp/euler"}

@@ -27,6 +27,20 @@ inline Trajectory converged_reference(const Scene& scene, int divisor) {
   return simulate(rtp_engine_info(), "rk4", refined(scene, divisor), options).trajectory;
 }
 
+// the scene's probed bodies held at their starting poses for the given number of samples, one a
+// step: a run that does not move, for testing metrics and verdicts
+inline Trajectory held_still(const Scene& scene, int samples) {
+  Trajectory t;
+  t.bodies = scene.probed_bodies();
+  for (int k = 0; k < samples; ++k) {
+    Sample s;
+    s.time = k * scene.dt;
+    for (int b : t.bodies) s.bodies.push_back({scene.bodies[b].position, scene.bodies[b].orientation});
+    t.samples.push_back(s);
+  }
+  return t;
+}
+
 inline Measured measure(const std::string& engine_name, const std::string& variant,
                         const Scene& scene) {
   SimulateOptions options;

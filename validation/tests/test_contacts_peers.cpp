@@ -103,21 +103,9 @@ TEST(ContactScenes, StartsExactlyTouchingOrAsOverlappedAsSaid) {
 
 // ---- the metrics on trajectories made here ----
 
-Trajectory still(const Scene& scene, int samples) {
-  Trajectory t;
-  t.bodies = scene.probed_bodies();
-  for (int k = 0; k < samples; ++k) {
-    Sample s;
-    s.time = k * scene.dt;
-    for (int b : t.bodies) s.bodies.push_back({scene.bodies[b].position, scene.bodies[b].orientation});
-    t.samples.push_back(s);
-  }
-  return t;
-}
-
 TEST(ContactMetrics, DriftHeightAndVerdicts) {
   const Scene scene = tower_scene(10);
-  Trajectory run = still(scene, 121);
+  Trajectory run = physbench::testing::held_still(scene, 121);
   ErrorSeries series = compare(scene, run, nullptr);
   ContactSummary c = contact_summary(scene, run, series);
   EXPECT_EQ(c.verdict, "stands");
@@ -140,7 +128,7 @@ TEST(ContactMetrics, DriftHeightAndVerdicts) {
 // a metric the scene does not ask for, or cannot compute, is empty, never zero
 TEST(ContactMetrics, WhatCannotBeComputedIsEmpty) {
   const Scene scene = tower_scene(10);
-  const Trajectory run = still(scene, 10);  // under a second: no "last second" to judge
+  const Trajectory run = physbench::testing::held_still(scene, 10);  // under a second: no "last second" to judge
   const ContactSummary c = contact_summary(scene, run, compare(scene, run, nullptr));
   EXPECT_FALSE(c.rest_speed_rms);
   EXPECT_FALSE(c.apex_relative_error_max);
@@ -149,7 +137,7 @@ TEST(ContactMetrics, WhatCannotBeComputedIsEmpty) {
   EXPECT_FALSE(c.tunnelled);
   Scene free_flight = projectile_scene();
   free_flight.probe.metrics = {Metric::Energy};
-  const ErrorSummary none = summarise(compare(free_flight, still(free_flight, 3), nullptr));
+  const ErrorSummary none = summarise(compare(free_flight, physbench::testing::held_still(free_flight, 3), nullptr));
   EXPECT_FALSE(none.stack_drift);
   EXPECT_FALSE(none.penetration);
 }

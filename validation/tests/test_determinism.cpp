@@ -108,4 +108,40 @@ TEST(Determinism, StackingSceneAgreesAcrossRepeatsAndThreads) {
   EXPECT_EQ(run_hash("soft-step-2t", scene), one);
 }
 
+// each peer adapter gives the same bits on two runs in one process (a fresh world each; a run in
+// a second process: harness/tests, Runner.EveryEngineGivesTheSameBitsTwiceInSeparateProcesses),
+// on springs and on boxes started in contact. Bullet's double build lives in another executable.
+TEST(Determinism, EveryPeerGivesTheSameBitsOnTwoRunsInOneProcess) {
+  std::vector<std::pair<std::string, std::string>> peers;
+#ifdef PHYSBENCH_HAVE_BULLET
+  peers.push_back({"bullet", "float"});
+#endif
+#ifdef PHYSBENCH_HAVE_ODE
+  peers.push_back({"ode", "quickstep"});  // shuffles its rows with ODE's global generator
+  peers.push_back({"ode", "step"});
+#endif
+#ifdef PHYSBENCH_HAVE_BOX2D
+  peers.push_back({"box2d", "default"});
+#endif
+#ifdef PHYSBENCH_HAVE_MUJOCO
+  peers.push_back({"mujoco", "euler"});
+  peers.push_back({"mujoco", "pgs-10"});  // contact scenes only
+#endif
+  if (peers.empty()) GTEST_SKIP() << "no peer engine in this build";
+  for (const Scene& scene : {scenario("spring-chain", 2.0), scenario("overlap-recovery", 1.0)}) {
+    for (const auto& [name, variant] : peers) {
+      if (variant == "pgs-10" && !scene.has_contacts()) continue;
+      SimulateOptions options;
+      options.timing_budget = 0.0;
+      const RunResult first = simulate(physbench::testing::engine(name), variant, scene, options);
+      const RunResult second = simulate(physbench::testing::engine(name), variant, scene, options);
+      const std::string what = scene.name + " " + name + "/" + variant;
+      EXPECT_NE(first.status, Status::Unsupported) << what << ": " << first.message;
+      EXPECT_EQ(first.status, second.status) << what;
+      ASSERT_GT(first.trajectory.samples.size(), 10u) << what << ": " << first.message;
+      EXPECT_EQ(trajectory_hash(first.trajectory), trajectory_hash(second.trajectory)) << what;
+    }
+  }
+}
+
 }  // namespace

@@ -24,17 +24,8 @@ struct Dimensions {
 };
 constexpr Dimensions kRain{2.5, 4.0, false}, kRainPlanar{4.0, 6.0, true};
 
-Trajectory at_start(const Scene& scene) {
-  Trajectory t;
-  t.bodies = scene.probed_bodies();
-  for (int k = 0; k < 61; ++k) {  // a second, so the last second's speeds are judged
-    Sample s;
-    s.time = k * scene.dt;
-    for (int b : t.bodies) s.bodies.push_back({scene.bodies[b].position, scene.bodies[b].orientation});
-    t.samples.push_back(s);
-  }
-  return t;
-}
+// a second, so the last second's speeds are judged
+Trajectory at_start(const Scene& scene) { return physbench::testing::held_still(scene, 61); }
 
 TEST(RainScenes, AreTheSceneTheyDescribe) {
   const Scene rain = rain_scene(false), planar = rain_scene(true);

@@ -64,6 +64,8 @@ struct EngineInfo {
   // a scene without springs): the run makes no row for it. Unset: every variant applies.
   std::function<bool(const Scene&, const std::string& variant)> applies;
   std::function<std::vector<Setting>(const std::string& variant)> settings;
+  // an engine for the harness's own tests (test-fault): not listed, and run only when named
+  bool test_only = false;
 };
 
 }  // namespace physbench

@@ -20,5 +20,7 @@ EngineInfo bullet_engine_info();
 EngineInfo ode_engine_info();
 EngineInfo box2d_engine_info();
 EngineInfo mujoco_engine_info();
+// test only: an "engine" whose variants abort or hang in their first step (fault_adapter.cpp)
+EngineInfo fault_engine_info();
 
 }  // namespace physbench

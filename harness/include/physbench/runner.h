@@ -18,6 +18,7 @@ struct EngineVariant {
   std::string variant;
   std::string version;
   std::filesystem::path host;
+  bool test_only = false;  // test-fault: not listed, and scheduled only when -e names it
   // an external worker's command line (workers/catalog.tsv, docs/worker-protocol.md), run in
   // place of `host worker`; empty for the engines linked into host
   std::vector<std::string> command{};
