@@ -99,7 +99,8 @@ std::vector<EngineVariant> engine_catalog(const fs::path& self) {
     }
 #endif
   // the external workers that are built; their version comes back with each result
-  for (const CatalogEntry& entry : read_worker_catalog(worker_catalog_file(), default_workers_dir()))
+  const fs::path catalog_file = worker_catalog_file();
+  for (const CatalogEntry& entry : read_worker_catalog(catalog_file, default_workers_dir()))
     if (entry.missing.empty())
       for (const std::string& v : entry.variants)
         catalog.push_back(

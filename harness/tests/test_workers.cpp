@@ -21,7 +21,8 @@ namespace fs = std::filesystem;
 using namespace physbench;
 
 fs::path scratch(const std::string& name) {
-  const fs::path dir = fs::temp_directory_path() / ("physbench-workers-" + std::to_string(getpid()));
+  const fs::path dir =
+      fs::temp_directory_path() / ("physbench-workers-" + std::to_string(getpid()));
   fs::create_directories(dir);
   return dir / name;
 }
@@ -30,7 +31,8 @@ fs::path scratch(const std::string& name) {
 std::vector<EngineVariant> built_workers() {
   std::vector<EngineVariant> workers;
   for (const CatalogEntry& e : read_worker_catalog(worker_catalog_file(), default_workers_dir()))
-    if (e.missing.empty()) workers.push_back({e.engine, e.variants[0], "", e.command[0], false, e.command});
+    if (e.missing.empty())
+      workers.push_back({e.engine, e.variants[0], "", e.command[0], false, e.command});
   return workers;
 }
 
@@ -207,9 +209,9 @@ TEST(WorkerProtocol, ACrashingOrSilentWorkerIsNeverOk) {
   EXPECT_EQ(job({"/bin/sh", "-c", "exit 3", "sh"}).status, Status::Error);
   EXPECT_EQ(job({scratch("no-such-worker").string()}).status, Status::Error);
   // a result that does not parse
-  const RunResult garbled =
-      job({"/bin/sh", "-c", "while [ $# -gt 1 ]; do [ \"$1\" = --out ] && echo '{' > \"$2\"; shift; done",
-           "sh"});
+  const RunResult garbled = job(
+      {"/bin/sh", "-c",
+       "while [ $# -gt 1 ]; do [ \"$1\" = --out ] && echo '{' > \"$2\"; shift; done", "sh"});
   EXPECT_EQ(garbled.status, Status::Error);
 }
 
