@@ -49,6 +49,12 @@ void print_list(const fs::path& self) {
     std::cout << " " << ev.variant;
   }
   std::cout << "\n";
+  const fs::path file = worker_catalog_file();
+  for (const CatalogEntry& entry : read_worker_catalog(file, default_workers_dir()))
+    if (!entry.missing.empty())
+      std::cout << "\n  " << entry.engine << "  (in " << file.string() << ", not runnable: "
+                << entry.missing << ")";
+  std::cout << "\n";
 }
 
 }  // namespace

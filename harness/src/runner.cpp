@@ -4,6 +4,7 @@
 #include <unistd.h>
 
 #include <algorithm>
+#include <cstdlib>
 #include <cstring>
 #include <chrono>
 #include <cmath>
@@ -33,6 +34,56 @@ namespace physbench {
 namespace fs = std::filesystem;
 using nlohmann::json;
 
+#ifndef PHYSBENCH_WORKER_CATALOG
+#define PHYSBENCH_WORKER_CATALOG ""
+#endif
+#ifndef PHYSBENCH_WORKERS_DIR
+#define PHYSBENCH_WORKERS_DIR ""
+#endif
+
+fs::path worker_catalog_file() {
+  if (const char* file = std::getenv("PHYSBENCH_WORKER_CATALOG")) return file;
+  return PHYSBENCH_WORKER_CATALOG;
+}
+
+fs::path default_workers_dir() {
+  if (const char* dir = std::getenv("PHYSBENCH_WORKERS_DIR")) return dir;
+  return PHYSBENCH_WORKERS_DIR;
+}
+
+std::vector<CatalogEntry> read_worker_catalog(const fs::path& file, const fs::path& workers_dir) {
+  std::vector<CatalogEntry> entries;
+  if (file.empty()) return entries;
+  std::ifstream in(file);
+  if (!in) return entries;
+  auto split = [](const std::string& text, char by) {
+    std::vector<std::string> parts;
+    std::string part;
+    std::istringstream stream(text);
+    while (std::getline(stream, part, by))
+      if (!part.empty()) parts.push_back(part);
+    return parts;
+  };
+  for (std::string line; std::getline(in, line);) {
+    if (line.empty() || line[0] == '#') continue;
+    // engine <tab> variants, comma-separated <tab> command line, words separated by spaces
+    const std::vector<std::string> fields = split(line, '\t');
+    if (fields.size() != 3) continue;
+    CatalogEntry entry;
+    entry.engine = fields[0];
+    entry.variants = split(fields[1], ',');
+    entry.command = split(fields[2], ' ');
+    if (entry.variants.empty() || entry.command.empty()) continue;
+    fs::path program = entry.command[0];
+    if (entry.command[0].find('/') == std::string::npos) program = workers_dir / program;
+    entry.command[0] = program.string();
+    if (access(program.c_str(), X_OK) != 0)
+      entry.missing = program.string() + " is not built (cargo missing, or its build failed)";
+    entries.push_back(std::move(entry));
+  }
+  return entries;
+}
+
 std::vector<EngineVariant> engine_catalog(const fs::path& self) {
   std::vector<EngineVariant> catalog;
   for (const EngineInfo& info : linked_engines())
@@ -47,6 +98,13 @@ std::vector<EngineVariant> engine_catalog(const fs::path& self) {
       break;
     }
 #endif
+  // the external workers that are built; their version comes back with each result
+  const fs::path catalog_file = worker_catalog_file();
+  for (const CatalogEntry& entry : read_worker_catalog(catalog_file, default_workers_dir()))
+    if (entry.missing.empty())
+      for (const std::string& v : entry.variants)
+        catalog.push_back(
+            {entry.engine, v, "external worker", entry.command[0], false, entry.command});
   return catalog;
 }
 
@@ -127,15 +185,23 @@ struct JobPaths {
   fs::path scene, result, log;
 };
 
-RunResult run_job(const EngineVariant& ev, const JobPaths& paths, int every_steps,
-                  double timing_budget, double timeout) {
-  const std::vector<std::string> argv = {ev.host.string(), "worker",
-                                         "--scene",        paths.scene.string(),
-                                         "--engine",       ev.engine,
-                                         "--variant",      ev.variant,
-                                         "--every",        std::to_string(every_steps),
-                                         "--budget",       number(timing_budget),
-                                         "--out",          paths.result.string()};
+}  // namespace
+
+RunResult run_worker_job(const EngineVariant& ev, const fs::path& scene_file,
+                         const fs::path& result_file, const fs::path& log_file, int every_steps,
+                         double timing_budget, double timeout) {
+  const struct {
+    fs::path scene, result, log;
+  } paths{scene_file, result_file, log_file};
+  // the protocol's arguments follow the host's `worker` subcommand or the external command
+  std::vector<std::string> argv = ev.command;
+  if (argv.empty()) argv = {ev.host.string(), "worker"};
+  for (const std::string& a : {std::string("--scene"), paths.scene.string(),
+                               std::string("--engine"), ev.engine, std::string("--variant"),
+                               ev.variant, std::string("--every"), std::to_string(every_steps),
+                               std::string("--budget"), number(timing_budget),
+                               std::string("--out"), paths.result.string()})
+    argv.push_back(a);
   fs::remove(paths.result);
   const ChildOutcome outcome = run_child(argv, paths.log.string(), timeout);
   if (outcome.kind == ChildOutcome::Kind::Interrupted)
@@ -168,6 +234,14 @@ RunResult run_job(const EngineVariant& ev, const JobPaths& paths, int every_step
   const std::string tail = tail_of_file(paths.log.string(), 3);
   if (!tail.empty()) result.message += ": " + tail;
   return result;
+}
+
+namespace {
+
+RunResult run_job(const EngineVariant& ev, const JobPaths& paths, int every_steps,
+                  double timing_budget, double timeout) {
+  return run_worker_job(ev, paths.scene, paths.result, paths.log, every_steps, timing_budget,
+                        timeout);
 }
 
 // ---- the results folder -------------------------------------------------------------------------

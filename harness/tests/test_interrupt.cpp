@@ -9,6 +9,7 @@
 #include <unistd.h>
 
 #include <chrono>
+#include <cstdlib>
 #include <filesystem>
 #include <fstream>
 #include <sstream>
@@ -142,6 +143,50 @@ TEST_P(Interrupt, KillsTheWorkerAndMarksTheRunIncomplete) {
   EXPECT_NE(read_text(dir / "reuse.log").find("already holds files"), std::string::npos)
       << read_text(dir / "reuse.log");
   EXPECT_EQ(read_text(dir / "earlier" / "results.csv"), earlier_csv);
+  prctl(PR_SET_CHILD_SUBREAPER, 0);
+}
+
+// an external worker (a catalog line, docs/worker-protocol.md) runs through the same process
+// machinery: the runner's signal kills its whole group, grandchildren too
+TEST(Signals, InterruptKillsAnExternalWorkersGroup) {
+  ASSERT_EQ(prctl(PR_SET_CHILD_SUBREAPER, 1), 0);
+  const fs::path dir = fs::temp_directory_path() / "physbench_test_interrupt_external";
+  fs::remove_all(dir);
+  fs::create_directories(dir);
+  const fs::path script = dir / "stand-in-worker.sh";
+  std::ofstream(script) << "#!/bin/sh\nsleep 600\n";
+  fs::permissions(script, fs::perms::owner_all);
+  std::ofstream(dir / "catalog.tsv") << "stand-in\tdefault\t" << script.string() << "\n";
+  setenv("PHYSBENCH_WORKER_CATALOG", (dir / "catalog.tsv").c_str(), 1);
+  const pid_t runner = spawn({PHYSBENCH_EXE, "run", "-s", "projectile", "-e", "stand-in",
+                              "--no-sweep", "--budget", "0", "--timeout", "600", "--out",
+                              (dir / "r").string()},
+                             dir / "run.log");
+  unsetenv("PHYSBENCH_WORKER_CATALOG");
+  std::vector<pid_t> workers;
+  for (int i = 0; i < 3000 && workers.empty(); ++i) {
+    std::this_thread::sleep_for(std::chrono::milliseconds(10));
+    for (pid_t p : children_of(runner))
+      if (read_text("/proc/" + std::to_string(p) + "/cmdline").find("stand-in-worker") !=
+          std::string::npos)
+        workers.push_back(p);
+  }
+  ASSERT_FALSE(workers.empty()) << "no worker started: " << read_text(dir / "run.log");
+  std::this_thread::sleep_for(std::chrono::milliseconds(200));
+  ASSERT_EQ(kill(runner, SIGINT), 0);
+  int status = 0;
+  ASSERT_EQ(waitpid(runner, &status, 0), runner);
+  EXPECT_TRUE(WIFSIGNALED(status) && WTERMSIG(status) == SIGINT) << read_text(dir / "run.log");
+  // the worker and its sleep (a grandchild, which would come to this subreaper) are gone
+  std::this_thread::sleep_for(std::chrono::milliseconds(100));
+  for (pid_t w : workers) waitpid(w, nullptr, WNOHANG);
+  for (pid_t p : children_of(getpid())) {
+    waitpid(p, nullptr, WNOHANG);
+    EXPECT_FALSE(alive(p)) << "process " << p << " left behind";
+    if (alive(p)) kill(p, SIGKILL), waitpid(p, nullptr, 0);
+  }
+  EXPECT_TRUE(fs::exists(dir / "r" / "INCOMPLETE"));
+  EXPECT_FALSE(fs::exists(dir / "r" / "results.csv"));
   prctl(PR_SET_CHILD_SUBREAPER, 0);
 }
 

@@ -8,6 +8,7 @@
 #include <vector>
 
 #include "physbench/scene.h"
+#include "physbench/simulate.h"
 
 namespace physbench {
 
@@ -18,10 +19,37 @@ struct EngineVariant {
   std::string version;
   std::filesystem::path host;
   bool test_only = false;  // test-fault: not listed, and scheduled only when -e names it
+  // an external worker's command line (workers/catalog.tsv, docs/worker-protocol.md), run in
+  // place of `host worker`; empty for the engines linked into host
+  std::vector<std::string> command{};
 };
+
+// one line of the worker catalog: an engine outside this executable, run by its command
+struct CatalogEntry {
+  std::string engine;
+  std::vector<std::string> variants;
+  std::vector<std::string> command;  // the first word resolved against the workers folder
+  std::string missing;               // why it cannot run here (not built); empty when it can
+};
+
+// The catalog file: PHYSBENCH_WORKER_CATALOG when set (empty: no external workers), else the
+// repository's workers/catalog.tsv. A command's first word without a '/' names a program in
+// workers_dir (the build's cargo output), else a path as written.
+std::filesystem::path worker_catalog_file();
+std::filesystem::path default_workers_dir();
+std::vector<CatalogEntry> read_worker_catalog(const std::filesystem::path& file,
+                                              const std::filesystem::path& workers_dir);
 
 // every engine variant this build can run; self is this executable's path
 std::vector<EngineVariant> engine_catalog(const std::filesystem::path& self);
+
+// One job in a child process through run_child, for an in-process engine (`host worker ...`)
+// and an external worker (its command) alike: the same timeout, interrupt handling and crash
+// classification. Throws RunInterrupted when this process got SIGINT or SIGTERM.
+RunResult run_worker_job(const EngineVariant& ev, const std::filesystem::path& scene_file,
+                         const std::filesystem::path& result_file,
+                         const std::filesystem::path& log_file, int every_steps,
+                         double timing_budget, double timeout_seconds);
 
 struct RunOptions {
   std::vector<std::string>
