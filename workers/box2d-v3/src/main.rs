@@ -68,15 +68,11 @@ impl Engine for Box2dV3 {
         if !scene.planar {
             return Some("Box2D v3 is a 2D engine: it runs planar scenes only".into());
         }
-        if scene.has_particles {
-            return Some("particle sets are not mapped in the Box2D v3 worker yet (the shared \
-                         particle driver is C++ only)".into());
-        }
-        None
+        scene.particles_unsupported("Box2D v3")
     }
     fn not_applicable(&self, scene: &Scene, variant: &str) -> Option<String> {
-        (variant == "iterations-10" && !scene.has_contacts())
-            .then(|| "substeps as iterations matter only with contacts here".into())
+        scene.iterations_not_applicable(variant,
+                                        "substeps as iterations matter only with contacts here")
     }
     fn create(&self, scene: &Scene, variant: &str) -> Result<Box<dyn World>, String> {
         unsafe {

@@ -96,6 +96,16 @@ impl Scene {
     pub fn springs_without_contacts(&self) -> bool {
         !self.springs.is_empty() && !self.has_contacts()
     }
+    /// Some(reason) for a scene with particle sets: no worker maps them yet
+    pub fn particles_unsupported(&self, worker: &str) -> Option<String> {
+        self.has_particles.then(|| format!("particle sets are not mapped in the {worker} worker \
+                                            yet (the shared particle driver is C++ only)"))
+    }
+    /// Some(reason) when an equal-iterations variant would repeat the default's row: on a
+    /// scene without contacts iterations change nothing
+    pub fn iterations_not_applicable(&self, variant: &str, why: &str) -> Option<String> {
+        (variant == "iterations-10" && !self.has_contacts()).then(|| why.to_string())
+    }
     /// every body shares one friction and one restitution
     pub fn one_material(&self) -> bool {
         self.bodies.windows(2).all(|w| {
@@ -234,6 +244,11 @@ pub trait World {
     fn failure(&self) -> Option<String> {
         None
     }
+    /// Some(reason) when the engine reports that its answer is wrong without breaking down
+    /// (a full contact buffer dropped contacts): the run is an `error`, never a result
+    fn error(&self) -> Option<String> {
+        None
+    }
 }
 
 pub struct Setting {
@@ -337,6 +352,7 @@ fn sane(s: &State) -> bool {
 struct Pass {
     stepping_seconds: f64,
     exploded: Option<String>,
+    error: Option<String>,
 }
 
 /// one run of the whole scene; only the steps (forces, impulses and the engine's step) are timed,
@@ -344,7 +360,7 @@ struct Pass {
 fn run_once(scene: &Scene, world: &mut dyn World, every: i64, keep: Option<&mut Vec<Value>>)
     -> Pass {
     let mut keep = keep;
-    let mut pass = Pass { stepping_seconds: 0.0, exploded: None };
+    let mut pass = Pass { stepping_seconds: 0.0, exploded: None, error: None };
     let sample = |world: &dyn World, time: f64| -> (Value, bool) {
         let mut row = vec![json!(time)];
         let mut ok = true;
@@ -382,6 +398,10 @@ fn run_once(scene: &Scene, world: &mut dyn World, every: i64, keep: Option<&mut 
         let (row, ok) = sample(world, time);
         if let Some(k) = keep.as_deref_mut() {
             k.push(row);
+        }
+        if let Some(reason) = world.error() {
+            pass.error = Some(format!("{reason} (by t = {time} s)"));
+            return pass;
         }
         if let Some(reason) = world.failure() {
             pass.exploded = Some(format!("{reason} (by t = {time} s)"));
@@ -477,6 +497,10 @@ fn simulate(engine: &dyn Engine, job: &Job) -> Value {
         let pass = run_once(&scene, world.as_mut(), every, Some(&mut samples));
         wall.push(pass.stepping_seconds);
         doc["samples"] = Value::Array(std::mem::take(&mut samples));
+        if let Some(why) = pass.error {
+            doc["wall_seconds"] = json!(wall);
+            return fail(doc, "error", why);
+        }
         if let Some(why) = pass.exploded {
             doc["wall_seconds"] = json!(wall);
             return fail(doc, "exploded", why);
@@ -496,6 +520,9 @@ fn simulate(engine: &dyn Engine, job: &Job) -> Value {
             Err(e) => return fail(doc, "error", e),
         };
         let pass = run_once(&scene, world.as_mut(), every, None);
+        if let Some(why) = pass.error {
+            return fail(doc, "error", why);
+        }
         wall.push(pass.stepping_seconds);
         measured += pass.stepping_seconds;
     }

@@ -47,15 +47,10 @@ impl Engine for Rapier {
         s
     }
     fn unsupported(&self, scene: &Scene, _variant: &str) -> Option<String> {
-        if scene.has_particles {
-            return Some("particle sets are not mapped in the Rapier worker yet (the shared \
-                         particle driver is C++ only)".into());
-        }
-        None
+        scene.particles_unsupported("Rapier")
     }
     fn not_applicable(&self, scene: &Scene, variant: &str) -> Option<String> {
-        (variant == "iterations-10" && !scene.has_contacts())
-            .then(|| "solver iterations matter only with contacts".into())
+        scene.iterations_not_applicable(variant, "solver iterations matter only with contacts")
     }
     fn create(&self, scene: &Scene, variant: &str) -> Result<Box<dyn World>, String> {
         let mut world = PhysicsWorld::new();
