@@ -1,6 +1,9 @@
-// MuJoCo adapter (2.2.2). The scene becomes an MJCF model held in memory (a virtual file):
-// one free-jointed body per dynamic scene body, mass properties given explicitly. MuJoCo's
-// "up" is only its default gravity; the scene's gravity vector is passed as it is.
+// MuJoCo adapter, built twice: against Debian's 2.2.2 (in physbench) and against MuJoCo 4 from
+// the mujoco-core wheel (in physbench-mujoco4; the two export the same symbols). The code is
+// one; `#if mjVERSION_HEADER` marks only where the API or the defaults changed. The scene
+// becomes an MJCF model held in memory (a virtual file): one free-jointed body per dynamic scene
+// body, mass properties given explicitly. MuJoCo's "up" is only its default gravity; the
+// scene's gravity vector is passed as it is.
 //
 // A free joint's qvel holds the linear velocity in the world frame and the angular velocity
 // in the body frame: the adapter converts both ways.
@@ -18,6 +21,14 @@
 #include "physbench/particle_driver.h"
 #include "physbench/registry.h"
 #include "physbench/springs.h"
+
+#ifndef PHYSBENCH_MUJOCO_NAME
+#define PHYSBENCH_MUJOCO_NAME "mujoco"
+#endif
+
+// MuJoCo 3.0 replaced nconmax/njmax (fixed buffers) with one arena for contacts, constraints
+// and the stack (`<size memory>`), and the file-based VFS calls with mj_addBufferVFS
+#define PHYSBENCH_MUJOCO_ARENA (mjVERSION_HEADER >= 300)
 
 namespace physbench {
 
@@ -38,6 +49,7 @@ std::string quaternion(const Quat& q) {
 const char* integrator_name(const std::string& variant) {
   if (variant == "rk4") return "RK4";
   if (variant == "implicit") return "implicit";
+  if (variant == "implicitfast") return "implicitfast";
   return "Euler";
 }
 
@@ -102,6 +114,8 @@ int contacts_per_pair(const BodySpec& a, const BodySpec& b) {
 // the largest njmax this adapter asks for: MuJoCo 2.2.2's mjData holds efc_AR, njmax × njmax
 // doubles, whatever the solver (12,000 rows: 1.1 GB; at 16,000 rows mj_makeData failed here)
 constexpr long kMaxConstraintRows = 12000;
+// the largest arena this adapter asks MuJoCo 4 for (the machines have 24 GB, shared)
+constexpr double kMaxArenaBytes = 4.0 * (1L << 30);
 // the rk4 and implicit variants on contact scenes up to this many bodies (their cost)
 constexpr int kMaxBodiesForCostlyVariants = 60;
 
@@ -126,6 +140,32 @@ std::string contact_attributes(const Scene& scene) {
   }
   return out.str();
 }
+
+int dynamic_bodies(const Scene& scene) {
+  int dynamic = 0;
+  for (const BodySpec& b : scene.bodies) dynamic += b.mass > 0.0;
+  return dynamic;
+}
+
+#if PHYSBENCH_MUJOCO_ARENA
+// MuJoCo 4's arena for a contact scene. Its contacts: 2.2.2's count, but at least 12 per
+// dynamic body (a box on three others, 4 points each), so a pile that forms during the run fits
+// (2.2.2's njmax² matrix made that unaffordable there). Per contact its record, per constraint
+// row its vectors and its Jacobian row (dense below 60 degrees of freedom, MuJoCo's automatic
+// choice, else sparse), for PGS its row of the dual matrix, and the stack, all doubled; too small
+// an arena drops contacts, which the adapter reports as an error
+double mujoco_arena_bytes(const Scene& scene, const MujocoBuffers& buffers,
+                          const std::string& variant) {
+  const double nv = 6.0 * dynamic_bodies(scene);
+  const double contacts = std::max(double(buffers.nconmax), 12.0 * dynamic_bodies(scene));
+  const double rows = contacts * double(buffers.njmax) / double(std::max(1L, buffers.nconmax));
+  const double jacobian_row = nv < 60 ? nv : 2.0 * 12.0;
+  const double dual_row = variant == "pgs-10" ? (nv < 60 ? rows : 2.0 * 48.0) : 0.0;
+  const double bytes = contacts * 1024.0 + rows * 8.0 * (64.0 + 3.0 * jacobian_row + dual_row) +
+                       nv * 8.0 * 64.0;
+  return 2.0 * bytes + double(16 << 20);
+}
+#endif
 
 }  // namespace
 
@@ -244,7 +284,14 @@ std::string model_xml(const Scene& scene, const std::string& variant) {
   const std::string material = contacts ? contact_attributes(scene) : std::string();
   if (contacts) {
     const MujocoBuffers buffers = mujoco_buffers(scene);
+#if PHYSBENCH_MUJOCO_ARENA
+    // nconmax is legacy and still caps the contact list: left at its default (no cap); the arena
+    // holds contacts and constraints
+    xml << "  <size memory=\"" << std::llround(mujoco_arena_bytes(scene, buffers, variant))
+        << "\"/>\n";
+#else
     xml << "  <size nconmax=\"" << buffers.nconmax << "\" njmax=\"" << buffers.njmax << "\"/>\n";
+#endif
   }
   xml << "  <worldbody>\n";
   for (const std::string& s : world_sites) xml << "    " << s << "\n";
@@ -314,10 +361,15 @@ class MujocoEngine final : public Engine {
     // mjVFS is about 2 MB: on the heap
     auto vfs = std::make_unique<mjVFS>();
     mj_defaultVFS(vfs.get());
+#if PHYSBENCH_MUJOCO_ARENA
+    if (mj_addBufferVFS(vfs.get(), "scene.xml", xml.data(), static_cast<int>(xml.size())) != 0)
+      throw std::runtime_error("mujoco: cannot create the in-memory model file");
+#else
     if (mj_makeEmptyFileVFS(vfs.get(), "scene.xml", static_cast<int>(xml.size())) != 0)
       throw std::runtime_error("mujoco: cannot create the in-memory model file");
     const int file = mj_findFileVFS(vfs.get(), "scene.xml");
     std::memcpy(vfs->filedata[file], xml.data(), xml.size());
+#endif
     char error[1000] = "";
     model_ = mj_loadXML("scene.xml", vfs.get(), error, sizeof error);
     mj_deleteVFS(vfs.get());
@@ -382,9 +434,15 @@ class MujocoEngine final : public Engine {
     if (data_->warning[mjWARN_CONTACTFULL].number > 0 ||
         data_->warning[mjWARN_CNSTRFULL].number > 0) {
       std::ostringstream why;
+#if PHYSBENCH_MUJOCO_ARENA
+      why << "MuJoCo's arena overflowed at step " << steps_ << " (memory " << model_->narena
+          << " bytes, " << data_->ncon
+          << " contacts kept): contacts were dropped, so the run is not a result";
+#else
       why << "MuJoCo's contact buffer overflowed at step " << steps_ << " (nconmax "
           << model_->nconmax << ", njmax " << model_->njmax << ", " << data_->ncon
           << " contacts kept): contacts were dropped, so the run is not a result";
+#endif
       throw std::runtime_error(why.str());
     }
     if (driver_) {
@@ -469,10 +527,12 @@ class MujocoEngine final : public Engine {
 
 }  // namespace
 
+const char* mujoco_engine_name() { return PHYSBENCH_MUJOCO_NAME; }
+
 EngineInfo mujoco_engine_info() {
   EngineInfo info;
-  info.name = "mujoco";
-  info.variants = {"euler", "rk4", "implicit", "pgs-10"};
+  info.name = PHYSBENCH_MUJOCO_NAME;
+  info.variants = mujoco_variants(mjVERSION_HEADER);
   info.version = mj_versionString();
   info.unsupported = [](const Scene& scene,
                         const std::string& variant) -> std::optional<std::string> {
@@ -482,9 +542,9 @@ EngineInfo mujoco_engine_info() {
              " particles MuJoCo 2.2.2 cannot create its mjData here (3,000 free bodies failed: "
              "its buffers are sized from nv and njmax when the model loads)";
     if (scene.has_contacts()) {
-      int dynamic = 0;
-      for (const BodySpec& b : scene.bodies) dynamic += b.mass > 0.0;
-      if ((variant == "rk4" || variant == "implicit") && dynamic > kMaxBodiesForCostlyVariants)
+      const int dynamic = dynamic_bodies(scene);
+      if ((variant == "rk4" || variant == "implicit" || variant == "implicitfast") &&
+          dynamic > kMaxBodiesForCostlyVariants)
         return "over " + std::to_string(kMaxBodiesForCostlyVariants) +
                " bodies in contact only euler and pgs-10 run: euler took 100 ms per step on the "
                "210-box pyramid, rk4 about 4x that (the suite's time budget)";
@@ -492,6 +552,16 @@ EngineInfo mujoco_engine_info() {
         return "MuJoCo combines two geoms' friction by max and solref by mean: the scene's pair "
                "rule holds here only when every body has the same friction and restitution";
       const MujocoBuffers buffers = mujoco_buffers(scene);
+#if PHYSBENCH_MUJOCO_ARENA
+      const double arena = mujoco_arena_bytes(scene, buffers, variant);
+      if (arena > kMaxArenaBytes) {
+        std::ostringstream why;
+        why << std::setprecision(2) << "the scene needs an arena of about "
+            << arena / double(1 << 30) << " GB (this adapter's limit: "
+            << kMaxArenaBytes / double(1 << 30) << " GB)";
+        return why.str();
+      }
+#else
       if (buffers.njmax > kMaxConstraintRows) {
         std::ostringstream why;
         why << std::setprecision(2) << "the scene needs about " << buffers.njmax
@@ -501,6 +571,7 @@ EngineInfo mujoco_engine_info() {
             << " GB (this adapter's limit: " << kMaxConstraintRows << " rows)";
         return why.str();
       }
+#endif
     }
     return std::nullopt;
   };
@@ -518,14 +589,29 @@ EngineInfo mujoco_engine_info() {
             ? Setting{"solver", "PGS, 10 iterations",
                       "the equal-iterations variant: projected Gauss-Seidel is MuJoCo's nearest to "
                       "10 velocity iterations of sequential impulses"}
-            : Setting{"solver", "Newton, 100 iterations, tolerance 1e-8 (MuJoCo's defaults)",
-                      "the engine's own defaults"},
+            : Setting{"solver", "Newton, 100 iterations, tolerance 1e-8, pyramidal cone "
+                      "(MuJoCo's defaults)", "the engine's own defaults"},
+#if PHYSBENCH_MUJOCO_ARENA
+        {"contact memory", "<size memory> from the scene: contacts counted as for 2.2.2 (4 points "
+         "per pair whose bounds lie within 5 cm, grown by the starting speeds over the duration, "
+         "and per body and plane where the body is that near the plane or near nothing else, "
+         "+25 % + 8, at least 12 per dynamic body; 4 rows each, 1 when frictionless), then per "
+         "contact 1 KB, per row its "
+         "vectors, Jacobian row (dense under 60 dofs) and for pgs-10 its dual row, doubled, "
+         "+16 MB; at most 4 GB; nconmax and njmax not set (legacy)",
+         "MuJoCo 4 drops contacts beyond its arena: sized from the scene, and an overflow ends the "
+         "run as an error"},
+        {"islands, nativeccd, multiccd", "on (MuJoCo 4's defaults: islands since 3.3.6, nativeccd "
+         "since 3.3.0, multiccd since 3.8.0)", "the engine's own defaults"},
+        {"sleep", "off (MuJoCo 4's default: mjENBL_SLEEP not set)", "sleeping off in every engine"},
+#else
         {"contact buffers", "nconmax from the scene: 4 points per pair whose bounds lie within 5 "
          "cm (grown by the starting speeds over the duration), and per body and plane where the "
          "body is that near the plane or near nothing else, +25 % + 8; at most 12,000 rows; "
          "njmax = 4 rows per contact (1 when frictionless)",
          "MuJoCo 2.2.2 drops contacts beyond nconmax silently: sized from the scene, and an "
          "overflow ends the run as an error"},
+#endif
         {"contact materials", "friction μ 0.005 0.0001, condim 3 (1 when μ = 0); e > 0: solref = "
          "(2 dt / ζ, ζ), ζ = −ln e / √(π² + ln² e); e = 0: default solref (0.02, 1) and solimp "
          "(0.9, 0.95, 0.001); margin 0",

@@ -49,6 +49,11 @@ void print_list(const fs::path& self) {
     std::cout << " " << ev.variant;
   }
   std::cout << "\n";
+#ifdef PHYSBENCH_MUJOCO4_MISSING
+  std::cout << "\n  MuJoCo 4  (not built: no mujoco-core wheel in the project's .venv when CMake "
+               "configured; scripts/setup.sh installs it, then reconfigure; Debian's 2.2.2 is the "
+               "mujoco row)";
+#endif
   const fs::path file = worker_catalog_file();
   for (const CatalogEntry& entry : read_worker_catalog(file, default_workers_dir()))
     if (!entry.missing.empty())

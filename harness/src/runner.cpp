@@ -16,6 +16,7 @@
 #include <sstream>
 
 #include "physbench/metrics.h"
+#include "physbench/mujoco_buffers.h"
 #include "physbench/process.h"
 #include "physbench/registry.h"
 #include "physbench/scenarios.h"
@@ -95,6 +96,18 @@ std::vector<EngineVariant> engine_catalog(const fs::path& self) {
     if (catalog[i].engine == "bullet") {
       catalog.insert(catalog.begin() + i + 1, {"bullet", "double", catalog[i].version,
                                                self.parent_path() / "physbench-bullet64"});
+      break;
+    }
+#endif
+#ifdef PHYSBENCH_MUJOCO4_VERSION
+  // MuJoCo 4 lives in its own executable beside this one (Debian's 2.2.2 here is mujoco-2.2)
+  for (std::size_t i = 0; i <= catalog.size(); ++i)
+    if (i == catalog.size() || catalog[i].engine == "mujoco-2.2") {
+      std::vector<EngineVariant> four;
+      for (const std::string& v : mujoco_variants(4000000))
+        four.push_back({"mujoco", v, PHYSBENCH_MUJOCO4_VERSION,
+                        self.parent_path() / "physbench-mujoco4"});
+      catalog.insert(catalog.begin() + long(i), four.begin(), four.end());
       break;
     }
 #endif

@@ -13,6 +13,11 @@
 #include <nlohmann/json.hpp>
 
 #include "physbench/process.h"
+#include "physbench/registry.h"
+
+// the linked MuJoCo build's name ("mujoco-2.2" where MuJoCo 4, in physbench-mujoco4, is the
+// mujoco row)
+static const std::string kMujoco = physbench::mujoco_engine_name();
 
 namespace {
 
@@ -405,6 +410,7 @@ TEST(Runner, EveryEngineGivesTheSameBitsTwiceInSeparateProcesses) {
     bool contacts_only = false;  // a variant that only applies where bodies touch
   };
   const fs::path bullet64 = fs::path(PHYSBENCH_EXE).parent_path() / "physbench-bullet64";
+  const fs::path mujoco4 = fs::path(PHYSBENCH_EXE).parent_path() / "physbench-mujoco4";
   const std::vector<Job> peers = {
 #ifdef PHYSBENCH_HAVE_BULLET
       {"bullet", "float", PHYSBENCH_EXE},
@@ -418,8 +424,12 @@ TEST(Runner, EveryEngineGivesTheSameBitsTwiceInSeparateProcesses) {
       {"box2d", "default", PHYSBENCH_EXE},
 #endif
 #ifdef PHYSBENCH_HAVE_MUJOCO
-      {"mujoco", "euler", PHYSBENCH_EXE},
-      {"mujoco", "pgs-10", PHYSBENCH_EXE, true},
+      {kMujoco, "euler", PHYSBENCH_EXE},
+      {kMujoco, "pgs-10", PHYSBENCH_EXE, true},
+#endif
+#ifdef PHYSBENCH_MUJOCO4_VERSION
+      {"mujoco", "euler", mujoco4},
+      {"mujoco", "pgs-10", mujoco4, true},
 #endif
   };
   // (scene, seconds of it, rtp's variant for it)

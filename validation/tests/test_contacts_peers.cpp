@@ -13,6 +13,11 @@
 #include "support.h"
 #ifdef PHYSBENCH_HAVE_MUJOCO
 #include "physbench/mujoco_buffers.h"
+#include "physbench/registry.h"
+
+// the linked MuJoCo build's name ("mujoco-2.2" where MuJoCo 4, in physbench-mujoco4, is the
+// mujoco row)
+static const std::string kMujoco = physbench::mujoco_engine_name();
 #endif
 
 namespace {
@@ -301,13 +306,13 @@ TEST(ContactPeers, Box2dSkinIsCompensated) {
 
 #ifdef PHYSBENCH_HAVE_MUJOCO
 TEST(ContactPeers, MujocoRunsTowerAndBounce) {
-  expect_tower_and_bounce_run("mujoco", "euler");
-  expect_tower_and_bounce_run("mujoco", "pgs-10");
+  expect_tower_and_bounce_run(kMujoco, "euler");
+  expect_tower_and_bounce_run(kMujoco, "pgs-10");
 }
 // MuJoCo's soft contact sinks by design, and by little at its defaults: the resting 10-box tower
 // ends under 5 mm deep (measured 1.5 mm) and within 1 cm of where it started (3.7 mm)
 TEST(ContactPeers, MujocoTowerRestsWithinItsSoftSink) {
-  const ContactRun r = run_contacts("mujoco", "euler", tower_scene(10));
+  const ContactRun r = run_contacts(kMujoco, "euler", tower_scene(10));
   ASSERT_TRUE(r.summary.penetration && r.summary.stack_drift);
   EXPECT_LT(r.summary.penetration->final, 0.005);
   EXPECT_LT(r.summary.stack_drift->max, 0.01);
@@ -320,7 +325,7 @@ TEST(ContactPeers, MujocoBuffersAreSizedFromTheScene) {
   EXPECT_EQ(tower.njmax, 4 * tower.nconmax);
   EXPECT_EQ(mujoco_buffers(projectile_scene()).nconmax, 0);
   // 5,050 boxes need an njmax x njmax matrix MuJoCo 2.2.2 cannot hold here: unsupported, why
-  const auto why = physbench::testing::engine("mujoco").unsupported(pyramid_scene(100), "euler");
+  const auto why = physbench::testing::engine(kMujoco).unsupported(pyramid_scene(100), "euler");
   ASSERT_TRUE(why);
   EXPECT_NE(why->find("efc_AR"), std::string::npos);
 }
@@ -356,7 +361,7 @@ TEST(ContactPeers, MujocoOverflowIsAFailure) {
   }
   ASSERT_NO_THROW(validate(scene));
   try {
-    simulate(physbench::testing::engine("mujoco"), "euler", scene, untimed());
+    simulate(physbench::testing::engine(kMujoco), "euler", scene, untimed());
     FAIL() << "the pit fitted the buffer sized for its start: make it fuller";
   } catch (const std::runtime_error& e) {
     EXPECT_NE(std::string(e.what()).find("overflowed"), std::string::npos) << e.what();
@@ -365,7 +370,7 @@ TEST(ContactPeers, MujocoOverflowIsAFailure) {
 TEST(ContactPeers, MujocoRefusesMaterialsItCannotCombine) {
   Scene scene = incline_scene(30);
   scene.bodies[0].friction = 1.0;
-  const auto why = physbench::testing::engine("mujoco").unsupported(scene, "euler");
+  const auto why = physbench::testing::engine(kMujoco).unsupported(scene, "euler");
   ASSERT_TRUE(why);
   EXPECT_NE(why->find("max"), std::string::npos);
 }
@@ -374,7 +379,7 @@ TEST(ContactPeers, MujocoRefusesMaterialsItCannotCombine) {
 // the equal-iteration variants only run where there are contacts to solve
 TEST(ContactPeers, IterationVariantsApplyOnlyToContacts) {
   for (const auto& [engine, variant] : std::vector<std::pair<std::string, std::string>>{
-           {"ode", "quickstep-10"}, {"box2d", "iterations-10"}, {"mujoco", "pgs-10"}}) {
+           {"ode", "quickstep-10"}, {"box2d", "iterations-10"}, {kMujoco, "pgs-10"}}) {
     const EngineInfo* info = find_linked_engine(engine);
     if (!info) continue;
     EXPECT_FALSE(info->applies(projectile_planar_scene(), variant)) << engine;

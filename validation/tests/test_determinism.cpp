@@ -11,6 +11,11 @@
 
 #include "physbench/scenarios.h"
 #include "support.h"
+#include "physbench/registry.h"
+
+// the linked MuJoCo build's name ("mujoco-2.2" where MuJoCo 4, in physbench-mujoco4, is the
+// mujoco row)
+static const std::string kMujoco = physbench::mujoco_engine_name();
 
 namespace {
 
@@ -124,8 +129,8 @@ TEST(Determinism, EveryPeerGivesTheSameBitsOnTwoRunsInOneProcess) {
   peers.push_back({"box2d", "default"});
 #endif
 #ifdef PHYSBENCH_HAVE_MUJOCO
-  peers.push_back({"mujoco", "euler"});
-  peers.push_back({"mujoco", "pgs-10"});  // contact scenes only
+  peers.push_back({kMujoco, "euler"});
+  peers.push_back({kMujoco, "pgs-10"});  // contact scenes only
 #endif
   if (peers.empty()) GTEST_SKIP() << "no peer engine in this build";
   for (const Scene& scene : {scenario("spring-chain", 2.0), scenario("overlap-recovery", 1.0)}) {

@@ -8,6 +8,11 @@
 #include "physbench/particle_driver.h"
 #include "physbench/scenarios.h"
 #include "support.h"
+#include "physbench/registry.h"
+
+// the linked MuJoCo build's name ("mujoco-2.2" where MuJoCo 4, in physbench-mujoco4, is the
+// mujoco row)
+static const std::string kMujoco = physbench::mujoco_engine_name();
 
 namespace {
 
@@ -308,43 +313,43 @@ TEST(Box2d, RefusesA3dScene) {
 
 #ifdef PHYSBENCH_HAVE_MUJOCO
 TEST(Mujoco, ReadsBackTheInitialStateIncludingBodyFrameSpin) {
-  expect_initial_state_read_back("mujoco", "euler", false, 1e-12);
+  expect_initial_state_read_back(kMujoco, "euler", false, 1e-12);
 }
 TEST(Mujoco, TendonSpringsMatchRtpAtTheSameIntegrator) {
   // MuJoCo's tendon is the scene's spring law evaluated at every stage: RK4 matches rtp's RK4
   // (to 1e-7 m, not round-off: MuJoCo's RK4 integrates orientation differently, see the report)
-  expect_same_spring_trajectory_as_rtp("mujoco", "rk4", "rk4", spring_chain_scene(4), 1e-7);
-  expect_same_spring_trajectory_as_rtp("mujoco", "euler", "euler", spring_oscillator_scene(),
+  expect_same_spring_trajectory_as_rtp(kMujoco, "rk4", "rk4", spring_chain_scene(4), 1e-7);
+  expect_same_spring_trajectory_as_rtp(kMujoco, "euler", "euler", spring_oscillator_scene(),
                                        1e-12);
 }
-TEST(Mujoco, ParticlesStartWhereRtpsDo) { expect_same_particle_starts_as_rtp("mujoco", "euler"); }
+TEST(Mujoco, ParticlesStartWhereRtpsDo) { expect_same_particle_starts_as_rtp(kMujoco, "euler"); }
 TEST(Mujoco, ParticleOrbitForcesAreSeenAtEveryRk4Stage) {
   // the attractor is a passive force (mjcb_passive): RK4 must beat semi-implicit Euler by
   // orders of magnitude; held through the stages as an applied force it came out 45x worse
-  const double rk4 = measure("mujoco", "rk4", particles_orbit_scene()).summary.position->max;
-  const double euler = measure("mujoco", "euler", particles_orbit_scene()).summary.position->max;
+  const double rk4 = measure(kMujoco, "rk4", particles_orbit_scene()).summary.position->max;
+  const double euler = measure(kMujoco, "euler", particles_orbit_scene()).summary.position->max;
   EXPECT_LT(rk4, 1e-3 * euler) << "rk4 " << rk4 << " m, euler " << euler << " m";
 }
 TEST(Mujoco, ParticleBounceApexesFollowRestitution) {
   // a soft contact damped to keep 0.8 of the normal speed: apexes 0.64, 0.41 m (it sinks a few
   // cm into the plane meanwhile: MuJoCo's contacts are springs)
-  expect_apexes_follow_restitution("mujoco", "euler", 2);
+  expect_apexes_follow_restitution(kMujoco, "euler", 2);
 }
 TEST(Mujoco, ParticleSetsBeyondItsLimitSayWhy) {
   const auto why =
-      physbench::testing::engine("mujoco").unsupported(particles_attractors_scene(10000), "euler");
+      physbench::testing::engine(kMujoco).unsupported(particles_attractors_scene(10000), "euler");
   ASSERT_TRUE(why.has_value());
   EXPECT_NE(why->find("mjData"), std::string::npos) << *why;
 }
-TEST(Mujoco, ImpulsesLand) { expect_impulses_land("mujoco", "rk4", false, 1e-3); }
+TEST(Mujoco, ImpulsesLand) { expect_impulses_land(kMujoco, "rk4", false, 1e-3); }
 TEST(Mujoco, Rk4ProjectileIsExact) {
-  EXPECT_LT(measure("mujoco", "rk4", projectile_scene()).summary.position->max, 1e-10);
+  EXPECT_LT(measure(kMujoco, "rk4", projectile_scene()).summary.position->max, 1e-10);
 }
 TEST(Mujoco, EulerProjectileShowsSemiImplicitEuler) {
-  expect_semi_implicit_signature("mujoco", "euler", false, 1e-9);
+  expect_semi_implicit_signature(kMujoco, "euler", false, 1e-9);
 }
 TEST(Mujoco, Rk4KeepsTumblingBoxEnergy) {
-  EXPECT_LT(measure("mujoco", "rk4", tumbling_box_scene()).summary.energy->max, 1e-6);
+  EXPECT_LT(measure(kMujoco, "rk4", tumbling_box_scene()).summary.energy->max, 1e-6);
 }
 #endif
 

@@ -5,6 +5,11 @@
 
 #include "physbench/scenarios.h"
 #include "support.h"
+#include "physbench/registry.h"
+
+// the linked MuJoCo build's name ("mujoco-2.2" where MuJoCo 4, in physbench-mujoco4, is the
+// mujoco row)
+static const std::string kMujoco = physbench::mujoco_engine_name();
 
 namespace {
 
@@ -51,7 +56,7 @@ TEST(Status, OdeStiffSpringExplodes) {
 // carries on: the samples stay finite and near the start, and the row used to read `ok`
 TEST(Status, MujocoResetAfterBadAccelerationIsExplodedNotOk) {
   for (const char* variant : {"euler", "rk4", "implicit"}) {
-    const RunResult r = run("mujoco", variant, stiff_spring());
+    const RunResult r = run(kMujoco, variant, stiff_spring());
     EXPECT_EQ(r.status, Status::Exploded) << variant << ": " << r.message;
     EXPECT_NE(r.message.find("mjWARN_BADQACC"), std::string::npos) << variant << ": " << r.message;
     // the trajectory stops before the reset: every kept sample is the engine's own motion
@@ -61,7 +66,7 @@ TEST(Status, MujocoResetAfterBadAccelerationIsExplodedNotOk) {
 }
 
 TEST(Status, MujocoSoftSpringStaysOk) {
-  const RunResult r = run("mujoco", "euler", stiff_spring_scene(1e2));
+  const RunResult r = run(kMujoco, "euler", stiff_spring_scene(1e2));
   EXPECT_EQ(r.status, Status::Ok) << r.message;
 }
 #endif

@@ -20,6 +20,9 @@ EngineInfo bullet_engine_info();
 EngineInfo ode_engine_info();
 EngineInfo box2d_engine_info();
 EngineInfo mujoco_engine_info();
+// the engine name of the MuJoCo build linked here: "mujoco", or "mujoco-2.2" for Debian's 2.2.2
+// when MuJoCo 4 is the mujoco row (in physbench-mujoco4)
+const char* mujoco_engine_name();
 // test only: an "engine" whose variants abort or hang in their first step (fault_adapter.cpp)
 EngineInfo fault_engine_info();
 
