@@ -173,6 +173,46 @@ TEST(WorkerConformance, ABoxRestsOnAPlane) {
   }
 }
 
+// a box of sides 1 : 4 : 9 tumbling freely in 3D, spun off its principal axes: its angular
+// momentum in the world, R I Rᵀ ω, is constant. An engine that keeps ω constant instead (no
+// gyroscopic term, Jolt's default) turns it about with the body.
+TEST(WorkerConformance, AFreeBodyKeepsItsAngularMomentum) {
+  const auto workers = built_workers();
+  if (workers.empty()) GTEST_SKIP() << "no external worker is built (cargo missing?)";
+  Scene scene;
+  scene.name = "conformance-tumbling";
+  scene.collisions = false;
+  scene.gravity = Vec3::Zero();
+  scene.dt = 1.0 / 120.0;
+  scene.duration = 4.0;
+  BodySpec box;
+  box.name = "box";
+  box.shape.half_extents = Vec3(0.05, 0.2, 0.45);
+  box.mass = 1.0;
+  box.angular_velocity = Vec3(0.5, 2.0, 1.5);
+  scene.bodies = {box};
+  const Vec3 inertia = principal_inertia(box.shape, box.mass);
+  const auto momentum = [&](const SampledState& s) {
+    const Eigen::Matrix3d r = s.orientation.toRotationMatrix();
+    return Vec3(r * inertia.asDiagonal() * r.transpose() * s.angular_velocity);
+  };
+  int ran = 0;
+  for (const EngineVariant& w : workers) {
+    const RunResult r = run(w, scene);
+    if (r.status == Status::Unsupported) continue;  // a 2D engine
+    expect_ok(r, w);
+    ++ran;
+    const Vec3 start = momentum(r.trajectory.samples.front().bodies[0]);
+    double worst = 0.0;
+    for (const Sample& s : r.trajectory.samples)
+      worst = std::max(worst, (momentum(s.bodies[0]) - start).norm() / start.norm());
+    // measured: Jolt 0.95 %, Rapier 0.24 % (Bullet 2.9 % on tumbling-box at 1/60 s); with ω held
+    // constant in the world (no gyroscopic term) R I Rᵀ ω moves by up to 93 % of itself here
+    EXPECT_LT(worst, 0.05) << w.engine;
+  }
+  if (ran == 0) GTEST_SKIP() << "no built worker models 3D bodies";
+}
+
 TEST(WorkerConformance, AnswersWhatItCannotDo) {
   const auto workers = built_workers();
   if (workers.empty()) GTEST_SKIP() << "no external worker is built (cargo missing?)";
