@@ -48,13 +48,15 @@ FAILED_VERDICTS = {"collapsed", "sinks", "drifts", "settles", "tumbled", "no bou
                    "exploded", "slides, should stay", "stays, should slide", "escaped", "unsettled"}
 
 # the two views of drift against cost (docs/engines.md, "Contacts"): each engine at its own
-# defaults, and each at 10 velocity iterations or the nearest it has (Bullet's default is 10;
-# rtp's soft step has no iteration count, so its 10-iteration solver stands for it there)
+# defaults, and each at 10 velocity iterations or the nearest it has (Bullet's and Jolt's defaults
+# are 10; rtp's soft step has no iteration count, so its 10-iteration solver stands for it there)
 CONTACT_VIEWS = {
     "each engine's defaults": {"rtp": "soft-step", "bullet": "float", "ode": "quickstep", "box2d": "default",
-                               "mujoco": "euler"},
+                               "mujoco": "euler", "mujoco-2.2": "euler", "box2d-v3": "default",
+                               "rapier": "default", "jolt": "default"},
     "equal iterations (10)": {"rtp": "sequential-impulse", "bullet": "float", "ode": "quickstep-10",
-                              "box2d": "iterations-10", "mujoco": "pgs-10"},
+                              "box2d": "iterations-10", "mujoco": "pgs-10", "mujoco-2.2": "pgs-10",
+                              "box2d-v3": "iterations-10", "rapier": "iterations-10", "jolt": "default"},
 }
 # drift below this is drawn at it (a log axis has no zero)
 DRIFT_FLOOR = 1e-6
