@@ -18,7 +18,7 @@ SCENE_BYTES = 1_500_000
 # all the viewers of one page; a scene past it gets a note instead of a viewer
 PAGE_BYTES = 8_000_000
 # the variant each engine is shown in (its default); an engine not named shows its first row
-SHOWN_VARIANTS = {"rtp": ["soft-step", "rk4"], "bullet": ["float"], "ode": ["quickstep"], "box2d": ["default"],
+SHOWN_VARIANTS = {"rtp": ["soft-step", "rk4", "midpoint"], "bullet": ["float"], "ode": ["quickstep"], "box2d": ["default"],
                   "mujoco": ["euler"], "box2d-v3": ["default"], "rapier": ["default"]}
 FLOATS = 8  # px py pz qx qy qz qw |v|
 MAGIC = b"PBPOSES1"

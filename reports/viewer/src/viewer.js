@@ -6,6 +6,20 @@ import * as THREE from 'three';
 import { OrbitControls } from 'three/addons/controls/OrbitControls.js';
 
 const BACKGROUND = 0xf4f6f8;
+// a unit box's twelve edges as pairs of corners (±1 along each axis)
+const BOX_EDGES = (() => {
+  const edges = [];
+  for (const axis of [0, 1, 2])
+    for (const a of [-1, 1])
+      for (const b of [-1, 1]) {
+        const from = [0, 0, 0], to = [0, 0, 0];
+        const [u, v] = [0, 1, 2].filter((k) => k !== axis);
+        from[axis] = -1; to[axis] = 1;
+        from[u] = to[u] = a; from[v] = to[v] = b;
+        edges.push([from, to]);
+      }
+  return edges;
+})();
 const ENGINE_HUES = [0.58, 0.08, 0.33, 0.78, 0.0, 0.14, 0.5, 0.9];
 const PALETTE_STOPS = [[0.19, 0.33, 0.72], [0.25, 0.72, 0.65], [0.95, 0.85, 0.3], [0.84, 0.19, 0.15]];
 
@@ -163,6 +177,12 @@ class EngineView {
       this.boxMesh = new THREE.InstancedMesh(new THREE.BoxGeometry(2, 2, 2), material, this.boxes.length);
       this.boxMesh.frustumCulled = false;
       this.scene.add(this.boxMesh);
+      // each box's twelve edges, so boxes that touch (a stack) read as separate boxes
+      const edges = new THREE.BufferGeometry();
+      edges.setAttribute('position', new THREE.BufferAttribute(new Float32Array(this.boxes.length * 24 * 3), 3));
+      this.edgeLines = new THREE.LineSegments(edges, new THREE.LineBasicMaterial({ color: 0x1d2630, transparent: true, opacity: 0.55 }));
+      this.edgeLines.frustumCulled = false;
+      this.scene.add(this.edgeLines);
     }
     if (this.spheres.length) {
       this.sphereMesh = new THREE.InstancedMesh(new THREE.SphereGeometry(1, 20, 14), material, this.spheres.length);
@@ -230,7 +250,24 @@ class EngineView {
       mesh.instanceMatrix.needsUpdate = true;
       if (mesh.instanceColor) mesh.instanceColor.needsUpdate = true;
     };
-    if (this.boxMesh) place(this.boxMesh, this.boxes, (h, s) => s.set(h[0], h[1], h[2]));
+    if (this.boxMesh) {
+      place(this.boxMesh, this.boxes, (h, s) => s.set(h[0], h[1], h[2]));
+      const attr = this.edgeLines.geometry.attributes.position;
+      const corner = new THREE.Vector3();
+      this.boxes.forEach(([column, h], i) => {
+        const finite = pose(column);
+        rotation.normalize();
+        for (let e = 0; e < 12; e++) {
+          for (let end = 0; end < 2; end++) {
+            const [cx, cy, cz] = BOX_EDGES[e][end];
+            corner.set(cx * h[0], cy * h[1], cz * h[2]).applyQuaternion(rotation).add(position);
+            if (!finite) corner.set(0, -1e9, 0);
+            attr.setXYZ(i * 24 + e * 2 + end, corner.x, corner.y, corner.z);
+          }
+        }
+      });
+      attr.needsUpdate = true;
+    }
     if (this.sphereMesh) place(this.sphereMesh, this.spheres, (r, s) => s.set(r, r, r));
     if (this.pointCloud) {
       const p = this.pointCloud.geometry.attributes.position, c = this.pointCloud.geometry.attributes.color;
@@ -342,7 +379,7 @@ class Replay {
     const centre = box.getCenter(new THREE.Vector3());
     this.camera = new THREE.PerspectiveCamera(40, this.width / this.columns / cellHeight, 0.05, extent * 50 + 100);
     const distance = extent * 1.6 + 1;
-    const direction = data.planar ? new THREE.Vector3(0.15, 0.25, 1) : new THREE.Vector3(0.8, 0.55, 1);
+    const direction = data.planar ? new THREE.Vector3(0.45, 0.35, 1) : new THREE.Vector3(0.8, 0.55, 1);
     this.camera.position.copy(centre).addScaledVector(direction.normalize(), distance);
     this.controls = new OrbitControls(this.camera, this.canvas);
     this.controls.target.copy(centre);
@@ -386,6 +423,9 @@ class Replay {
     this.speedSelect.value = '1';
     this.colourSelect = select('colour by', [['speed', 'speed'], ['body', 'body'], ['engine', 'engine']],
       (v) => { this.colouring = v; this.setTime(this.time); });
+    // a scene whose bodies never move their centres (a box spinning in place) is coloured by body
+    if (this.speedScale < 1e-2) this.colouring = 'body';
+    this.colourSelect.value = this.colouring;
     this.legend = document.createElement('span');
     this.legend.className = 'replay-legend';
     bar.appendChild(this.legend);
