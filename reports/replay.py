@@ -104,9 +104,9 @@ def scene_shapes(scene: dict) -> dict:
                 if particles else None)
 
 
-def replay_for(folder: Path, name: str, rows, meta: dict, budget: int) -> tuple[dict | None, str]:
-    """The viewer's data for one scenario, within min(SCENE_BYTES, budget) compressed bytes, or
-    (None, why not)."""
+def replay_for(folder: Path, name: str, rows, meta: dict, budget: int) -> tuple[dict | None, str, int]:
+    """The viewer's data for one scenario within min(SCENE_BYTES, budget) compressed bytes, what it
+    holds and its bytes, or (None, why not, 0)."""
     info = meta.get("scenarios", {}).get(name, {})
     scene_files = info.get("scene_file") or {}
     own_dt = info.get("dt")
@@ -115,7 +115,7 @@ def replay_for(folder: Path, name: str, rows, meta: dict, budget: int) -> tuple[
         if own_dt is None or abs(float(dt) - own_dt) <= 1e-6 * own_dt:
             scene_file = folder / path
     if scene_file is None or not scene_file.is_file():
-        return None, "its scene file is not in scenes/"
+        return None, "its scene file is not in scenes/", 0
     runs = []
     for r in shown_rows(rows):
         trajectory = r.get("trajectory")
@@ -133,7 +133,7 @@ def replay_for(folder: Path, name: str, rows, meta: dict, budget: int) -> tuple[
         runs.append(dict(label=f"{r['engine']}/{r['variant']}", engine=r["engine"], status=r["status"], ended=ended,
                          bodies=[int(i) for i in index], times_all=times, poses_all=poses))
     if not runs:
-        return None, "no engine left a pose file for it (poses/)"
+        return None, "no engine left a pose file for it (poses/)", 0
     cap = min(SCENE_BYTES, budget)
     longest = max(len(run["times_all"]) for run in runs)
     step = 1
@@ -145,19 +145,20 @@ def replay_for(folder: Path, name: str, rows, meta: dict, budget: int) -> tuple[
             break
         step *= 2
     if size > cap:
-        return None, f"even two frames per engine take {size:,} bytes, over the page's budget left ({cap:,})"
+        return None, f"even two frames per engine take {size:,} bytes, over the {cap:,} left to it", 0
     data = scene_shapes(json.loads(scene_file.read_text()))
     data["runs"] = [dict(label=run["label"], engine=run["engine"], status=run["status"], ended=run["ended"],
                          bodies=run["bodies"], **e) for run, e in zip(runs, encoded)]
     frames_per_s = [(len(run["times_all"]) - 1) / max(1e-9, float(run["times_all"][-1])) / step for run in runs]
     note = (f"{len(runs)} engines, {size:,} bytes embedded, about {min(frames_per_s):.3g} frames per simulated second"
             + (f" (one recorded frame in {step}, to fit {cap:,} bytes)" if step > 1 else ""))
-    return data, note
+    return data, note, size
 
 
 def replays(folder: Path, results, meta: dict) -> dict:
-    """Per scenario name: dict(json=the viewer's data as text, note=what it holds), or
-    dict(json=None, note=why it has no viewer), for the scenes REPLAY_SCENES names."""
+    """Per scenario name: dict(json=the viewer's data as text, bytes=its compressed pose bytes,
+    note=what it holds), or dict(json=None, note=why it has no viewer), for the scenes
+    REPLAY_SCENES names. PAGE_BYTES counts compressed pose bytes, as SCENE_BYTES does."""
     out, budget = {}, PAGE_BYTES
     present = set(results["scenario"])
     for name in REPLAY_SCENES:
@@ -168,16 +169,16 @@ def replays(folder: Path, results, meta: dict) -> dict:
         if own is not None:
             rows = rows[(rows["dt"] - own).abs() <= 1e-6 * own]
         if budget <= 0:
-            out[name] = dict(json=None, note=f"not embedded: the page's replays reached {PAGE_BYTES:,} bytes")
+            out[name] = dict(json=None, bytes=0, note=f"not embedded: the page's replays reached {PAGE_BYTES:,} bytes")
             continue
-        data, note = replay_for(folder, name, rows, meta, budget)
+        data, note, size = replay_for(folder, name, rows, meta, budget)
         if data is None:
-            out[name] = dict(json=None, note=f"no replay: {note}")
+            out[name] = dict(json=None, bytes=0, note=f"no replay: {note}")
             continue
+        budget -= size
         text = json.dumps(data, separators=(",", ":"), allow_nan=False)
-        budget -= len(text)
         # inside <script type="application/json">: no "</" may end the block early
-        out[name] = dict(json=text.replace("</", "<\\/"), note=note)
+        out[name] = dict(json=text.replace("</", "<\\/"), bytes=size, note=note)
     return out
 
 
