@@ -222,8 +222,14 @@ class EngineView {
   show(time, colouring, speedScale) {
     const frame = this.frameAt(time);
     const n = this.run.bodies.length;
-    const poses = this.run.poses;
+    const poses = this.run.poses, times = this.run.times;
     const base = frame * n * 8;
+    // between two recorded frames: positions and speeds linearly, orientations by slerp
+    const next = Math.min(frame + 1, times.length - 1);
+    const span = times[next] - times[frame];
+    const alpha = span > 0 ? Math.min(1, Math.max(0, (time - times[frame]) / span)) : 0;
+    const nextBase = next * n * 8;
+    const otherPosition = new THREE.Vector3(), otherRotation = new THREE.Quaternion();
     const matrix = new THREE.Matrix4();
     const position = new THREE.Vector3(), rotation = new THREE.Quaternion(), scale = new THREE.Vector3();
     const colour = new THREE.Color();
@@ -231,12 +237,18 @@ class EngineView {
     const colourOf = (column) => {
       if (colouring === 'engine') return engineColour(this.index, colour);
       if (colouring === 'body') return bodyColour(this.run.bodies[column], colour);
-      return paletteColour(poses[base + column * 8 + 7] / speedScale, colour);
+      const o = column * 8 + 7;
+      return paletteColour((poses[base + o] * (1 - alpha) + poses[nextBase + o] * alpha) / speedScale, colour);
     };
     const pose = (column) => {
-      const o = base + column * 8;
+      const o = base + column * 8, p = nextBase + column * 8;
       position.set(poses[o], poses[o + 1], poses[o + 2]);
       rotation.set(poses[o + 3], poses[o + 4], poses[o + 5], poses[o + 6]);
+      if (alpha > 0) {
+        position.lerp(otherPosition.set(poses[p], poses[p + 1], poses[p + 2]), alpha);
+        otherRotation.set(poses[p + 3], poses[p + 4], poses[p + 5], poses[p + 6]);
+        rotation.slerp(otherRotation, alpha);
+      }
       return Number.isFinite(position.x + position.y + position.z + rotation.x + rotation.y + rotation.z + rotation.w);
     };
     const place = (mesh, list, scaleOf) => {
