@@ -1,8 +1,9 @@
 #!/usr/bin/env python3
 """Build one self-contained HTML report (index.html) from a physbench results folder.
 
-Reads only files: results.csv, metadata.json and trajectories/*.csv, as `physbench run`
-writes them. The page embeds plotly.js, so it opens offline.
+Reads only files: results.csv, metadata.json, trajectories/*.csv, scenes/*.json and poses/*.bin,
+as `physbench run` writes them. The page embeds plotly.js and the replay viewer (three.js, built
+by scripts/setup.sh into reports/viewer/dist), so it opens offline.
 
     python reports/build_report.py results/20261122-041500
 """
@@ -20,6 +21,8 @@ import pandas as pd
 import plotly.graph_objects as go
 import plotly.offline
 from plotly.subplots import make_subplots
+
+import replay
 
 # the error series a trajectory CSV may hold: column, title, unit, and the results.csv summary column
 SERIES = [
@@ -678,6 +681,11 @@ TEMPLATE = jinja2.Template("""<!doctype html>
  td.stable { background: #dff0d8; } td.unstable, td.exploded { background: #f2dede; }
  td.over-damped { background: #fcf8e3; }
  section { border-top: 2px solid #ddd; margin-top: 2em; }
+ .replay-controls { display: flex; gap: 0.8em; align-items: center; flex-wrap: wrap; margin: 0.4em 0; font-size: 0.9em; }
+ .replay-slider { flex: 1; min-width: 200px; } .replay-clock { font-variant-numeric: tabular-nums; }
+ .replay-stage { position: relative; } .replay-canvas { display: block; cursor: grab; }
+ .replay-label { position: absolute; font-size: 0.85em; font-weight: 600; background: rgba(255,255,255,0.75);
+   padding: 1px 5px; pointer-events: none; } .replay-legend { color: #555; }
 </style></head><body>
 <h1>physbench report</h1>
 <p class="note">{{ meta.created }} · commit {{ meta.git_commit or "unknown" }} · {{ meta.machine.cpu }},
@@ -706,6 +714,12 @@ TEMPLATE = jinja2.Template("""<!doctype html>
 {% for r in t.rows %}<tr><td class="l">{{ r.label }}</td><td class="l {{ r.status }}">{{ r.status }}</td><td>{{ r.ms }}</td>
 {% for v in r.cells %}<td class="{{ 'unstable' if r.failed and loop.first else '' }}">{{ v }}</td>{% endfor %}</tr>{% endfor %}
 </table>{% endfor %}
+{% if s.replay %}<h3>Replay</h3>
+<p class="note">Each engine's recorded run (its default variant) side by side, on one clock and one camera (drag to
+orbit, scroll to zoom); colours by speed, body or engine (docs/viewer.md). {{ s.replay.note }}.</p>
+{% if s.replay.json %}<div class="replay" data-replay="replay-{{ loop.index }}"></div>
+<script type="application/json" id="replay-{{ loop.index }}">{{ s.replay.json | safe }}</script>
+{% if not viewerjs %}<p class="error">The replay viewer is not built: scripts/setup.sh builds it (npm ci, then npm run build in reports/viewer).</p>{% endif %}{% endif %}{% endif %}
 {% for chart in s.charts %}{{ chart | safe }}{% endfor %}
 {% if s.front %}<table><tr><th class="l" colspan="4">Pareto front: nothing else is both faster and more accurate</th></tr>
 <tr><th class="l">engine/variant</th><th>dt (s)</th><th>wall s per simulated s</th><th>max error</th></tr>
@@ -848,6 +862,7 @@ over all rounds, its spread the least and largest ratio over consecutive blocks 
 <tr><th class="l">setting</th><th class="l">value</th><th class="l">why</th></tr>
 {% for s in v.settings %}<tr><td class="l">{{ s.name }}</td><td class="l">{{ s.value }}</td><td class="l">{{ s.why }}</td></tr>{% endfor %}
 </table>{% endfor %}{% endfor %}</section>
+{% if viewerjs and has_replays %}<script>{{ viewerjs | safe }}</script>{% endif %}
 </body></html>
 """, autoescape=True)
 
@@ -882,6 +897,7 @@ def build_report(folder: Path) -> Path:
             reference_failed=reference_failed(r),
             message=r["message"] if isinstance(r.get("message"), str) else ""))
 
+    replays = replay.replays(folder, results, meta)
     scenarios = []
     for name, rows in results.groupby("scenario", sort=False):
         info = meta.get("scenarios", {}).get(name, {})
@@ -919,7 +935,7 @@ def build_report(folder: Path) -> Path:
             reference_failures=[dict(dt=fmt(float(dt)), why=why)
                                 for dt, why in (info.get("reference_failure") or {}).items()],
             sweep=", ".join(f"1/{1 / dt:.0f}" for dt in sweep) if len(sweep) > 1 else "",
-            charts=charts, front=front, contact=contact_table(own),
+            charts=charts, front=front, contact=contact_table(own), replay=replays.get(name),
             unsupported=[f"{r['label']}: {r['message']}" for _, r in own.iterrows() if r["status"] == "unsupported"]))
 
     families = stability_maps(results, meta)
@@ -939,7 +955,8 @@ def build_report(folder: Path) -> Path:
                            benchmark=benchmark, broadphase=broadphase_benchmark(folder),
                            verdicts=verdict_table(nominal_all), drift_cost=drift_cost_views(nominal_all),
                            contact_views=CONTACT_VIEWS, contacts=contacts,
-                           narrowphase=narrowphase_benchmark(folder), engines=engines)
+                           narrowphase=narrowphase_benchmark(folder), engines=engines,
+                           viewerjs=replay.viewer_script(), has_replays=any(r["json"] for r in replays.values()))
     out = folder / "index.html"
     partial = folder / "index.html.partial"
     partial.write_text(page, encoding="utf-8")

@@ -1,7 +1,8 @@
 #!/usr/bin/env bash
-# Installs what physbench needs and is missing: Debian packages (apt-get) and the report
-# builder's Python packages (a project-local .venv). Safe to run again: it only installs
-# what is not there. Sourced by bench.sh and test.sh.
+# Installs what physbench needs and is missing: Debian packages (apt-get), the report
+# builder's Python packages (a project-local .venv) and the replay viewer's npm packages
+# (reports/viewer/node_modules, from its package-lock.json), then bundles the viewer. Safe to run
+# again: it only installs what is not there. Sourced by bench.sh and test.sh.
 set -euo pipefail
 
 root=$(cd "$(dirname "${BASH_SOURCE[0]}")/.." && pwd)
@@ -11,7 +12,10 @@ packages=(
   libeigen3-dev libboost-dev nlohmann-json3-dev libcli11-dev libgtest-dev libbenchmark-dev
   libbullet-dev libode-dev libbox2d-dev libmujoco-dev libqhull-dev
   python3 python3-venv
+  chromium  # the report's browser test (reports/viewer/tests) drives /usr/bin/chromium headless
 )
+# node and npm for the replay viewer: Debian's when the machine has none
+command -v npm >/dev/null 2>&1 || packages+=(nodejs npm)
 
 missing=()
 for p in "${packages[@]}"; do
@@ -36,3 +40,14 @@ if [ ! -x "$venv/bin/python" ] || [ "$(cat "$stamp" 2>/dev/null)" != "$want" ]; 
   "$venv/bin/python" -m pip install -q -r "$root/reports/requirements.txt"
   echo "$want" > "$stamp"
 fi
+
+# the replay viewer's npm packages, reinstalled when package-lock.json changes, then its bundle
+viewer="$root/reports/viewer"
+stamp="$viewer/node_modules/.package-lock.sha256"
+want=$(sha256sum "$viewer/package-lock.json" | cut -d' ' -f1)
+if [ "$(cat "$stamp" 2>/dev/null)" != "$want" ]; then
+  echo "setup: npm ci in $viewer" >&2
+  (cd "$viewer" && npm ci --no-audit --no-fund --loglevel=error)
+  echo "$want" > "$stamp"
+fi
+(cd "$viewer" && npm run --silent build)

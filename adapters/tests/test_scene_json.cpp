@@ -4,6 +4,7 @@
 #include <filesystem>
 #include <fstream>
 #include <typeinfo>
+#include <unistd.h>
 
 #include "physbench/scene_json.h"
 
@@ -70,7 +71,8 @@ TEST(SceneJson, RoundTripKeepsEveryValue) {
 }
 
 TEST(SceneJson, FileRoundTrip) {
-  const auto path = std::filesystem::temp_directory_path() / "physbench_scene_roundtrip.json";
+  const auto path = std::filesystem::temp_directory_path() /
+                    ("physbench_scene_roundtrip_" + std::to_string(getpid()) + ".json");
   save_scene_file(sample_scene(), path.string());
   EXPECT_EQ(to_json(load_scene_file(path.string())), to_json(sample_scene()));
   std::filesystem::remove(path);
@@ -127,7 +129,8 @@ TEST(SceneJson, InfiniteNumberIsRejected) {
 }
 
 TEST(SceneJson, NanInAFileIsAParseErrorWithItsPlace) {
-  const auto path = std::filesystem::temp_directory_path() / "physbench_scene_nan.json";
+  const auto path = std::filesystem::temp_directory_path() /
+                    ("physbench_scene_nan_" + std::to_string(getpid()) + ".json");
   {
     std::ofstream out(path);
     out << "{\n  \"name\": \"x\",\n  \"dt\": NaN,\n  \"duration\": 1, \"bodies\": []\n}\n";
@@ -252,7 +255,8 @@ struct FileCase {
 };
 FileCase file_error(const std::string& text) {
   const std::string name = ::testing::UnitTest::GetInstance()->current_test_info()->name();
-  const auto path = std::filesystem::temp_directory_path() / ("physbench_bad_" + name + ".json");
+  const auto path = std::filesystem::temp_directory_path() /
+                    ("physbench_bad_" + name + "_" + std::to_string(getpid()) + ".json");
   {
     std::ofstream out(path, std::ios::binary);
     out << text;
@@ -413,7 +417,8 @@ TEST(SceneFile, DuplicateKeysAreNamed) {
 }
 
 TEST(SceneFile, FileOverTheSizeCapIsRefusedUnread) {
-  const auto path = std::filesystem::temp_directory_path() / "physbench_bad_huge.json";
+  const auto path = std::filesystem::temp_directory_path() /
+                    ("physbench_bad_huge_" + std::to_string(getpid()) + ".json");
   { std::ofstream out(path); }
   std::filesystem::resize_file(path, limits::kFileBytes + 1);  // sparse: no 64 MiB written
   try {

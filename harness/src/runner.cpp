@@ -17,6 +17,7 @@
 
 #include "physbench/metrics.h"
 #include "physbench/mujoco_buffers.h"
+#include "physbench/poses.h"
 #include "physbench/process.h"
 #include "physbench/registry.h"
 #include "physbench/scenarios.h"
@@ -494,6 +495,7 @@ int run_suite(const RunOptions& options, const fs::path& self) {
   install_interrupt_handlers();
   fs::create_directories(out / "scenes");
   fs::create_directories(out / "trajectories");
+  fs::create_directories(out / "poses");
   const fs::path work = out / ".work";
   fs::create_directories(work);
   std::ofstream csv(out / "results.csv.partial");
@@ -522,6 +524,17 @@ int run_suite(const RunOptions& options, const fs::path& self) {
        "fresh world until the budget is spent (at least 3); steps/s is the median"}};
   metadata["engines"] = json::object();
   metadata["scenarios"] = json::object();
+
+  // the replay viewer's pose files (docs/viewer.md): each scene at its own step, within the caps
+  json& poses_meta = metadata["poses"];
+  poses_meta = {{"format", "PBPOSES1: float32 px py pz qx qy qz qw |v| per body per frame"},
+                {"frame_rate", kPoseFrameRate},
+                {"bytes_per_job_cap", kPoseBytesPerJob},
+                {"bytes_per_run_cap", kPoseBytesPerRun},
+                {"files", 0},
+                {"bytes", 0},
+                {"not_written", json::object()}};
+  std::uint64_t pose_bytes = 0;
 
   int failures = 0;
   std::size_t total = 0, done = 0, rows_written = 0;
@@ -710,6 +723,19 @@ int run_suite(const RunOptions& options, const fs::path& self) {
             const fs::path trajectory = out / "trajectories" / (job + ".csv");
             write_trajectory_csv(trajectory, r.trajectory, series, against);
             row["trajectory"] = fs::relative(trajectory, out).string();
+            if (std::abs(dt - p.scene.dt) <= 1e-9 * p.scene.dt) {
+              const PoseLayout layout = pose_layout(r.trajectory);
+              if (layout.frames == 0)
+                poses_meta["not_written"][job] = "no samples, or two frames exceed the job cap";
+              else if (pose_bytes + layout.bytes > kPoseBytesPerRun)
+                poses_meta["not_written"][job] = "the run's pose files reached their cap";
+              else {
+                write_pose_file(out / "poses" / (job + ".bin"), r.trajectory, layout);
+                pose_bytes += layout.bytes;
+                poses_meta["files"] = poses_meta["files"].get<int>() + 1;
+                poses_meta["bytes"] = pose_bytes;
+              }
+            }
           } catch (const std::exception& e) {
             message += (message.empty() ? "" : "; ") + std::string("metrics failed: ") + e.what();
           }

@@ -73,7 +73,8 @@ TEST_P(Interrupt, KillsTheWorkerAndMarksTheRunIncomplete) {
   const int signal = GetParam();
   // orphans come to this process, so a worker left behind is seen (and reaped) here
   ASSERT_EQ(prctl(PR_SET_CHILD_SUBREAPER, 1), 0);
-  const fs::path dir = fs::temp_directory_path() / ("physbench_test_interrupt_" + std::to_string(signal));
+  const std::string name = std::to_string(signal) + "_" + std::to_string(getpid());
+  const fs::path dir = fs::temp_directory_path() / ("physbench_test_interrupt_" + name);
   fs::remove_all(dir);
   fs::create_directories(dir);
 
@@ -150,7 +151,8 @@ TEST_P(Interrupt, KillsTheWorkerAndMarksTheRunIncomplete) {
 // machinery: the runner's signal kills its whole group, grandchildren too
 TEST(Signals, InterruptKillsAnExternalWorkersGroup) {
   ASSERT_EQ(prctl(PR_SET_CHILD_SUBREAPER, 1), 0);
-  const fs::path dir = fs::temp_directory_path() / "physbench_test_interrupt_external";
+  const fs::path dir = fs::temp_directory_path() /
+                       ("physbench_test_interrupt_external_" + std::to_string(getpid()));
   fs::remove_all(dir);
   fs::create_directories(dir);
   const fs::path script = dir / "stand-in-worker.sh";

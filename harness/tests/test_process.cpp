@@ -2,6 +2,7 @@
 #include <gtest/gtest.h>
 
 #include <filesystem>
+#include <unistd.h>
 
 #include "physbench/process.h"
 #include "physbench/worker.h"
@@ -13,7 +14,8 @@ using namespace physbench;
 // one log per test: CTest runs tests in parallel
 std::string log_file() {
   const std::string name = ::testing::UnitTest::GetInstance()->current_test_info()->name();
-  const auto path = std::filesystem::temp_directory_path() / ("physbench_process_" + name + ".log");
+  const auto path = std::filesystem::temp_directory_path() /
+                    ("physbench_process_" + name + "_" + std::to_string(getpid()) + ".log");
   std::filesystem::remove(path);
   return path.string();
 }

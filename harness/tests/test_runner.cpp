@@ -9,6 +9,7 @@
 #include <map>
 #include <sstream>
 #include <tuple>
+#include <unistd.h>
 
 #include <nlohmann/json.hpp>
 
@@ -32,7 +33,8 @@ struct Invocation {
 };
 
 fs::path fresh_dir(const std::string& name) {
-  const fs::path dir = fs::temp_directory_path() / ("physbench_test_" + name);
+  const fs::path dir = fs::temp_directory_path() /
+                       ("physbench_test_" + name + "_" + std::to_string(getpid()));
   fs::remove_all(dir);
   fs::create_directories(dir);
   return dir;

@@ -1,0 +1,187 @@
+"""The report's 3D replay viewer: per chosen scene, each engine's pose file (poses/*.bin, written
+by `physbench run`) and the scene's shapes, packed into a JSON block the bundled viewer
+(reports/viewer/, three.js) draws. docs/viewer.md describes the files and the caps."""
+from __future__ import annotations
+
+import base64
+import gzip
+import json
+from pathlib import Path
+
+import numpy as np
+
+# the scenes that get a viewer, in the order they take the page's budget
+REPLAY_SCENES = ["tower-20", "pyramid-20", "rain", "tumbling-box", "spring-cube", "particles-attractors",
+                 "particles-plume", "particles-snow", "tower-10", "pyramid-10"]
+# compressed pose bytes one scene's viewer may embed (frames are dropped evenly to fit)
+SCENE_BYTES = 1_500_000
+# all the viewers of one page; a scene past it gets a note instead of a viewer
+PAGE_BYTES = 8_000_000
+# the variant each engine is shown in (its default); an engine not named shows its first row
+SHOWN_VARIANTS = {"rtp": ["soft-step", "rk4", "midpoint"], "bullet": ["float"], "ode": ["quickstep"], "box2d": ["default"],
+                  "mujoco": ["euler"], "box2d-v3": ["default"], "rapier": ["default"]}
+FLOATS = 8  # px py pz qx qy qz qw |v|
+MAGIC = b"PBPOSES1"
+VIEWER_JS = Path(__file__).resolve().parent / "viewer" / "dist" / "viewer.js"
+
+
+class PoseFileError(Exception):
+    pass
+
+
+def read_pose_file(path: Path) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+    """(scene body indices [B], times [F], poses [F, B, 8]) from a pose file."""
+    raw = path.read_bytes()
+    if len(raw) < 24 or raw[:8] != MAGIC:
+        raise PoseFileError(f"{path}: not a physbench pose file")
+    frames, bodies = np.frombuffer(raw, "<u4", 2, 8)
+    want = 24 + 4 * bodies + 4 * frames + 4 * FLOATS * frames * bodies
+    if len(raw) != want:
+        raise PoseFileError(f"{path}: {len(raw)} bytes, the header says {want}")
+    at = 24
+    index = np.frombuffer(raw, "<i4", bodies, at)
+    at += 4 * bodies
+    times = np.frombuffer(raw, "<f4", frames, at)
+    at += 4 * frames
+    poses = np.frombuffer(raw, "<f4", frames * bodies * FLOATS, at).reshape(frames, bodies, FLOATS)
+    return index, times, poses
+
+
+def packed(array: np.ndarray) -> str:
+    return base64.b64encode(gzip.compress(np.ascontiguousarray(array).tobytes(), compresslevel=6, mtime=0)).decode()
+
+
+def encode_run(times: np.ndarray, poses: np.ndarray, keep: np.ndarray) -> dict:
+    """One engine's frames `keep`: times as float32, positions as float16 offsets from the first
+    frame (so a body at rest keeps sub-millimetre detail far from the origin), the rest float16."""
+    chosen = poses[keep].astype(np.float32)
+    origin = np.nan_to_num(chosen[0, :, 0:3].copy(), nan=0.0, posinf=0.0, neginf=0.0)
+    chosen[:, :, 0:3] -= origin
+    with np.errstate(over="ignore"):
+        halves = chosen.astype("<f2")
+    return dict(frames=int(len(keep)), times=packed(times[keep].astype("<f4")), origin=packed(origin.astype("<f4")),
+                poses=packed(halves))
+
+
+def frames_every(count: int, step: int) -> np.ndarray:
+    keep = list(range(0, count, step))
+    if keep[-1] != count - 1:
+        keep.append(count - 1)
+    return np.array(keep)
+
+
+def shown_rows(rows) -> list:
+    """One row per engine at the scene's own step with a pose file: its default variant."""
+    chosen = {}
+    for _, r in rows.iterrows():
+        engine = r["engine"]
+        preferred = SHOWN_VARIANTS.get(engine, [])
+        rank = preferred.index(r["variant"]) if r["variant"] in preferred else len(preferred)
+        if engine not in chosen or rank < chosen[engine][0]:
+            chosen[engine] = (rank, r)
+    return [r for _, r in chosen.values()]
+
+
+def scene_shapes(scene: dict) -> dict:
+    """What the viewer draws besides the bodies' poses: static bodies, each dynamic body's shape,
+    the particles' planes and attractors, springs and their world anchors."""
+    bodies = scene.get("bodies", [])
+    shapes, static = {}, []
+    for i, b in enumerate(bodies):
+        shape = b.get("shape", {"type": "box", "half_extents": [0.5, 0.5, 0.5]})
+        if b.get("mass", 1.0) == 0:
+            static.append(dict(shape=shape, position=b.get("position", [0, 0, 0]),
+                               orientation=b.get("orientation", [1, 0, 0, 0])))
+        else:
+            shapes[str(i)] = shape
+    springs = [dict(body_a=s.get("body_a", 0), local_point_a=s.get("local_point_a", [0, 0, 0]),
+                    body_b=s.get("body_b", -1), point_b=s.get("point_b", [0, 0, 0]))
+               for s in scene.get("springs", [])]
+    particles = scene.get("particles")
+    return dict(name=scene.get("name", ""), planar=bool(scene.get("planar", False)), static=static, shapes=shapes,
+                springs=springs, anchors=[s["point_b"] for s in springs if s["body_b"] < 0],
+                particles=dict(planes=particles.get("planes", []), attractors=particles.get("attractors", []))
+                if particles else None)
+
+
+def replay_for(folder: Path, name: str, rows, meta: dict, budget: int) -> tuple[dict | None, str, int]:
+    """The viewer's data for one scenario within min(SCENE_BYTES, budget) compressed bytes, what it
+    holds and its bytes, or (None, why not, 0)."""
+    info = meta.get("scenarios", {}).get(name, {})
+    scene_files = info.get("scene_file") or {}
+    own_dt = info.get("dt")
+    scene_file = None
+    for dt, path in scene_files.items():
+        if own_dt is None or abs(float(dt) - own_dt) <= 1e-6 * own_dt:
+            scene_file = folder / path
+    if scene_file is None or not scene_file.is_file():
+        return None, "its scene file is not in scenes/", 0
+    runs = []
+    for r in shown_rows(rows):
+        trajectory = r.get("trajectory")
+        if not isinstance(trajectory, str):
+            continue
+        pose_file = folder / "poses" / (Path(trajectory).stem + ".bin")
+        if not pose_file.is_file():
+            continue
+        index, times, poses = read_pose_file(pose_file)
+        if len(times) == 0:
+            continue
+        ended = ""
+        if r["status"] != "ok":
+            ended = f"{r['status']}: {r['message']}" if isinstance(r.get("message"), str) else r["status"]
+        runs.append(dict(label=f"{r['engine']}/{r['variant']}", engine=r["engine"], status=r["status"], ended=ended,
+                         bodies=[int(i) for i in index], times_all=times, poses_all=poses))
+    if not runs:
+        return None, "no engine left a pose file for it (poses/)", 0
+    cap = min(SCENE_BYTES, budget)
+    longest = max(len(run["times_all"]) for run in runs)
+    step = 1
+    while True:
+        encoded = [encode_run(run["times_all"], run["poses_all"], frames_every(len(run["times_all"]), step))
+                   for run in runs]
+        size = sum(len(e["times"]) + len(e["origin"]) + len(e["poses"]) for e in encoded)
+        if size <= cap or step >= longest:
+            break
+        step *= 2
+    if size > cap:
+        return None, f"even two frames per engine take {size:,} bytes, over the {cap:,} left to it", 0
+    data = scene_shapes(json.loads(scene_file.read_text()))
+    data["runs"] = [dict(label=run["label"], engine=run["engine"], status=run["status"], ended=run["ended"],
+                         bodies=run["bodies"], **e) for run, e in zip(runs, encoded)]
+    frames_per_s = [(len(run["times_all"]) - 1) / max(1e-9, float(run["times_all"][-1])) / step for run in runs]
+    note = (f"{len(runs)} engines, {size:,} bytes embedded, about {min(frames_per_s):.3g} frames per simulated second"
+            + (f" (one recorded frame in {step}, to fit {cap:,} bytes)" if step > 1 else ""))
+    return data, note, size
+
+
+def replays(folder: Path, results, meta: dict) -> dict:
+    """Per scenario name: dict(json=the viewer's data as text, bytes=its compressed pose bytes,
+    note=what it holds), or dict(json=None, note=why it has no viewer), for the scenes
+    REPLAY_SCENES names. PAGE_BYTES counts compressed pose bytes, as SCENE_BYTES does."""
+    out, budget = {}, PAGE_BYTES
+    present = set(results["scenario"])
+    for name in REPLAY_SCENES:
+        if name not in present:
+            continue
+        rows = results[results["scenario"] == name]
+        own = meta.get("scenarios", {}).get(name, {}).get("dt")
+        if own is not None:
+            rows = rows[(rows["dt"] - own).abs() <= 1e-6 * own]
+        if budget <= 0:
+            out[name] = dict(json=None, bytes=0, note=f"not embedded: the page's replays reached {PAGE_BYTES:,} bytes")
+            continue
+        data, note, size = replay_for(folder, name, rows, meta, budget)
+        if data is None:
+            out[name] = dict(json=None, bytes=0, note=f"no replay: {note}")
+            continue
+        budget -= size
+        text = json.dumps(data, separators=(",", ":"), allow_nan=False)
+        # inside <script type="application/json">: no "</" may end the block early
+        out[name] = dict(json=text.replace("</", "<\\/"), bytes=size, note=note)
+    return out
+
+
+def viewer_script() -> str | None:
+    """The bundled viewer (three.js and reports/viewer/src), or None when it is not built."""
+    return VIEWER_JS.read_text(encoding="utf-8") if VIEWER_JS.is_file() else None

@@ -1,0 +1,147 @@
+"""The replay viewer's data: the runner's pose files and what the report embeds from them."""
+from __future__ import annotations
+
+import base64
+import gzip
+import json
+import os
+import re
+import subprocess
+import sys
+from pathlib import Path
+
+import numpy as np
+import pandas as pd
+import pytest
+
+sys.path.insert(0, str(Path(__file__).resolve().parents[1]))
+import build_report  # noqa: E402
+import replay  # noqa: E402
+
+PHYSBENCH = os.environ.get("PHYSBENCH_EXE")
+
+
+@pytest.fixture(scope="module")
+def run(tmp_path_factory) -> Path:
+    if not PHYSBENCH:
+        pytest.skip("PHYSBENCH_EXE is not set (CTest sets it)")
+    out = tmp_path_factory.mktemp("replay") / "r"
+    subprocess.run([PHYSBENCH, "run", "-s", "tower-10,tumbling-box,particles-plume", "-e", "rtp,ode", "--no-sweep",
+                    "--duration", "0.5", "--budget", "0", "--out", str(out)], check=True, capture_output=True)
+    return out
+
+
+def ok_rows(folder: Path) -> pd.DataFrame:
+    table = pd.read_csv(folder / "results.csv")
+    return table[table["trajectory"].notna()]
+
+
+def test_every_run_at_its_own_step_has_a_pose_file_matching_its_trajectory(run):
+    rows = ok_rows(run)
+    assert len(rows) >= 4
+    total = 0
+    for _, row in rows.iterrows():
+        path = run / "poses" / (Path(row["trajectory"]).stem + ".bin")
+        index, times, poses = replay.read_pose_file(path)
+        total += path.stat().st_size
+        traj = pd.read_csv(run / row["trajectory"])
+        assert sorted(index) == sorted(traj["body"].unique())
+        # 30 frames per simulated second from 60 Hz samples, the last sample included
+        assert np.allclose(np.diff(times), 1 / 30, atol=1e-5)
+        assert times[-1] == pytest.approx(traj["time"].max(), abs=1e-6)
+        # frame k is the trajectory's sample at that time, to float32 precision
+        for k in (0, len(times) // 2, len(times) - 1):
+            at = traj[np.isclose(traj["time"], times[k], atol=1e-5)].set_index("body").loc[index]
+            expected = at[["px", "py", "pz", "qx", "qy", "qz", "qw"]].to_numpy(float)
+            got = poses[k, :, :7].astype(float)
+            flip = np.sum(expected[:, 3:] * got[:, 3:], axis=1) < 0  # q and −q are one rotation
+            got[flip, 3:] *= -1
+            assert np.allclose(got, expected, rtol=1e-6, atol=1e-6)
+            speed = np.linalg.norm(at[["vx", "vy", "vz"]].to_numpy(float), axis=1)
+            assert np.allclose(poses[k, :, 7], speed, rtol=1e-5, atol=1e-6)
+    meta = json.loads((run / "metadata.json").read_text())["poses"]
+    assert meta["files"] == len(rows) and meta["bytes"] == total
+    assert meta["bytes_per_run_cap"] >= meta["bytes_per_job_cap"] > 0
+
+
+def test_a_particle_mode_records_a_sample_of_its_particles(run):
+    rows = ok_rows(run)
+    row = rows[rows["scenario"] == "particles-plume"].iloc[0]
+    index, _, poses = replay.read_pose_file(run / "poses" / (Path(row["trajectory"]).stem + ".bin"))
+    scene = json.loads((run / "scenes" / "particles-plume.json").read_text())
+    assert len(index) == 200 and index.min() >= len(scene["bodies"])  # particles follow the bodies
+    # spread over the set: the sample covers the spawn square, not one corner of it
+    assert np.ptp(poses[0, :, 0]) > 6 and np.ptp(poses[0, :, 2]) > 6
+
+
+def embedded(page: str) -> dict:
+    blocks = re.findall(r'<script type="application/json" id="(replay-\d+)">(.*?)</script>', page, re.S)
+    out = {}
+    for _, text in blocks:
+        data = json.loads(text.replace("<\\/", "</"))
+        out[data["name"]] = data
+    return out
+
+
+def unpack(text: str, dtype) -> np.ndarray:
+    return np.frombuffer(gzip.decompress(base64.b64decode(text)), dtype)
+
+
+def test_the_report_embeds_each_engines_replay_and_the_viewer(run):
+    page = build_report.build_report(run).read_text()
+    assert "physbenchReplays" in page  # the bundled viewer (three.js inside)
+    data = embedded(page)
+    assert set(data) == {"tower-10", "tumbling-box", "particles-plume"}
+    tower = data["tower-10"]
+    assert {r["engine"] for r in tower["runs"]} == {"rtp", "ode"}
+    assert any(s["shape"]["type"] == "plane" for s in tower["static"])  # the ground
+    assert len(tower["shapes"]) == 10
+    assert data["particles-plume"]["particles"]["attractors"]  # drawn as the force point
+    # what the viewer decodes is the pose file, to float16 on the offsets from frame 0
+    rows = ok_rows(run)
+    for name, scene in data.items():
+        for r in scene["runs"]:
+            row = rows[(rows["scenario"] == name) & (rows["engine"] + "/" + rows["variant"] == r["label"])].iloc[0]
+            _, times, poses = replay.read_pose_file(run / "poses" / (Path(row["trajectory"]).stem + ".bin"))
+            frames, bodies = r["frames"], len(r["bodies"])
+            assert frames == len(times)
+            got = unpack(r["poses"], "<f2").astype(np.float32).reshape(frames, bodies, 8)
+            got[:, :, :3] += unpack(r["origin"], "<f4").reshape(bodies, 3)
+            assert np.allclose(unpack(r["times"], "<f4"), times)
+            offset = np.abs(poses[:, :, :3] - poses[:1, :, :3]).max()
+            assert np.allclose(got[:, :, :3], poses[:, :, :3], atol=1e-3 * max(1.0, offset))
+            assert np.allclose(got[:, :, 3:7], poses[:, :, 3:7], atol=1e-3)
+
+
+def test_a_scene_over_its_budget_keeps_fewer_frames_and_says_so(run, monkeypatch):
+    full = replay.replays(run, pd.read_csv(run / "results.csv"), json.loads((run / "metadata.json").read_text()))
+    size = len(full["tower-10"]["json"])
+    monkeypatch.setattr(replay, "SCENE_BYTES", size // 3)
+    cut = replay.replays(run, pd.read_csv(run / "results.csv"), json.loads((run / "metadata.json").read_text()))
+    data = json.loads(cut["tower-10"]["json"])
+    assert "one recorded frame in" in cut["tower-10"]["note"]
+    assert data["runs"][0]["frames"] < json.loads(full["tower-10"]["json"])["runs"][0]["frames"]
+    assert sum(len(r["poses"]) + len(r["times"]) + len(r["origin"]) for r in data["runs"]) <= size // 3
+
+
+def test_past_the_page_budget_a_scene_gets_a_note_not_a_viewer(run, monkeypatch):
+    full = replay.replays(run, pd.read_csv(run / "results.csv"), json.loads((run / "metadata.json").read_text()))
+    first = next(name for name in replay.REPLAY_SCENES if name in full)
+    monkeypatch.setattr(replay, "PAGE_BYTES", full[first]["bytes"])
+    page = build_report.build_report(run).read_text()
+    assert list(embedded(page)) == [first]  # the first scene takes the whole budget
+    assert f"not embedded: the page&#39;s replays reached {full[first]['bytes']:,} bytes" in page
+
+
+def test_without_the_bundle_the_page_says_how_to_build_it(run, monkeypatch, tmp_path):
+    monkeypatch.setattr(replay, "VIEWER_JS", tmp_path / "absent.js")
+    page = build_report.build_report(run).read_text()
+    assert "The replay viewer is not built" in page
+    assert "physbenchReplays" not in page
+
+
+def test_a_truncated_pose_file_is_named(tmp_path):
+    path = tmp_path / "x.bin"
+    path.write_bytes(b"PBPOSES1" + np.array([2, 1, 0, 0], "<u4").tobytes())
+    with pytest.raises(replay.PoseFileError, match="header says"):
+        replay.read_pose_file(path)

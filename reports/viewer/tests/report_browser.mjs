@@ -1,0 +1,180 @@
+// The report in a real browser: a short real run (physbench) becomes a report (build_report.py),
+// which headless Chromium opens from file://. Any page: no JavaScript error, no console error, no
+// failed request. The replay viewer: every replay started; two engines' viewports draw bodies
+// (coloured pixels read back from the canvas); the decoded poses match the scene file; moving the
+// slider changes each engine's picture. Screenshots go to PHYSBENCH_ARTIFACTS (viewer.png).
+//
+//   node reports/viewer/tests/report_browser.mjs            (CTest sets the environment)
+//   node reports/viewer/tests/report_browser.mjs PAGE.html  (the page checks on any built report)
+//   node reports/viewer/tests/report_browser.mjs RESULTS/   (report that run's folder, every check)
+//
+// Exit 77 (CTest's skip) only when Chromium is absent.
+import { execFileSync } from 'node:child_process';
+import { existsSync, mkdirSync, mkdtempSync, readFileSync, rmSync, statSync } from 'node:fs';
+import { tmpdir } from 'node:os';
+import { dirname, join, resolve } from 'node:path';
+import { fileURLToPath, pathToFileURL } from 'node:url';
+import { chromium } from 'playwright-core';
+
+const here = dirname(fileURLToPath(import.meta.url));
+const root = resolve(here, '../../..');
+const browserPath = process.env.PHYSBENCH_CHROMIUM || '/usr/bin/chromium';
+const artifacts = process.env.PHYSBENCH_ARTIFACTS || join(root, 'build', 'artifacts');
+
+let failures = 0;
+function check(ok, what) {
+  console.log(`${ok ? 'ok  ' : 'FAIL'} ${what}`);
+  if (!ok) failures++;
+}
+
+// ---- any page: load it, collect every error ------------------------------------------------
+
+export async function openReport(browser, page_path) {
+  const page = await browser.newPage({ viewport: { width: 1280, height: 900 } });
+  const errors = [];
+  page.on('pageerror', (e) => errors.push(`page error: ${e.message}`));
+  page.on('console', (m) => { if (m.type() === 'error') errors.push(`console error: ${m.text()}`); });
+  page.on('requestfailed', (r) => errors.push(`request failed: ${r.url()} (${r.failure()?.errorText})`));
+  await page.goto(pathToFileURL(page_path).href, { waitUntil: 'load' });
+  // a page with replays is ready when the viewer says so (it decodes its data asynchronously)
+  if (await page.locator('.replay[data-replay]').count())
+    await page.waitForFunction(() => window.physbenchReplaysReady === true, null, { timeout: 60000 });
+  return { page, errors };
+}
+
+// ---- the viewer: pixels of one engine's viewport -------------------------------------------
+
+// fraction of a viewport's pixels that are saturated (bodies are coloured; background, ground and
+// walls are grey), and a checksum of the viewport's pixels
+async function viewportPixels(page, replay, view) {
+  return page.evaluate(([r, v]) => {
+    const replay = window.physbenchReplays[r];
+    replay.render();
+    const box = replay.viewport(v);
+    const copy = document.createElement('canvas');
+    copy.width = box.w; copy.height = box.h;
+    const context = copy.getContext('2d');
+    context.drawImage(replay.canvas, box.x, box.y, box.w, box.h, 0, 0, box.w, box.h);
+    const pixels = context.getImageData(0, 0, box.w, box.h).data;
+    let coloured = 0, sum = 0;
+    for (let i = 0; i < pixels.length; i += 4) {
+      const [red, green, blue] = [pixels[i], pixels[i + 1], pixels[i + 2]];
+      if (Math.max(red, green, blue) - Math.min(red, green, blue) > 60) coloured++;
+      sum = (sum * 31 + red + 7 * green + 13 * blue) % 1000000007;
+    }
+    return { coloured: coloured / (box.w * box.h), sum };
+  }, [replay, view]);
+}
+
+async function setSlider(page, replay, value) {
+  await page.evaluate(([r, value]) => {
+    const slider = window.physbenchReplays[r].slider;
+    slider.value = String(value);
+    slider.dispatchEvent(new Event('input'));
+  }, [replay, value]);
+}
+
+async function viewerChecks(page, results) {
+  const replays = await page.evaluate(() => window.physbenchReplays.map((r) => ({
+    name: r.data.name, labels: r.runs.map((run) => run.label), frames: r.runs.map((run) => run.frames),
+  })));
+  const wanted = await page.locator('.replay[data-replay]').count();
+  check(replays.length === wanted && wanted > 0, `every replay on the page started (${replays.length} of ${wanted})`);
+  for (const [i, replay] of replays.entries()) {
+    check(replay.labels.length >= 2, `${replay.name}: two engines or more (${replay.labels.join(', ')})`);
+    for (let v = 0; v < replay.labels.length; v++) {
+      const { coloured } = await viewportPixels(page, i, v);
+      check(coloured > 0.002, `${replay.name} ${replay.labels[v]}: bodies drawn (${(100 * coloured).toFixed(2)} % coloured pixels)`);
+    }
+    // the decoded poses put body 0 where the scene file starts it
+    const scene = JSON.parse(readFileSync(join(results, 'scenes', `${replay.name}.json`), 'utf8'));
+    const firstDynamic = scene.bodies.findIndex((b) => b.mass > 0);
+    if (firstDynamic >= 0) {
+      const decoded = await page.evaluate(([r, body]) => {
+        const run = window.physbenchReplays[r].runs[0];
+        const column = run.bodies.indexOf(body);
+        return column < 0 ? null : Array.from(run.poses.slice(column * 8, column * 8 + 3));
+      }, [i, firstDynamic]);
+      const start = scene.bodies[firstDynamic].position;
+      const off = decoded ? Math.hypot(...decoded.map((x, k) => x - start[k])) : Infinity;
+      check(off < 1e-3, `${replay.name}: body ${firstDynamic} decoded at its scene position (off by ${off.toExponential(2)} m)`);
+    }
+  }
+  // the slider moves every engine of the tumbling box (a spinning box changes its picture)
+  const tumbling = replays.findIndex((r) => r.name === 'tumbling-box');
+  check(tumbling >= 0, 'the tumbling-box replay is on the page');
+  if (tumbling >= 0) {
+    await setSlider(page, tumbling, 0);
+    const before = [];
+    for (let v = 0; v < replays[tumbling].labels.length; v++) before.push((await viewportPixels(page, tumbling, v)).sum);
+    await setSlider(page, tumbling, 370);
+    for (let v = 0; v < replays[tumbling].labels.length; v++) {
+      const after = (await viewportPixels(page, tumbling, v)).sum;
+      check(after !== before[v], `tumbling-box ${replays[tumbling].labels[v]}: moving the slider changes the picture`);
+    }
+    const clock = await page.evaluate((r) => window.physbenchReplays[r].time, tumbling);
+    check(clock > 0, `the slider moved the clock (t = ${clock.toFixed(3)} s)`);
+  }
+  // screenshots: the first replay half-way, and the tumbling box where the slider left it
+  mkdirSync(artifacts, { recursive: true });
+  await setSlider(page, 0, 500);
+  const first = page.locator('.replay[data-replay]').first();
+  await first.scrollIntoViewIfNeeded();
+  await first.screenshot({ path: join(artifacts, 'viewer.png') });
+  if (tumbling >= 0)
+    await page.locator('.replay[data-replay]').nth(tumbling).screenshot({ path: join(artifacts, 'viewer-tumbling-box.png') });
+  console.log(`screenshots in ${artifacts}`);
+}
+
+// ---- main ------------------------------------------------------------------------------------
+
+async function main() {
+  if (!existsSync(browserPath)) {
+    console.log(`SKIPPED: no Chromium at ${browserPath} (scripts/setup.sh installs Debian's chromium)`);
+    process.exit(77);
+  }
+  const browser = await chromium.launch({
+    executablePath: browserPath, headless: true,
+    // WebGL without a GPU: Chromium's software renderer
+    args: ['--no-sandbox', '--use-angle=swiftshader', '--enable-unsafe-swiftshader', '--ignore-gpu-blocklist'],
+  });
+  let scratch = null;
+  try {
+    let pagePath = process.argv[2], results = null;
+    if (pagePath && statSync(pagePath).isDirectory()) {
+      results = pagePath;
+      const python = process.env.PHYSBENCH_PYTHON || join(root, '.venv', 'bin', 'python');
+      execFileSync(python, [join(root, 'reports', 'build_report.py'), results], { stdio: 'inherit' });
+      pagePath = join(results, 'index.html');
+    } else if (!pagePath) {
+      const physbench = process.env.PHYSBENCH_EXE, python = process.env.PHYSBENCH_PYTHON;
+      if (!physbench || !python) throw new Error('PHYSBENCH_EXE and PHYSBENCH_PYTHON must be set (CTest sets them)');
+      scratch = mkdtempSync(join(tmpdir(), 'physbench-browser-'));
+      results = join(scratch, 'r');
+      const engines = process.env.PHYSBENCH_BROWSER_ENGINES || 'rtp,bullet';
+      execFileSync(physbench, ['run', '-s', 'tower-10,tumbling-box', '-e', engines, '--no-sweep', '--duration', '1',
+        '--budget', '0', '--out', results], { stdio: ['ignore', 'ignore', 'inherit'] });
+      execFileSync(python, [join(root, 'reports', 'build_report.py'), results], { stdio: 'inherit' });
+      pagePath = join(results, 'index.html');
+    }
+    const { page, errors } = await openReport(browser, pagePath);
+    check(errors.length === 0, `the page loads with no JavaScript or console error${errors.length ? ':\n  ' + errors.join('\n  ') : ''}`);
+    const [plots, drawn] = await page.evaluate(() => {
+      const divs = [...document.querySelectorAll('.plotly-graph-div')];
+      return [divs.length, divs.filter((d) => d.querySelector('svg.main-svg') && d.querySelector('.trace')).length];
+    });
+    check(drawn === plots, `every chart drew (${drawn} of ${plots})`);
+    if (results) await viewerChecks(page, results);
+    check(errors.length === 0, `no error while the viewer was driven${errors.length ? ':\n  ' + errors.join('\n  ') : ''}`);
+  } finally {
+    await browser.close();
+    if (scratch && !failures) rmSync(scratch, { recursive: true, force: true });
+    else if (scratch) console.log(`results kept in ${scratch}`);
+  }
+  if (failures) {
+    console.log(`${failures} check(s) failed`);
+    process.exit(1);
+  }
+}
+
+main().catch((error) => { console.error(error); process.exit(1); });
