@@ -2,31 +2,23 @@
 from __future__ import annotations
 
 import json
-import os
 import re
 import shutil
 import subprocess
-import sys
 from pathlib import Path
 
 import pandas as pd
 import pytest
 
-sys.path.insert(0, str(Path(__file__).resolve().parents[1]))
-import build_report  # noqa: E402
-
-PHYSBENCH = os.environ.get("PHYSBENCH_EXE")
+from support import PHYSBENCH, physbench_run
+import build_report  # noqa: E402  (found through support's path)
 
 
 @pytest.fixture(scope="module")
 def results(tmp_path_factory) -> Path:
-    if not PHYSBENCH:
-        pytest.skip("PHYSBENCH_EXE is not set (CTest sets it)")
-    out = tmp_path_factory.mktemp("run") / "r"
-    # a short sweep keeps the converged references cheap (the sanitizer build runs this too)
-    subprocess.run([PHYSBENCH, "run", "-s", "projectile,projectile-planar,tumbling-box", "--sweep-hz", "30,60,120",
-                    "--budget", "0", "--out", str(out)], check=True, capture_output=True)
-    return out
+    # a short sweep keeps the converged references cheap
+    return physbench_run(tmp_path_factory.mktemp("run") / "r", "-s", "projectile,projectile-planar,tumbling-box",
+                         "--sweep-hz", "30,60,120")
 
 
 def test_report_is_self_contained_and_names_every_row(results):

@@ -4,31 +4,22 @@ from __future__ import annotations
 import base64
 import gzip
 import json
-import os
 import re
-import subprocess
-import sys
 from pathlib import Path
 
 import numpy as np
 import pandas as pd
 import pytest
 
-sys.path.insert(0, str(Path(__file__).resolve().parents[1]))
-import build_report  # noqa: E402
+from support import physbench_run
+import build_report  # noqa: E402  (found through support's path)
 import replay  # noqa: E402
-
-PHYSBENCH = os.environ.get("PHYSBENCH_EXE")
 
 
 @pytest.fixture(scope="module")
 def run(tmp_path_factory) -> Path:
-    if not PHYSBENCH:
-        pytest.skip("PHYSBENCH_EXE is not set (CTest sets it)")
-    out = tmp_path_factory.mktemp("replay") / "r"
-    subprocess.run([PHYSBENCH, "run", "-s", "tower-10,tumbling-box,particles-plume", "-e", "rtp,ode", "--no-sweep",
-                    "--duration", "0.5", "--budget", "0", "--out", str(out)], check=True, capture_output=True)
-    return out
+    return physbench_run(tmp_path_factory.mktemp("replay") / "r", "-s", "tower-10,tumbling-box,particles-plume",
+                         "-e", "rtp,ode", "--no-sweep", "--duration", "0.5")
 
 
 def ok_rows(folder: Path) -> pd.DataFrame:
