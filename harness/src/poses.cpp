@@ -17,11 +17,16 @@ std::uint64_t file_bytes(std::uint64_t frames, std::uint64_t bodies) {
   return 24 + 4 * bodies + 4 * frames + 4ull * kPoseFloats * frames * bodies;
 }
 
+// the samples kept as frames: every stride-th, and the last even when the stride steps over it
+std::vector<std::size_t> picked_samples(std::size_t samples, std::size_t stride) {
+  std::vector<std::size_t> picked;
+  for (std::size_t k = 0; k < samples; k += stride) picked.push_back(k);
+  if (samples > 0 && picked.back() != samples - 1) picked.push_back(samples - 1);
+  return picked;
+}
+
 std::uint32_t frame_count(std::size_t samples, std::size_t stride) {
-  if (samples == 0) return 0;
-  const std::size_t picked = (samples - 1) / stride + 1;
-  // the last sample is a frame even when the stride steps over it
-  return static_cast<std::uint32_t>(picked + ((samples - 1) % stride != 0));
+  return static_cast<std::uint32_t>(picked_samples(samples, stride).size());
 }
 
 }  // namespace
@@ -52,9 +57,7 @@ PoseLayout pose_layout(const Trajectory& run, std::uint64_t byte_cap) {
 void write_pose_file(const std::filesystem::path& path, const Trajectory& run,
                      const PoseLayout& layout) {
   if (layout.frames == 0) throw std::invalid_argument("write_pose_file: no frames to write");
-  std::vector<std::size_t> picked;
-  for (std::size_t k = 0; k < run.samples.size(); k += layout.stride) picked.push_back(k);
-  if (picked.back() != run.samples.size() - 1) picked.push_back(run.samples.size() - 1);
+  const std::vector<std::size_t> picked = picked_samples(run.samples.size(), layout.stride);
   if (picked.size() != layout.frames)
     throw std::logic_error("write_pose_file: layout does not match");
 

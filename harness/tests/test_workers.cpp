@@ -62,20 +62,28 @@ Scene free_flight() {
   return scene;
 }
 
-Scene spring() {
+// one box of mass m and the given half extents, alone, no gravity and no collisions, at 120 Hz
+Scene lone_box(const std::string& name, const Vec3& half_extents, double mass, double duration) {
   Scene scene;
-  scene.name = "conformance-spring";
-  scene.planar = true;
+  scene.name = name;
   scene.collisions = false;
   scene.gravity = Vec3::Zero();
   scene.dt = 1.0 / 120.0;
-  scene.duration = 5.0;
-  BodySpec mass;
+  scene.duration = duration;
+  BodySpec box;
+  box.name = "box";
+  box.shape.half_extents = half_extents;
+  box.mass = mass;
+  scene.bodies = {box};
+  return scene;
+}
+
+Scene spring() {
+  Scene scene = lone_box("conformance-spring", Vec3(0.1, 0.1, 0.1), 1.0, 5.0);
+  scene.planar = true;
+  BodySpec& mass = scene.bodies[0];
   mass.name = "mass";
-  mass.shape.half_extents = Vec3(0.1, 0.1, 0.1);
-  mass.mass = 1.0;
   mass.position = Vec3(0.0, 0.5, 0.0);  // 0.5 m past the rest length
-  scene.bodies = {mass};
   SpringSpec s;
   s.body_a = 0;
   s.point_b = Vec3(0.0, 2.0, 0.0);
@@ -179,18 +187,9 @@ TEST(WorkerConformance, ABoxRestsOnAPlane) {
 TEST(WorkerConformance, AFreeBodyKeepsItsAngularMomentum) {
   const auto workers = built_workers();
   if (workers.empty()) GTEST_SKIP() << "no external worker is built (cargo missing?)";
-  Scene scene;
-  scene.name = "conformance-tumbling";
-  scene.collisions = false;
-  scene.gravity = Vec3::Zero();
-  scene.dt = 1.0 / 120.0;
-  scene.duration = 4.0;
-  BodySpec box;
-  box.name = "box";
-  box.shape.half_extents = Vec3(0.05, 0.2, 0.45);
-  box.mass = 1.0;
+  Scene scene = lone_box("conformance-tumbling", Vec3(0.05, 0.2, 0.45), 1.0, 4.0);
+  BodySpec& box = scene.bodies[0];
   box.angular_velocity = Vec3(0.5, 2.0, 1.5);
-  scene.bodies = {box};
   const Vec3 inertia = principal_inertia(box.shape, box.mass);
   const auto momentum = [&](const SampledState& s) {
     const Eigen::Matrix3d r = s.orientation.toRotationMatrix();
