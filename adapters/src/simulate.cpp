@@ -31,8 +31,16 @@ struct Pass {
 };
 
 // one run of the whole scene; the trajectory is kept when asked
+// busy-waits until the time since start is (1 + share) times what it was on entry
+void stretch(Clock::time_point start, double share) {
+  if (share <= 0.0) return;
+  const auto until = start + (Clock::now() - start) * (1.0 + share);
+  while (Clock::now() < until) {
+  }
+}
+
 Pass run_once(Engine& engine, const Scene& scene, const std::vector<int>& bodies, int every_steps,
-              double explosion_distance, Trajectory* keep) {
+              double explosion_distance, double slowdown, Trajectory* keep) {
   Pass pass;
   const long steps = scene.step_count();
   Sample first = sample_of(engine, bodies, 0.0);
@@ -66,6 +74,7 @@ Pass run_once(Engine& engine, const Scene& scene, const std::vector<int>& bodies
       pass.reason = e.what();
       return pass;
     }
+    stretch(start, slowdown);
     pass.stepping_seconds += std::chrono::duration<double>(Clock::now() - start).count();
     done += chunk;
     Sample s = sample_of(engine, bodies, static_cast<double>(done) * scene.dt);
@@ -150,7 +159,7 @@ RunResult simulate(const EngineInfo& info, const std::string& variant, const Sce
     auto engine = info.create(variant);
     engine->load(scene);
     const Pass pass = run_once(*engine, scene, result.trajectory.bodies, every,
-                               options.explosion_distance, &result.trajectory);
+                               options.explosion_distance, options.slowdown, &result.trajectory);
     if (pass.exploded) {
       std::ostringstream why;
       if (!pass.reason.empty())
@@ -176,7 +185,7 @@ RunResult simulate(const EngineInfo& info, const std::string& variant, const Sce
     auto engine = info.create(variant);
     engine->load(scene);
     const Pass pass = run_once(*engine, scene, result.trajectory.bodies, every,
-                               options.explosion_distance, nullptr);
+                               options.explosion_distance, options.slowdown, nullptr);
     result.wall_seconds.push_back(pass.stepping_seconds);
     measured += pass.stepping_seconds;
   }

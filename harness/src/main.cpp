@@ -4,7 +4,11 @@
 #include <csignal>
 #include <ctime>
 #include <filesystem>
+#include <cerrno>
+#include <cstring>
 #include <iostream>
+#include <tuple>
+#include <unistd.h>
 
 #include "physbench/metrics.h"
 #include "physbench/registry.h"
@@ -62,6 +66,27 @@ void print_list(const fs::path& self) {
   std::cout << "\n";
 }
 
+// runs reports/<tool> with the project's Python (.venv), passing the arguments on; returns its
+// exit code. The tools read results folders with the report builder's own readers
+int run_python_tool(const std::string& tool, const std::vector<std::string>& args) {
+  const fs::path source = source_directory();
+  const fs::path python = source / ".venv" / "bin" / "python";
+  const fs::path script = source / "reports" / tool;
+  if (!fs::exists(python)) {
+    std::cerr << "physbench: " << python.string()
+              << " is missing: run scripts/setup.sh (it makes the project's Python environment)\n";
+    return 2;
+  }
+  std::vector<std::string> words = {python.string(), script.string()};
+  words.insert(words.end(), args.begin(), args.end());
+  std::vector<char*> argv;
+  for (std::string& w : words) argv.push_back(w.data());
+  argv.push_back(nullptr);
+  execv(argv[0], argv.data());
+  std::cerr << "physbench: cannot run " << python.string() << ": " << std::strerror(errno) << '\n';
+  return 2;
+}
+
 }  // namespace
 
 int main(int argc, char** argv) {
@@ -106,6 +131,21 @@ int main(int argc, char** argv) {
                   "seconds of measured stepping per job (repeats)")
       ->capture_default_str()
       ->check(CLI::NonNegativeNumber);
+  std::string shard;
+  run->add_option("--shard", shard,
+                  "run the K-th of N disjoint slices of the planned jobs, K/N with K from 1 "
+                  "(join the N folders with `physbench merge`)");
+
+  // merge and compare read results folders; they are the report builder's Python (reports/),
+  // run with the project's .venv
+  auto* merge = app.add_subcommand(
+      "merge", "join the results folders of a sharded run (--shard K/N) into one: "
+               "merge -o OUT SHARD_DIR... (merge -- --help for its options)");
+  merge->prefix_command();
+  auto* compare = app.add_subcommand(
+      "compare", "compare two results folders, OLD then NEW: faster, slower, more or less "
+                 "accurate; exit 1 on a regression (compare -- --help for its options)");
+  compare->prefix_command();
 
   auto* check = app.add_subcommand("check", "validate scene files and print what is wrong");
   std::vector<std::string> check_files;
@@ -130,6 +170,8 @@ int main(int argc, char** argv) {
     return 0;
   }
   if (*worker) return run_worker(job);
+  if (*merge) return run_python_tool("merge.py", merge->remaining());
+  if (*compare) return run_python_tool("compare.py", compare->remaining());
   if (*export_scenes) try {
     fs::create_directories(export_dir);
     int written = 0;
@@ -174,6 +216,12 @@ int main(int argc, char** argv) {
     return bad ? 1 : 0;
   }
 
+  if (!shard.empty()) try {
+    std::tie(options.shard_index, options.shard_count) = parse_shard(shard);
+  } catch (const RunError& e) {
+    std::cerr << "physbench: " << e.what() << '\n';
+    return 2;
+  }
   if (dt > 0.0) options.dt = dt;
   for (double hz : sweep_hz) options.sweep_dt.push_back(1.0 / hz);
   if (duration > 0.0) options.duration = duration;

@@ -145,6 +145,16 @@ std::string number(double value) {
 }
 
 // every bit of a double, for values that are matched rather than read
+// 64-bit FNV-1a of a text, in hex: the plan's fingerprint (the same text gives the same value on
+// every machine, which std::hash does not promise)
+std::string fingerprint(const std::string& text) {
+  std::uint64_t hash = 0xcbf29ce484222325ull;
+  for (unsigned char c : text) hash = (hash ^ c) * 0x100000001b3ull;
+  std::ostringstream out;
+  out << std::hex << std::setw(16) << std::setfill('0') << hash;
+  return out.str();
+}
+
 std::string exact(double value) {
   std::ostringstream out;
   out << std::setprecision(17) << value;
@@ -274,6 +284,7 @@ const std::vector<std::string> kColumns = {"scenario",
                                            "steps_per_s",
                                            "steps_per_s_min",
                                            "steps_per_s_max",
+                                           "steps_per_s_repeats",
                                            "body_steps_per_s",
                                            "realtime_factor",
                                            "position_err_rms",
@@ -423,7 +434,32 @@ ReferenceRun converged_reference(const Scene& scene, const std::string& tag, con
 
 }  // namespace
 
+fs::path source_directory() { return PHYSBENCH_SOURCE_DIR; }
+
+std::pair<int, int> parse_shard(const std::string& text) {
+  const auto bad = [&](const std::string& why) {
+    return RunError("--shard " + text + ": " + why +
+                    " (write K/N: the K-th of N slices, 1 ≤ K ≤ N, e.g. --shard 2/4)");
+  };
+  const std::size_t slash = text.find('/');
+  if (slash == std::string::npos) throw bad("no '/'");
+  auto whole = [&](const std::string& part, const char* what) {
+    if (part.empty() || part.size() > 6 ||
+        !std::all_of(part.begin(), part.end(), [](char c) { return c >= '0' && c <= '9'; }))
+      throw bad(std::string(what) + " is not a whole number");
+    return std::stoi(part);
+  };
+  const int k = whole(text.substr(0, slash), "K"), n = whole(text.substr(slash + 1), "N");
+  if (n < 1) throw bad("N must be at least 1");
+  if (k < 1 || k > n) throw bad("K must be between 1 and N");
+  return {k, n};
+}
+
 int run_suite(const RunOptions& options, const fs::path& self) {
+  if (options.shard_count < 1 || options.shard_index < 1 ||
+      options.shard_index > options.shard_count)
+    throw RunError("shard " + std::to_string(options.shard_index) + "/" +
+                   std::to_string(options.shard_count) + " is not a slice of the plan");
   // ---- check every name before running anything
   const std::vector<EngineVariant> catalog = engine_catalog(self);
   auto known_engines = [&] {
@@ -496,6 +532,29 @@ int run_suite(const RunOptions& options, const fs::path& self) {
       jobs_engines.push_back(ev);
   if (jobs_engines.empty()) throw RunError("no engine variant matches the filters given");
 
+  // ---- the plan: every job in order (scene, step, engine variant), numbered from 0; a shard runs
+  // the scene steps whose number is K−1 modulo N, every engine of a step in one shard, so that the
+  // engines of a scene are always timed on one machine, one after another. Its fingerprint covers
+  // each scene as it will run, the engine variants and the timing budget, so `merge` can refuse
+  // shards of different plans
+  const std::size_t engines_per_step = jobs_engines.size();
+  std::size_t planned = 0;
+  std::string plan_text = "budget " + exact(options.timing_budget) + "\n";
+  for (const PreparedScene& p : scenes)
+    for (double dt : p.dts) {
+      Scene scene = p.scene;
+      scene.dt = dt;
+      plan_text += to_json(scene).dump() + "\n";
+      for (const EngineVariant& ev : jobs_engines) plan_text += ev.engine + "/" + ev.variant + "\n";
+      planned += engines_per_step;
+    }
+  const auto in_shard = [&](std::size_t job) {
+    return job / engines_per_step % std::size_t(options.shard_count) ==
+           std::size_t(options.shard_index - 1);
+  };
+  // does this shard run the step whose first job has this number?
+  const auto shard_runs_step = [&](std::size_t first_job) { return in_shard(first_job); };
+
   // ---- the results folder; results.csv appears only when complete
   const fs::path out = options.out;
   if (fs::exists(out) && (!fs::is_directory(out) || !fs::is_empty(out)))
@@ -547,11 +606,26 @@ int run_suite(const RunOptions& options, const fs::path& self) {
                 {"not_written", json::object()}};
   std::uint64_t pose_bytes = 0;
 
-  int failures = 0;
   std::size_t total = 0, done = 0, rows_written = 0;
-  for (const PreparedScene& p : scenes) total += p.dts.size() * jobs_engines.size();
+  for (std::size_t j = 0; j < planned; ++j) total += in_shard(j);
+  metadata["plan"] = {{"fingerprint", fingerprint(plan_text)},
+                      {"jobs", planned},
+                      {"shard", {{"index", options.shard_index}, {"count", options.shard_count}}},
+                      {"jobs_in_shard", total},
+                      {"row_jobs", json::array()}};  // each row's job number, in row order
+  json& row_jobs = metadata["plan"]["row_jobs"];
+
+  int failures = 0;
+  std::size_t job_number = 0;  // in the whole plan
   try {
   for (const PreparedScene& p : scenes) {
+    bool any_step = false;
+    for (std::size_t i = 0; i < p.dts.size(); ++i)
+      any_step = any_step || shard_runs_step(job_number + i * engines_per_step);
+    if (!any_step) {
+      job_number += p.dts.size() * engines_per_step;
+      continue;
+    }
     json& scenario_meta = metadata["scenarios"][p.scene.name];
     scenario_meta = {{"description", p.scene.description},
                      {"question", p.question},
@@ -567,6 +641,10 @@ int run_suite(const RunOptions& options, const fs::path& self) {
                      {"parameter", p.parameter},
                      {"scene_file", json::object()}};
     for (double dt : p.dts) {
+      if (!shard_runs_step(job_number)) {
+        job_number += engines_per_step;
+        continue;
+      }
       Scene scene = p.scene;
       scene.dt = dt;
       // one file per step when the scene is swept, else the scene's own name
@@ -591,6 +669,8 @@ int run_suite(const RunOptions& options, const fs::path& self) {
       if (scene.particles) dynamic_bodies += static_cast<int>(scene.particles->count);
 
       for (const EngineVariant& ev : jobs_engines) {
+        const std::size_t this_job = job_number++;
+        if (!in_shard(this_job)) continue;
         ++done;
         const std::string job = tag + "__" + safe_name(ev.engine + "__" + ev.variant);
         std::cerr << "[" << done << "/" << total << "] " << tag << "  " << ev.engine << "/"
@@ -641,11 +721,17 @@ int run_suite(const RunOptions& options, const fs::path& self) {
             row["steps_per_s"] = number(steps / wall);
             row["steps_per_s_min"] = number(steps / *hi);
             row["steps_per_s_max"] = number(steps / *lo);
+            // every repeat, for `physbench compare`'s rank test (docs/regression.md)
+            std::string repeats;
+            for (double seconds : r.wall_seconds)
+              repeats += (repeats.empty() ? "" : ";") + number(steps / seconds);
+            row["steps_per_s_repeats"] = repeats;
             row["body_steps_per_s"] = number(steps * dynamic_bodies / wall);
             row["realtime_factor"] = number(scene.duration / wall);
             if (r.status == Status::Exploded) {
               // the run stopped early: its speed is not comparable
               for (const char* key : {"steps_per_s", "steps_per_s_min", "steps_per_s_max",
+                                      "steps_per_s_repeats",
                                       "body_steps_per_s", "realtime_factor"})
                 row[key] = "";
             }
@@ -760,6 +846,7 @@ int run_suite(const RunOptions& options, const fs::path& self) {
         csv << '\n';
         csv.flush();  // an interrupted run keeps every finished row
         ++rows_written;
+        row_jobs.push_back(this_job);
 
         std::cerr << row["status"];
         if (!row["steps_per_s"].empty()) std::cerr << "  " << row["steps_per_s"] << " steps/s";

@@ -1,5 +1,6 @@
 #include "physbench/worker.h"
 
+#include <cstdlib>
 #include <filesystem>
 #include <fstream>
 #include <iostream>
@@ -74,6 +75,26 @@ RunResult result_from_json(const json& doc) {
   return r;
 }
 
+namespace {
+
+// PHYSBENCH_TEST_SLOWDOWN=ENGINE[/VARIANT]:SHARE (e.g. rtp/rk4:0.3) stretches that engine's (or
+// variant's) timed stepping by the share: the harness's tests inject a known slowdown to show that
+// `physbench compare` flags it. Anything malformed is ignored (a test that sets it checks the result)
+double test_slowdown(const std::string& engine, const std::string& variant) {
+  const char* value = std::getenv("PHYSBENCH_TEST_SLOWDOWN");
+  if (!value) return 0.0;
+  const std::string text = value;
+  const std::size_t colon = text.find(':');
+  if (colon == std::string::npos) return 0.0;
+  const std::string who = text.substr(0, colon);
+  if (who != engine && who != engine + "/" + variant) return 0.0;
+  char* end = nullptr;
+  const double share = std::strtod(text.c_str() + colon + 1, &end);
+  return end && *end == '\0' && share > 0.0 && share < 100.0 ? share : 0.0;
+}
+
+}  // namespace
+
 int run_worker(const WorkerJob& job) {
   RunResult result;
   try {
@@ -86,6 +107,7 @@ int run_worker(const WorkerJob& job) {
       SimulateOptions options;
       options.every_steps = job.every_steps;
       options.timing_budget = job.timing_budget;
+      options.slowdown = test_slowdown(job.engine, job.variant);
       result = simulate(*engine, job.variant, scene, options);
     }
   } catch (const std::exception& e) {

@@ -32,6 +32,10 @@ struct SimulateOptions {
   int min_timed_repeats = 3;
   int max_timed_repeats = 50;
   double explosion_distance = 1e6;  // m from the origin: a body beyond it has exploded
+  // for the harness's own tests only: each timed stretch of stepping is stretched by this share
+  // of its time (busy waiting), so that `physbench compare` can be shown to flag a slower build
+  // (PHYSBENCH_TEST_SLOWDOWN, harness/src/worker.cpp)
+  double slowdown = 0.0;
 };
 
 struct RunResult {

@@ -36,6 +36,8 @@ struct CatalogEntry {
 // repository's workers/catalog.tsv. A command's first word without a '/' names a program in
 // workers_dir (the build's cargo output), else a path as written.
 std::filesystem::path worker_catalog_file();
+// the source tree this build came from (its .venv and reports/ hold merge and compare)
+std::filesystem::path source_directory();
 std::filesystem::path default_workers_dir();
 std::vector<CatalogEntry> read_worker_catalog(const std::filesystem::path& file,
                                               const std::filesystem::path& workers_dir);
@@ -63,8 +65,15 @@ struct RunOptions {
   std::filesystem::path out;
   double timeout_seconds = 300.0;
   double timing_budget = 0.2;  // s of measured stepping per job
+  // --shard K/N: the K-th of N disjoint slices of the planned jobs (K from 1), a stride over the
+  // plan's scene steps (steps K−1, K−1+N, …, each with all its engine variants), so a scene's
+  // engines are timed on one machine; `physbench merge` joins the N folders (docs/regression.md)
+  int shard_index = 1, shard_count = 1;
   std::string command_line;
 };
+
+// "K/N" → {K, N}; RunError names the value and what is wrong with it
+std::pair<int, int> parse_shard(const std::string& text);
 
 struct RunError : std::runtime_error {
   using std::runtime_error::runtime_error;

@@ -1,0 +1,172 @@
+"""physbench run --shard, merge and compare: a sharded run merged is the unsharded run; compare flags an
+injected slowdown and a worse result, and not a second run of the same build (docs/regression.md)."""
+from __future__ import annotations
+
+import csv
+import json
+import os
+import subprocess
+from pathlib import Path
+
+import pytest
+
+from support import PHYSBENCH, physbench_run
+
+import compare
+import merge
+
+# what changes from run to run of one build: the timings
+TIMING = {"repeats", "wall_s_median", "steps_per_s", "steps_per_s_min", "steps_per_s_max", "steps_per_s_repeats",
+          "body_steps_per_s", "realtime_factor", "engine_version"}
+SCENES = ["-s", "tumbling-box,projectile,spring-oscillator", "--no-sweep"]
+
+
+def rows_of(folder: Path) -> list[dict]:
+    with open(folder / "results.csv", newline="") as f:
+        return list(csv.DictReader(f))
+
+
+def physbench(*args: str, env: dict | None = None) -> subprocess.CompletedProcess:
+    if not PHYSBENCH:
+        pytest.skip("PHYSBENCH_EXE is not set (CTest sets it)")
+    return subprocess.run([PHYSBENCH, *args], capture_output=True, text=True, env=env)
+
+
+def test_a_sharded_run_merged_is_the_unsharded_run(tmp_path):
+    whole = physbench_run(tmp_path / "whole", *SCENES, "-e", "rtp")
+    shards = [physbench_run(tmp_path / f"s{k}", *SCENES, "-e", "rtp", "--shard", f"{k}/3") for k in (1, 2, 3)]
+    # a stride: every shard holds rows, and no row is in two
+    counts = [len(rows_of(s)) for s in shards]
+    assert all(counts) and sum(counts) == len(rows_of(whole))
+    done = physbench("merge", "-o", str(tmp_path / "merged"), *map(str, reversed(shards)))
+    assert done.returncode == 0, done.stderr
+    merged = tmp_path / "merged"
+    strip = lambda rows: [{k: v for k, v in r.items() if k not in TIMING} for r in rows]
+    # the same rows, in the same order, with the same numbers (rtp is deterministic)
+    assert strip(rows_of(merged)) == strip(rows_of(whole))
+    for folder in ("trajectories", "poses", "scenes"):
+        assert sorted(p.name for p in (merged / folder).iterdir()) == sorted(p.name for p in (whole / folder).iterdir())
+    # the converged reference of tumbling-box ran in the shard that had its jobs, and says so
+    meta, whole_meta = (json.loads((f / "metadata.json").read_text()) for f in (merged, whole))
+    assert meta["scenarios"].keys() == whole_meta["scenarios"].keys()
+    assert meta["scenarios"]["tumbling-box"]["reference_self_error"] == \
+        whole_meta["scenarios"]["tumbling-box"]["reference_self_error"]
+    assert meta["plan"]["fingerprint"] == whole_meta["plan"]["fingerprint"]
+    assert len(meta["plan"]["merged_from"]) == 3
+
+
+def test_merge_refuses_what_is_not_one_plans_shards(tmp_path):
+    one = physbench_run(tmp_path / "one", *SCENES, "-e", "rtp", "--shard", "1/2")
+    two = physbench_run(tmp_path / "two", *SCENES, "-e", "rtp", "--shard", "2/2")
+    other = physbench_run(tmp_path / "other", "-s", "projectile", "--no-sweep", "-e", "rtp", "--shard", "2/2")
+    cases = {
+        "missing shard(s) 2/2": [one],
+        "given twice": [one, one, two],
+        "ran another plan": [one, other],
+        "no such folder": [one, tmp_path / "absent"],
+    }
+    for why, folders in cases.items():
+        out = tmp_path / f"out-{len(list(tmp_path.iterdir()))}"
+        done = physbench("merge", "-o", str(out), *map(str, folders))
+        assert done.returncode == 2 and why in done.stderr, (why, done.stderr)
+        assert not (out / "results.csv").exists()
+    # never into a folder that holds files
+    busy = tmp_path / "busy"
+    busy.mkdir()
+    (busy / "keep.txt").write_text("an earlier run")
+    done = physbench("merge", "-o", str(busy), str(one), str(two))
+    assert done.returncode == 2 and "already holds files" in done.stderr
+    assert not (busy / "results.csv").exists()
+
+
+def test_shard_values_out_of_range_are_refused(tmp_path):
+    for bad in ("0/2", "3/2", "2", "a/b", "1/0"):
+        done = physbench("run", "-s", "projectile", "-e", "rtp", "--shard", bad, "-o", str(tmp_path / "x"))
+        assert done.returncode == 2 and f"--shard {bad}" in done.stderr, done.stderr
+        assert not (tmp_path / "x").exists()
+
+
+def row(scenario="s", engine="rtp", variant="v", status="ok", speeds=(), **metrics) -> tuple:
+    values = {"scenario": scenario, "engine": engine, "variant": variant, "dt": "0.01", "status": status,
+              "message": "", **{k: str(v) for k, v in metrics.items()}}
+    if speeds:
+        values.update(steps_per_s=str(sorted(speeds)[len(speeds) // 2]), steps_per_s_min=str(min(speeds)),
+                      steps_per_s_max=str(max(speeds)), steps_per_s_repeats=";".join(map(str, speeds)))
+    return (scenario, engine, variant, 0.01), values
+
+
+def table(*rows) -> dict:
+    return dict(rows)
+
+
+def test_compare_tells_each_kind_of_change():
+    noise = [100, 104, 97, 101, 99, 103, 98, 102]
+    peer = row(engine="bullet", variant="float", speeds=[50, 51, 49, 50, 52, 48, 50, 51])
+    old = table(peer, row(speeds=noise, position_err_max=1e-3, stack_drift_max=0.002, contact_verdict="stands"),
+                row(variant="broken", position_err_max=1e-3), row(variant="same", speeds=noise, position_err_max=2e-3))
+    new = table(peer, row(speeds=[x * 0.7 for x in noise], position_err_max=3e-3, stack_drift_max=0.5,
+                          contact_verdict="collapsed"),
+                row(variant="broken", status="exploded", position_err_max=1e-3),
+                row(variant="same", speeds=[x + 1 for x in reversed(noise)], position_err_max=2e-3 * (1 + 1e-9)))
+    result = compare.compare(old, new, against="bullet")
+    assert result.against == "bullet"
+    verdicts = {(c.key[2], c.verdict) for c in result.changes}
+    assert verdicts == {("v", "slower"), ("v", "less accurate"), ("v", "worse verdict"), ("broken", "broken")}
+    assert len(result.regressions) == 4
+    # the other way round is all better, and no regression
+    back = compare.compare(new, old, against="bullet")
+    assert {c.verdict for c in back.changes} == {"faster", "more accurate", "better verdict", "fixed"}
+    assert not back.regressions
+    # a change within the repeats' spread is not a change, however the threshold is set
+    within = table(peer, row(speeds=[x * 0.97 for x in noise]))
+    assert not compare.compare(table(peer, row(speeds=noise)), within, speed_threshold=0.0).changes
+    # the peers' own change is set aside: every engine 40 % slower is no change of rtp's
+    slow = lambda r: (r[0], {**r[1], **row(r[0][0], r[0][1], r[0][2], speeds=[
+        float(x) * 0.6 for x in r[1]["steps_per_s_repeats"].split(";")])[1]})
+    everything_slower = table(slow(peer), slow(row(speeds=noise)))
+    assert not compare.compare(table(peer, row(speeds=noise)), everything_slower, against="bullet").changes
+
+
+def test_compare_flags_an_injected_slowdown_and_not_the_same_build(tmp_path):
+    if not PHYSBENCH:
+        pytest.skip("PHYSBENCH_EXE is not set (CTest sets it)")
+    # rtp's rk4 rows against rtp's other variants: on these VMs a peer engine's job runs in one of
+    # two speeds a process (Bullet and ODE alike, up to 2x apart), too coarse for a 30 % step in a
+    # run this small (docs/regression.md); the nightly suite's hundreds of peer rows are not
+    args = [*SCENES, "-e", "rtp", "--variant", "rk4,midpoint,euler,symplectic", "--budget", "0.3"]
+    runs = {}
+    for name, slowdown in (("old", None), ("same", None), ("slowed", "rtp/rk4:0.3")):
+        env = dict(os.environ)
+        if slowdown:
+            env["PHYSBENCH_TEST_SLOWDOWN"] = slowdown
+        done = physbench("run", *args, "-o", str(tmp_path / name), env=env)
+        assert done.returncode == 0, done.stderr
+        runs[name] = tmp_path / name
+    # the same build: no status, verdict or accuracy change at all. Its speed ratios move with the
+    # machine (on a 2-core VM shared with a build, the fastest-repeat ratio of a 0.1 s job moved by up
+    # to 2x between two runs: docs/regression.md), so here speed is held to that band only
+    same = physbench("compare", str(runs["old"]), str(runs["same"]), "--against", "rtp",
+                     "--speed-threshold", "1.0")
+    assert same.returncode == 0, same.stdout
+    assert "no change beyond the noise" in same.stdout, same.stdout
+    slowed = physbench("compare", str(runs["old"]), str(runs["slowed"]), "--against", "rtp")
+    assert slowed.returncode == 1, slowed.stdout
+    lines = slowed.stdout.splitlines()
+    # every rk4 row took 30 % longer a step (0.77 of the speed): told apart from the noise on two of
+    # the three scenes at least. A single row of the same build moves by up to ±40 % on a 2-core VM
+    # shared with other work (docs/regression.md), so other rows may be flagged too; the rk4 rows
+    # must stand out from them as a group
+    assert sum(line.startswith("slower") and " rtp/rk4 " in line for line in lines) >= 2, slowed.stdout
+    old_rows, new_rows = ({(r["scenario"], r["variant"]): r for r in rows_of(runs[n])} for n in ("old", "slowed"))
+    change = {k: float(new_rows[k]["steps_per_s_max"]) / float(old_rows[k]["steps_per_s_max"]) for k in old_rows}
+    rk4 = sorted(v for k, v in change.items() if k[1] == "rk4")
+    others = sorted(v for k, v in change.items() if k[1] != "rk4")
+    assert rk4[1] < others[len(others) // 2] * 0.85, change
+
+
+def test_compare_says_what_is_wrong_with_its_input(tmp_path):
+    done = physbench("compare", str(tmp_path), str(tmp_path))
+    assert done.returncode == 2 and "no results.csv" in done.stderr
+    good = physbench_run(tmp_path / "good", "-s", "projectile", "--no-sweep", "-e", "rtp")
+    done = physbench("compare", str(good), str(good), "--against", "nosuch")
+    assert done.returncode == 2 and "--against nosuch" in done.stderr
