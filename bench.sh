@@ -5,8 +5,16 @@
 # index.html.
 #   ./bench.sh                         the default suite
 #   ./bench.sh -s tumbling-box -e rtp  any `physbench run` options pass through
+#   ./bench.sh --nightly [options]     then keep the run in the history (PHYSBENCH_HISTORY, default
+#                                      history/), compare it with the entry before, write the trends
+#                                      page, and exit 1 on a regression (docs/regression.md)
 set -euo pipefail
 cd "$(dirname "$0")"
+nightly=0
+if [ "${1:-}" = "--nightly" ]; then
+  nightly=1
+  shift
+fi
 scripts/setup.sh
 cmake --preset bench
 cmake --build --preset bench
@@ -27,3 +35,11 @@ build/bench/bench/narrowphase_bench "${interleave[@]}" --benchmark_out="$out/ben
 build/bench/bench/contacts_bench --benchmark_out="$out/benchmarks/contacts.json" --benchmark_out_format=json
 .venv/bin/python reports/build_report.py "$out"
 echo "bench: open $out/index.html"
+if [ "$nightly" = 1 ]; then
+  history="${PHYSBENCH_HISTORY:-history}"
+  code=0
+  .venv/bin/python reports/history.py add "$out" --history "$history" || code=$?
+  .venv/bin/python reports/history.py report --history "$history"
+  echo "bench: trends in $history/index.html"
+  exit "$code"
+fi

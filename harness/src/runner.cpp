@@ -4,6 +4,7 @@
 #include <unistd.h>
 
 #include <algorithm>
+#include <cstdio>
 #include <cstdlib>
 #include <cstring>
 #include <chrono>
@@ -721,10 +722,14 @@ int run_suite(const RunOptions& options, const fs::path& self) {
             row["steps_per_s"] = number(steps / wall);
             row["steps_per_s_min"] = number(steps / *hi);
             row["steps_per_s_max"] = number(steps / *lo);
-            // every repeat, for `physbench compare`'s rank test (docs/regression.md)
+            // every repeat, for `physbench compare`'s rank test (docs/regression.md), to four
+            // digits: a nightly history keeps them for years
             std::string repeats;
-            for (double seconds : r.wall_seconds)
-              repeats += (repeats.empty() ? "" : ";") + number(steps / seconds);
+            char digits[32];
+            for (double seconds : r.wall_seconds) {
+              std::snprintf(digits, sizeof digits, "%.4g", steps / seconds);
+              repeats += (repeats.empty() ? "" : ";") + std::string(digits);
+            }
             row["steps_per_s_repeats"] = repeats;
             row["body_steps_per_s"] = number(steps * dynamic_bodies / wall);
             row["realtime_factor"] = number(scene.duration / wall);

@@ -170,3 +170,30 @@ def test_compare_says_what_is_wrong_with_its_input(tmp_path):
     good = physbench_run(tmp_path / "good", "-s", "projectile", "--no-sweep", "-e", "rtp")
     done = physbench("compare", str(good), str(good), "--against", "nosuch")
     assert done.returncode == 2 and "--against nosuch" in done.stderr
+
+
+def test_the_history_keeps_runs_small_compares_each_with_the_last_and_draws_trends(tmp_path):
+    import history
+
+    first = physbench_run(tmp_path / "first", *SCENES, "-e", "rtp")
+    second = physbench_run(tmp_path / "second", *SCENES, "-e", "rtp")
+    store = tmp_path / "history"
+    entry, code = history.add(first, store)
+    assert code == 0 and "nothing to compare" in (entry / "compare.txt").read_text()
+    entry2, code = history.add(second, store)
+    # deterministic rows, no timing (--budget 0): nothing changed, and compare.txt says so
+    assert code == 0 and "no regression" in (entry2 / "compare.txt").read_text()
+    assert history.entries(store) == sorted([entry, entry2])
+    # an entry holds the rows and the metadata only, compressed: a small fraction of the run's folder
+    run_bytes = sum(p.stat().st_size for p in first.rglob("*") if p.is_file())
+    entry_bytes = sum(p.stat().st_size for p in entry.iterdir())
+    assert entry_bytes < 0.05 * run_bytes, (entry_bytes, run_bytes)
+    assert history.read_entry_rows(entry).keys() == {
+        (r["scenario"], r["engine"], r["variant"], float(r["dt"])) for r in rows_of(first)}
+    with pytest.raises(history.HistoryError, match="in the history"):
+        history.add(first, store)
+    assert history.report(store, store / "index.html") == 2
+    page = (store / "index.html").read_text()
+    for scenario in ("tumbling-box", "projectile", "spring-oscillator"):
+        assert f"id='s-{scenario}'" in page
+    assert page.count("Plotly.newPlot") >= 3  # a chart of each scenario's main error at least
