@@ -22,6 +22,7 @@ import plotly.graph_objects as go
 import plotly.offline
 from plotly.subplots import make_subplots
 
+import compare
 import replay
 
 # the error series a trajectory CSV may hold: column, title, unit, and the results.csv summary column
@@ -693,6 +694,16 @@ TEMPLATE = jinja2.Template("""<!doctype html>
  {{ meta.compiler }} · build {{ meta.build }}<br>command: <code>{{ meta.command }}</code><br>
  timing: {{ meta.timing.note }} (budget {{ meta.timing.budget_s }} s per job)</p>
 
+{% if comparison %}<section id="compare"><h2>Compared with an earlier run</h2>
+<p>{{ comparison.old }} → this run: {{ comparison.matched }} rows matched, speed against {{ comparison.against }}
+ on {{ comparison.speed_compared }} of them ({{ comparison.method }}).
+ <b>{% if comparison.regressions %}{{ comparison.regressions }} regression(s){% else %}no regression{% endif %}</b>{% if comparison.only_old %};
+ {{ comparison.only_old }} rows only in the earlier run{% endif %}{% if comparison.only_new %}; {{ comparison.only_new }} only in this one{% endif %}.</p>
+{% if comparison.changes %}<table><tr><th class="l">change</th><th class="l">scenario</th><th class="l">engine/variant</th><th>dt (s)</th><th class="l">what</th></tr>
+{% for c in comparison.changes %}<tr><td class="l {{ c.css }}">{{ c.verdict }}</td><td class="l">{{ c.scenario }}</td><td class="l">{{ c.label }}</td>
+<td>{{ c.dt }}</td><td class="l">{{ c.detail }}</td></tr>{% endfor %}</table>{% else %}<p>No change beyond the noise.</p>{% endif %}
+</section>{% endif %}
+
 <h2>Summary</h2>
 <table><tr><th class="l">scenario</th><th class="l">engine/variant</th><th class="l">status</th><th>dt (s)</th>
 <th>steps/s (median)</th><th>min–max</th><th>body-steps/s</th><th>real-time ×</th>
@@ -874,8 +885,27 @@ def reference_failed(row) -> str:
     return status if isinstance(status, str) and status and status != "ok" else ""
 
 
-def build_report(folder: Path) -> Path:
+def comparison_section(old: Path | None, folder: Path) -> dict | None:
+    """`physbench compare OLD this-run`, as a section (docs/regression.md)"""
+    if old is None:
+        return None
+    try:
+        result = compare.compare(compare.read_rows(old), compare.read_rows(folder))
+    except compare.CompareError as exc:
+        raise ReportError(f"--compare: {exc}") from exc
+    css = {"broken": "error", "slower": "error", "less accurate": "error", "worse verdict": "error",
+           "fixed": "stable", "faster": "stable", "more accurate": "stable", "better verdict": "stable"}
+    return dict(old=str(old), matched=result.matched, against=result.against, speed_compared=result.speed_compared,
+                method="fastest repeat over the same scene's peers, Mann–Whitney U on the repeats",
+                regressions=len(result.regressions), only_old=len(result.only_old), only_new=len(result.only_new),
+                changes=[dict(verdict=c.verdict, css=css.get(c.verdict, ""), scenario=c.key[0],
+                              label=f"{c.key[1]}/{c.key[2]}", dt=fmt(c.key[3]), detail=c.detail)
+                         for c in result.changes])
+
+
+def build_report(folder: Path, compare_with: Path | None = None) -> Path:
     results, meta = load_results(folder)
+    comparison = comparison_section(compare_with, folder)
     present = [(c, t) for c, t, _, summary in SERIES if summary in results and results[summary].notna().any()]
     summary_columns = [(c, f"{c.replace('_', ' ')} max") for c, _ in present]
 
@@ -956,7 +986,8 @@ def build_report(folder: Path) -> Path:
                            verdicts=verdict_table(nominal_all), drift_cost=drift_cost_views(nominal_all),
                            contact_views=CONTACT_VIEWS, contacts=contacts,
                            narrowphase=narrowphase_benchmark(folder), engines=engines,
-                           viewerjs=replay.viewer_script(), has_replays=any(r["json"] for r in replays.values()))
+                           viewerjs=replay.viewer_script(), has_replays=any(r["json"] for r in replays.values()),
+                           comparison=comparison)
     out = folder / "index.html"
     partial = folder / "index.html.partial"
     partial.write_text(page, encoding="utf-8")
@@ -967,9 +998,11 @@ def build_report(folder: Path) -> Path:
 def main(argv: list[str] | None = None) -> int:
     parser = argparse.ArgumentParser(description=__doc__.splitlines()[0])
     parser.add_argument("results", type=Path, help="a results folder written by `physbench run`")
+    parser.add_argument("--compare", type=Path, metavar="OLD",
+                        help="an earlier results folder: the page opens with what changed since (physbench compare)")
     args = parser.parse_args(argv)
     try:
-        out = build_report(args.results)
+        out = build_report(args.results, args.compare)
     except ReportError as exc:
         print(f"build_report: {exc}", file=sys.stderr)
         return 2

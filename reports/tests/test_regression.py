@@ -197,3 +197,30 @@ def test_the_history_keeps_runs_small_compares_each_with_the_last_and_draws_tren
     for scenario in ("tumbling-box", "projectile", "spring-oscillator"):
         assert f"id='s-{scenario}'" in page
     assert page.count("Plotly.newPlot") >= 3  # a chart of each scenario's main error at least
+
+
+def test_the_report_opens_with_what_changed_since_an_earlier_run(tmp_path):
+    import shutil
+
+    import build_report
+
+    old = physbench_run(tmp_path / "old", "-s", "projectile,tumbling-box", "--no-sweep", "-e", "rtp")
+    new = tmp_path / "new"
+    shutil.copytree(old, new)
+    # the new run's rk4 tumbles three times as far from the reference
+    rows = rows_of(new)
+    for r in rows:
+        if r["scenario"] == "tumbling-box" and r["variant"] == "rk4":
+            r["orientation_err_max"] = str(3 * float(r["orientation_err_max"]))
+    with open(new / "results.csv", "w", newline="") as f:
+        writer = csv.DictWriter(f, fieldnames=list(rows[0].keys()), lineterminator="\n")
+        writer.writeheader()
+        writer.writerows(rows)
+    page = build_report.build_report(new, old).read_text()
+    section = page[page.index("<section id=\"compare\">"):page.index("<h2>Summary</h2>")]
+    assert "1 regression(s)" in section
+    assert "less accurate" in section and "tumbling-box" in section and "rtp/rk4" in section
+    # without --compare there is no such section, and the same run against itself has no change
+    assert "id=\"compare\"" not in build_report.build_report(new).read_text()
+    same = build_report.build_report(old, old).read_text()
+    assert "no regression" in same and "No change beyond the noise." in same
