@@ -115,6 +115,40 @@ class ReportError(Exception):
     """A results folder that cannot be reported, with what is wrong and where."""
 
 
+SCHEMA_FILE = Path(__file__).resolve().parents[1] / "harness" / "results-schema.json"
+
+
+def check_schema(results: pd.DataFrame, csv: Path) -> None:
+    """results.csv against harness/results-schema.json, the contract `physbench run` writes by: no
+    column the schema lacks, every required column present and filled, numbers that parse. A column
+    the schema has and the file lacks is allowed (a run from before the column joined)."""
+    schema = json.loads(SCHEMA_FILE.read_text())
+    columns = {c["name"]: c for c in schema["columns"]}
+    unknown = [c for c in results.columns if c not in columns]
+    if unknown:
+        raise ReportError(f"{csv}: columns not in {SCHEMA_FILE.name}: {unknown}")
+    for name, c in columns.items():
+        if name not in results.columns:
+            if c["required"]:
+                raise ReportError(f"{csv}: missing column {name!r}, which every row must fill")
+            continue
+        values = results[name]
+        filled = values.notna() & (values.astype(str) != "")
+        if c["required"] and not filled.all():
+            raise ReportError(f"{csv}: row {int((~filled).idxmax()) + 2}: {name} is empty")
+        if c["type"] in ("number", "integer"):
+            parsed = pd.to_numeric(values.where(filled), errors="coerce")
+            wrong = filled & parsed.isna()
+            if wrong.any():
+                row = int(wrong.idxmax())
+                raise ReportError(f"{csv}: row {row + 2}: {name} = {values[row]!r} is not a {c['type']}")
+        if c["type"] == "status":
+            wrong = filled & ~values.isin(schema["statuses"])
+            if wrong.any():
+                row = int(wrong.idxmax())
+                raise ReportError(f"{csv}: row {row + 2}: status {values[row]!r} is not one of {schema['statuses']}")
+
+
 def load_results(folder: Path) -> tuple[pd.DataFrame, dict]:
     csv = folder / "results.csv"
     meta = folder / "metadata.json"
@@ -126,10 +160,7 @@ def load_results(folder: Path) -> tuple[pd.DataFrame, dict]:
         results = pd.read_csv(csv, dtype={"message": str, "trajectory": str})
     except Exception as exc:  # pandas raises several types for a broken file
         raise ReportError(f"{csv}: unreadable: {exc}") from exc
-    needed = {"scenario", "engine", "variant", "status", "steps_per_s"}
-    missing = needed - set(results.columns)
-    if missing:
-        raise ReportError(f"{csv}: missing columns {sorted(missing)}")
+    check_schema(results, csv)
     try:
         metadata = json.loads(meta.read_text())
     except json.JSONDecodeError as exc:

@@ -20,6 +20,7 @@
 #include "physbench/mujoco_buffers.h"
 #include "physbench/poses.h"
 #include "physbench/process.h"
+#include "physbench/results_schema.h"
 #include "physbench/registry.h"
 #include "physbench/scenarios.h"
 #include "physbench/scene_json.h"
@@ -271,62 +272,12 @@ RunResult run_job(const EngineVariant& ev, const JobPaths& paths, int every_step
 
 // ---- the results folder -------------------------------------------------------------------------
 
-const std::vector<std::string> kColumns = {"scenario",
-                                           "engine",
-                                           "variant",
-                                           "engine_version",
-                                           "status",
-                                           "dt",
-                                           "duration",
-                                           "steps",
-                                           "bodies",
-                                           "repeats",
-                                           "wall_s_median",
-                                           "steps_per_s",
-                                           "steps_per_s_min",
-                                           "steps_per_s_max",
-                                           "steps_per_s_repeats",
-                                           "body_steps_per_s",
-                                           "realtime_factor",
-                                           "position_err_rms",
-                                           "position_err_max",
-                                           "position_err_final",
-                                           "orientation_err_rms",
-                                           "orientation_err_max",
-                                           "orientation_err_final",
-                                           "energy_drift_max",
-                                           "energy_drift_final",
-                                           "energy_change_final",
-                                           "stability",
-                                           "family",
-                                           "parameter",
-                                           "linear_momentum_drift_max",
-                                           "linear_momentum_drift_final",
-                                           "angular_momentum_drift_max",
-                                           "angular_momentum_drift_final",
-                                           "contact_verdict",
-                                           "stack_drift_max",
-                                           "stack_drift_final",
-                                           "top_height_change",
-                                           "penetration_max",
-                                           "penetration_final",
-                                           "energy_added_max",
-                                           "speed_max",
-                                           "rest_speed_rms",
-                                           "apex_rel_err",
-                                           "apex_rel_err_max",
-                                           "slide_distance",
-                                           "slide_accel",
-                                           "slide_accel_expected",
-                                           "slide_accel_rel_err",
-                                           "exchange_err",
-                                           "tunnelled",
-                                           "escaped",
-                                           "reference",
-                                           "reference_status",
-                                           "reference_self_error",
-                                           "trajectory",
-                                           "message"};
+// results.csv's columns, in order, from harness/results-schema.json (the generated header)
+const std::vector<std::string> kColumns = [] {
+  std::vector<std::string> names;
+  for (const ResultColumn& c : kResultColumns) names.push_back(c.name);
+  return names;
+}();
 
 // the probed particles a trajectory file keeps: the seed's particle modes probe a sample of 200
 // for the replay viewer (poses/, docs/viewer.md), and no metric reads them, so the CSV keeps the
@@ -436,6 +387,48 @@ ReferenceRun converged_reference(const Scene& scene, const std::string& tag, con
 }  // namespace
 
 fs::path source_directory() { return PHYSBENCH_SOURCE_DIR; }
+
+void check_row(const std::map<std::string, std::string>& row) {
+  const std::string where = "row " + (row.count("scenario") ? row.at("scenario") : "?") + " " +
+                            (row.count("engine") ? row.at("engine") : "?") + "/" +
+                            (row.count("variant") ? row.at("variant") : "?");
+  const auto bad = [&](const std::string& column, const std::string& why) {
+    return RunError(where + ": column " + column + " " + why +
+                    " (harness/results-schema.json; a defect of physbench, not of the scene)");
+  };
+  for (const auto& [key, value] : row)
+    if (std::none_of(std::begin(kResultColumns), std::end(kResultColumns),
+                     [&](const ResultColumn& c) { return key == c.name; }))
+      throw bad(key, "is not in the schema");
+  const auto is_number = [](const std::string& text) {
+    if (text == "inf" || text == "-inf") return true;
+    char* end = nullptr;
+    const double value = std::strtod(text.c_str(), &end);
+    return !text.empty() && end == text.c_str() + text.size() && std::isfinite(value);
+  };
+  for (const ResultColumn& c : kResultColumns) {
+    const auto found = row.find(c.name);
+    const std::string value = found == row.end() ? "" : found->second;
+    if (value.empty()) {
+      if (c.required) throw bad(c.name, "is empty on a row that must fill it");
+      continue;
+    }
+    const std::string type = c.type;
+    bool fits = true;
+    if (type == "number") {
+      fits = is_number(value);
+    } else if (type == "integer") {
+      fits = value.find_first_not_of("-0123456789") == std::string::npos && is_number(value);
+    } else if (type == "numbers") {
+      std::stringstream parts(value);
+      for (std::string part; std::getline(parts, part, ';');) fits = fits && is_number(part);
+    } else if (type == "status") {
+      fits = std::any_of(std::begin(kResultStatuses), std::end(kResultStatuses),
+                         [&](const char* s) { return value == s; });
+    }
+    if (!fits) throw bad(c.name, "holds '" + value + "', not a " + type);
+  }
+}
 
 std::pair<int, int> parse_shard(const std::string& text) {
   const auto bad = [&](const std::string& why) {
@@ -846,6 +839,7 @@ int run_suite(const RunOptions& options, const fs::path& self) {
           ++failures;
         row["status"] = to_string(r.status);
         row["message"] = message;
+        check_row(row);  // a row that does not fit the schema stops the run, named
         for (std::size_t i = 0; i < kColumns.size(); ++i)
           csv << (i ? "," : "") << csv_field(row[kColumns[i]]);
         csv << '\n';
@@ -891,6 +885,14 @@ int run_suite(const RunOptions& options, const fs::path& self) {
            << " rows written before it, metadata.json.partial the metadata. No results.csv was "
               "written.\n";
     }
+    fs::remove_all(work);
+    throw;
+  } catch (const RunError& e) {
+    // a row that does not fit the schema: the rows before it stay, and the folder says why
+    csv.close();
+    std::ofstream(out / "INCOMPLETE") << "This run stopped at job " << done << " of " << total
+                                      << ": " << e.what() << "\nresults.csv.partial holds the "
+                                      << rows_written << " rows written before it.\n";
     fs::remove_all(work);
     throw;
   }

@@ -550,3 +550,41 @@ TEST(Runner, DtSweepGivesARowPerStepAndRk4ConvergesAtFourthOrder) {
 }
 
 }  // namespace
+
+#include "physbench/runner.h"
+
+namespace {
+
+// a row as the runner fills it for a finished job
+std::map<std::string, std::string> fitting_row() {
+  return {{"scenario", "projectile"}, {"engine", "rtp"},       {"variant", "rk4"},
+          {"status", "ok"},           {"dt", "0.0166666667"}, {"duration", "2"},
+          {"steps", "120"},           {"bodies", "1"},        {"steps_per_s_repeats", "1.2e+06;9e5"},
+          {"tunnelled", "0"},         {"position_err_max", "inf"}, {"message", ""}};
+}
+
+TEST(ResultsSchema, ARowFitsOrTheRunSaysWhichColumnDoesNot) {
+  EXPECT_NO_THROW(physbench::check_row(fitting_row()));
+  const std::vector<std::tuple<std::string, std::string, std::string>> broken = {
+      {"position_err_mx", "0.1", "position_err_mx is not in the schema"},  // a misspelt key
+      {"status", "fine", "status holds 'fine', not a status"},
+      {"dt", "", "dt is empty on a row that must fill it"},
+      {"steps_per_s", "fast", "steps_per_s holds 'fast', not a number"},
+      {"steps_per_s", "nan", "not a number"},  // NaN is written as an empty cell, never as text
+      {"steps", "12.5", "steps holds '12.5', not a integer"},
+      {"apex_rel_err", "0.1;x", "apex_rel_err holds '0.1;x', not a numbers"},
+  };
+  for (const auto& [column, value, why] : broken) {
+    auto row = fitting_row();
+    row[column] = value;
+    try {
+      physbench::check_row(row);
+      ADD_FAILURE() << column << " = '" << value << "' passed";
+    } catch (const physbench::RunError& e) {
+      EXPECT_NE(std::string(e.what()).find(why), std::string::npos) << e.what();
+      EXPECT_NE(std::string(e.what()).find("projectile rtp/rk4"), std::string::npos) << e.what();
+    }
+  }
+}
+
+}  // namespace

@@ -224,3 +224,46 @@ def test_the_report_opens_with_what_changed_since_an_earlier_run(tmp_path):
     assert "id=\"compare\"" not in build_report.build_report(new).read_text()
     same = build_report.build_report(old, old).read_text()
     assert "no regression" in same and "No change beyond the noise." in same
+
+
+def test_the_report_holds_results_to_the_schema_physbench_writes_by(tmp_path):
+    import json as json_module
+    import shutil
+
+    import build_report
+
+    good = physbench_run(tmp_path / "good", "-s", "projectile,tower-10", "--no-sweep", "-e", "rtp")
+    schema = json_module.loads(build_report.SCHEMA_FILE.read_text())
+    # the runner writes exactly the schema's columns, in its order
+    with open(good / "results.csv", newline="") as f:
+        assert next(csv.reader(f)) == [c["name"] for c in schema["columns"]]
+    build_report.build_report(good)
+
+    def broken(name: str, change) -> Path:
+        folder = tmp_path / name
+        shutil.copytree(good, folder)
+        (folder / "index.html").unlink()  # the good run's report
+        rows = rows_of(folder)
+        fields = list(rows[0].keys())
+        fields = change(rows, fields) or fields
+        with open(folder / "results.csv", "w", newline="") as f:
+            writer = csv.DictWriter(f, fieldnames=fields, lineterminator="\n")
+            writer.writeheader()
+            writer.writerows(rows)
+        return folder
+
+    def rename(rows, fields):
+        for r in rows:
+            r["stack_drift_mx"] = r.pop("stack_drift_max")
+        return [f if f != "stack_drift_max" else "stack_drift_mx" for f in fields]
+
+    cases = {
+        "columns not in results-schema.json: \\['stack_drift_mx'\\]": broken("renamed", rename),
+        "row 3: dt = 'fast' is not a number": broken("word", lambda rows, _: rows[1].update(dt="fast")),
+        "row 2: status 'fine' is not one of": broken("status", lambda rows, _: rows[0].update(status="fine")),
+        "row 2: engine is empty": broken("empty", lambda rows, _: rows[0].update(engine="")),
+    }
+    for why, folder in cases.items():
+        with pytest.raises(build_report.ReportError, match=why):
+            build_report.build_report(folder)
+        assert not (folder / "index.html").exists()

@@ -3,6 +3,7 @@
 #pragma once
 
 #include <filesystem>
+#include <map>
 #include <optional>
 #include <string>
 #include <vector>
@@ -71,6 +72,10 @@ struct RunOptions {
   int shard_index = 1, shard_count = 1;
   std::string command_line;
 };
+
+// a results row against harness/results-schema.json: every key a column, every required column
+// filled, every value of its column's type; RunError names the row and column otherwise
+void check_row(const std::map<std::string, std::string>& row);
 
 // "K/N" → {K, N}; RunError names the value and what is wrong with it
 std::pair<int, int> parse_shard(const std::string& text);
