@@ -324,6 +324,59 @@ def speed_error(rows: pd.DataFrame, floors: dict[float, float] | None = None) ->
     return figure_html(fig), table
 
 
+FAILED = {"exploded": "exploded", "crashed": "crashed", "timeout": "timed out", "error": "failed",
+          "diverged": "diverged"}
+
+
+def at_a_glance(results: pd.DataFrame, meta: dict) -> list[dict]:
+    """Per scenario, the front page's answers: which engine variant is fastest and which most accurate
+    at the scene's own step, which runs are on the Pareto front of cost against error (over the step
+    sweep), the best error each engine variant reaches within an equal time budget, and what failed,
+    in words."""
+    glance = []
+    for name, rows in results.groupby("scenario", sort=False):
+        nominal = rows[[is_nominal(meta, r) for _, r in rows.iterrows()]]
+        ok = nominal[(nominal["status"] == "ok") & nominal["steps_per_s"].notna()]
+        entry = dict(name=name, anchor=anchor_of(name), fastest="", accurate="", metric="", front="", budget="",
+                     budget_rows=[], failures=[], unsupported=int((nominal["status"] == "unsupported").sum()))
+        if not ok.empty:
+            best = ok.loc[ok["steps_per_s"].idxmax()]
+            entry["fastest"] = f"{best['label']} ({fmt(best['steps_per_s'])} steps/s)"
+        metric = headline_metric(rows)
+        if metric:
+            column, title = metric
+            entry["metric"] = title.lower()
+            scored = ok[ok[column].notna()]
+            if not scored.empty:
+                best = scored.loc[scored[column].abs().idxmin()]
+                entry["accurate"] = f"{best['label']} ({fmt(abs(best[column]))})"
+            points = rows[(rows["status"] == "ok") & rows["steps_per_s"].notna() & rows[column].notna()].copy()
+            if not points.empty:
+                points["cost"] = points["wall_s_median"] / points["duration"]
+                points[column] = points[column].abs()
+                front = pareto_front(points, column)
+                entry["front"] = ", ".join(f"{r['label']} at 1/{1 / r['dt']:.0f} s" for _, r in front.iterrows())
+                # equal time budget: the cheapest run of the costliest engine variant, so that every
+                # variant has a run within it; each variant's best error at that cost or less
+                cheapest = points.groupby("label")["cost"].min()
+                budget = cheapest.max()
+                within = points[points["cost"] <= budget * (1 + 1e-9)]
+                best_within = within.loc[within.groupby("label")[column].idxmin()].sort_values(column)
+                entry["budget"] = fmt(budget)
+                entry["budget_rows"] = [dict(label=r["label"], error=fmt(r[column]), dt=f"1/{1 / r['dt']:.0f}")
+                                        for _, r in best_within.iterrows()]
+        for _, r in rows.iterrows():
+            if r["status"] in FAILED:
+                why = r["message"] if isinstance(r.get("message"), str) and r["message"] else "no reason given"
+                entry["failures"].append(f"{r['label']} {FAILED[r['status']]} at dt = {fmt(r['dt'])} s: {why}")
+        glance.append(entry)
+    return glance
+
+
+def anchor_of(name: str) -> str:
+    return "s-" + "".join(c if c.isalnum() or c in "-_" else "-" for c in name)
+
+
 def families_of(meta: dict) -> dict[str, list[tuple]]:
     """Scenario families from the metadata: family -> [(parameter, scenario, info), ...]."""
     families: dict[str, list[tuple]] = {}
@@ -735,6 +788,19 @@ TEMPLATE = jinja2.Template("""<!doctype html>
 <td>{{ c.dt }}</td><td class="l">{{ c.detail }}</td></tr>{% endfor %}</table>{% else %}<p>No change beyond the noise.</p>{% endif %}
 </section>{% endif %}
 
+{% if glance %}<section id="glance"><h2>At a glance</h2>
+<p class="note">Per scenario: the fastest and the most accurate engine variant at the scene's own step;
+the runs on the Pareto front of cost (wall s per simulated s) against the scenario's first error; the best
+error each variant reaches within an equal time budget (the cheapest run of the costliest variant, so every
+variant has one); and every run that failed. Contents: {% for g in glance if g.linked %}<a href="#{{ g.anchor }}">{{ g.name }}</a>{% if not loop.last %} · {% endif %}{% endfor %}.</p>
+<table><tr><th class="l">scenario</th><th class="l">fastest</th><th class="l">most accurate</th><th class="l">Pareto front</th>
+<th class="l">equal budget: best error each</th><th class="l">failures</th></tr>
+{% for g in glance %}<tr><td class="l">{% if g.linked %}<a href="#{{ g.anchor }}">{{ g.name }}</a>{% else %}{{ g.name }}{% endif %}</td><td class="l">{{ g.fastest }}</td>
+<td class="l">{{ g.accurate }}{% if g.metric %}<br><span class="note">{{ g.metric }}</span>{% endif %}</td><td class="l">{{ g.front }}</td>
+<td class="l">{% if g.budget_rows %}<span class="note">≤ {{ g.budget }} s/s:</span> {% for b in g.budget_rows %}{{ b.label }} {{ b.error }} (dt {{ b.dt }} s){% if not loop.last %}; {% endif %}{% endfor %}{% endif %}</td>
+<td class="l">{% for f in g.failures %}<span class="error">{{ f }}</span><br>{% endfor %}{% if g.unsupported %}<span class="unsupported">{{ g.unsupported }} unsupported</span>{% endif %}</td></tr>{% endfor %}
+</table></section>{% endif %}
+
 <h2>Summary</h2>
 <table><tr><th class="l">scenario</th><th class="l">engine/variant</th><th class="l">status</th><th>dt (s)</th>
 <th>steps/s (median)</th><th>min–max</th><th>body-steps/s</th><th>real-time ×</th>
@@ -744,7 +810,7 @@ TEMPLATE = jinja2.Template("""<!doctype html>
 <td>{{ r.bsps }}</td><td>{{ r.rtf }}</td>{% for v in r.errors %}<td>{{ v }}</td>{% endfor %}
 <td class="l">{{ r.message }}</td></tr>{% endfor %}</table>
 
-{% for s in scenarios %}<section><h2>{{ s.name }}</h2>
+{% for s in scenarios %}<section id="{{ s.anchor }}"><h2>{{ s.name }}</h2>
 <p>{{ s.description }}<br><em>{{ s.question }}</em></p>
 <p class="note">dt {{ s.dt }} s · {{ s.duration }} s simulated · reference: {{ s.reference }}
 {% if s.self_error %} · reference changes by at most {{ s.self_error }} when its step is halved (its own error){% endif %}
@@ -990,7 +1056,7 @@ def build_report(folder: Path, compare_with: Path | None = None) -> Path:
             self_error = self_errors if isinstance(self_errors, (int, float)) else None
         sweep = sorted(info.get("sweep_dt", []))
         scenarios.append(dict(
-            name=name, description=info.get("description", ""), question=info.get("question", ""),
+            name=name, anchor=anchor_of(name), description=info.get("description", ""), question=info.get("question", ""),
             dt=fmt(info.get("dt")), duration=fmt(info.get("duration")), reference=info.get("reference", ""),
             self_error=fmt(self_error) if self_error is not None else "",
             reference_failures=[dict(dt=fmt(float(dt)), why=why)
@@ -999,6 +1065,10 @@ def build_report(folder: Path, compare_with: Path | None = None) -> Path:
             charts=charts, front=front, contact=contact_table(own), replay=replays.get(name),
             unsupported=[f"{r['label']}: {r['message']}" for _, r in own.iterrows() if r["status"] == "unsupported"]))
 
+    glance = at_a_glance(results, meta)
+    shown = {s["name"] for s in scenarios}
+    for g in glance:
+        g["linked"] = g["name"] in shown  # a family member is drawn in its family's map or chart
     families = stability_maps(results, meta)
     benchmark = particle_benchmark(folder)
     contacts = contacts_benchmark(folder)
@@ -1018,7 +1088,7 @@ def build_report(folder: Path, compare_with: Path | None = None) -> Path:
                            contact_views=CONTACT_VIEWS, contacts=contacts,
                            narrowphase=narrowphase_benchmark(folder), engines=engines,
                            viewerjs=replay.viewer_script(), has_replays=any(r["json"] for r in replays.values()),
-                           comparison=comparison)
+                           comparison=comparison, glance=glance)
     out = folder / "index.html"
     partial = folder / "index.html.partial"
     partial.write_text(page, encoding="utf-8")

@@ -267,3 +267,24 @@ def test_the_report_holds_results_to_the_schema_physbench_writes_by(tmp_path):
         with pytest.raises(build_report.ReportError, match=why):
             build_report.build_report(folder)
         assert not (folder / "index.html").exists()
+
+
+def test_the_front_page_names_the_fastest_the_most_accurate_and_the_failures(tmp_path):
+    import build_report
+
+    run = physbench_run(tmp_path / "run", "-s", "tumbling-box,projectile", "-e", "rtp,test-fault",
+                        "--variant", "rk4,euler,midpoint,abort", "--timeout", "20")
+    # --budget 0 times one pass: enough to rank, and the page must rank as the file says
+    page = build_report.build_report(run).read_text()
+    glance = page[page.index('<section id="glance">'):page.index("<h2>Summary</h2>")]
+    rows = [r for r in rows_of(run) if r["scenario"] == "tumbling-box" and r["status"] == "ok"
+            and abs(float(r["dt"]) - 1 / 60) < 1e-9]
+    fastest = max(rows, key=lambda r: float(r["steps_per_s"]))
+    accurate = min(rows, key=lambda r: float(r["orientation_err_max"]))
+    line = glance[glance.index('<tr><td class="l"><a href="#s-tumbling-box"'):].split("</tr>")[0]
+    assert f"{fastest['engine']}/{fastest['variant']} (" in line.split("</td>")[1]
+    assert accurate["variant"] == "rk4" and "rtp/rk4 (" in line.split("</td>")[2]
+    # the engine that aborts is a failure in words, with its reason
+    assert "test-fault/abort crashed at dt = " in line
+    # every scenario links to its section
+    assert 'id="s-tumbling-box"' in page and 'id="s-projectile"' in page
