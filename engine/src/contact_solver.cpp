@@ -265,30 +265,39 @@ void ContactPipeline::colour_contacts() {
 }
 
 template <class Kernel>
-void ContactPipeline::for_each_block(Kernel&& kernel) {
+void ContactPipeline::for_each_block(Kernel&& kernel, bool backwards) {
   std::vector<ContactBlock>& blocks = lanes_->blocks;
   const std::vector<std::uint32_t>& start = lanes_->colour_start;
   constexpr std::size_t parallel_blocks = kParallelColour / W;
+  // the k-th colour visited: the colours in reverse on a backward pass (a colour's own blocks
+  // are independent, so they go forwards either way, each prefetching the next)
+  auto colour = [&](int k) { return backwards ? kColours - 1 - k : k; };
   auto wide = [&](int k) {
-    return k + 1 < kColours && start[k + 1] - start[k] >= parallel_blocks;
+    const int c = colour(k);
+    return c + 1 < kColours && start[c + 1] - start[c] >= parallel_blocks;
+  };
+  auto run_colour = [&](int k) {
+    const int c = colour(k);
+    for (std::size_t i = start[c]; i < start[c + 1]; ++i) {
+      if (i + 1 < start[c + 1]) prefetch(blocks[i + 1]);
+      kernel(blocks[i]);
+    }
   };
   // threads only when some colour is wide enough to share: each colour ends in a barrier, and
   // a barrier among threads that have nothing to share costs more than the colour
   bool any_wide = false;
   for (int k = 0; k + 1 < kColours && !any_wide; ++k) any_wide = wide(k);
   if (settings_.threads <= 1 || !any_wide) {
-    for (std::size_t i = 0; i < blocks.size(); ++i) {
-      if (i + 1 < blocks.size()) prefetch(blocks[i + 1]);
-      kernel(blocks[i]);
-    }
+    for (int k = 0; k < kColours; ++k) run_colour(k);
     return;
   }
 #pragma omp parallel num_threads(settings_.threads)
   for (int k = 0; k < kColours;) {
     if (wide(k)) {
+      const int c = colour(k);
 #pragma omp for schedule(static)
-      for (std::size_t i = start[k]; i < start[k + 1]; ++i) {
-        if (i + 1 < start[k + 1]) prefetch(blocks[i + 1]);
+      for (std::size_t i = start[c]; i < start[c + 1]; ++i) {
+        if (i + 1 < start[c + 1]) prefetch(blocks[i + 1]);
         kernel(blocks[i]);
       }
       ++k;
@@ -298,10 +307,7 @@ void ContactPipeline::for_each_block(Kernel&& kernel) {
     int end = k;
     while (end < kColours && !wide(end)) ++end;
 #pragma omp single
-    for (std::size_t i = start[k]; i < start[end]; ++i) {
-      if (i + 1 < start[end]) prefetch(blocks[i + 1]);
-      kernel(blocks[i]);
-    }
+    for (int j = k; j < end; ++j) run_colour(j);
     k = end;
   }
 }
@@ -460,7 +466,7 @@ void ContactPipeline::warm_start() {
   });
 }
 
-void ContactPipeline::solve(double h, bool bias) {
+void ContactPipeline::solve(double h, bool bias, bool backwards) {
   const float inverse_h = float(1.0 / h);
   const bool soft = settings_.solver == ContactSolver::SoftStep;
   // sequential impulse: the Baumgarte bias removes this fraction of the penetration past the
@@ -540,7 +546,7 @@ void ContactPipeline::solve(double h, bool bias) {
       pair.apply(c, p, (f0 - old0) * t0 + (f1 - old1) * t1);
     }
     pair.store(bodies_, c);
-  });
+  }, backwards);
 }
 
 void ContactPipeline::restitution() {

@@ -89,8 +89,9 @@ class ContactPipeline {
   void load_bodies(std::span<const BodyState> states, std::span<const BodyMass> masses);
   void prepare(double dt, const Vec3& gravity);
   void warm_start();
-  // one pass of the velocity solve; bias: push out penetration (soft step, sequential impulse)
-  void solve(double h, bool bias);
+  // one pass of the velocity solve; bias: push out penetration (soft step, sequential impulse);
+  // backwards: the colours in reverse order
+  void solve(double h, bool bias, bool backwards = false);
   void solve_seed(double dt);
   void restitution();
   // the accumulated impulses back into the contacts, for the next step's warm start
@@ -124,8 +125,9 @@ class ContactPipeline {
   // threads, with the same result as on one; every solve visits contacts in this order
   void colour_contacts();
   // a kernel on every block of lanes_, colour by colour, each colour's blocks on the threads
+  // backwards: the colours in reverse order (the soft step alternates, docs/solver.md)
   template <class Kernel>
-  void for_each_block(Kernel&& kernel);
+  void for_each_block(Kernel&& kernel, bool backwards = false);
   // a block's rows, effective masses, approach speeds and fresh lanes from its raw points
   void prepare_lanes(ContactBlock& block, const std::array<LaneMask, 4>& exists,
                      Lane acceleration) const;

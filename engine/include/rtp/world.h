@@ -133,6 +133,8 @@ struct ContactSettings {
                                        // the step, up to this times its smallest half extent
   double restitution_threshold = 1.0;  // m/s: slower approaches do not bounce
   bool warm_start = true;              // soft step and sequential impulse
+  bool alternate_order = true;  // soft step: odd substeps visit the colours backwards, so the
+                                // sweep's order leans a stack neither way (docs/solver.md)
   double match_distance = 0.02;  // m: a point with no feature match takes the impulses of last
                                  // step's nearest point within this distance
   double pair_cache_distance = 1e-3;  // m: a pair found apart is not tested again while
