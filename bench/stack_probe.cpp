@@ -1,0 +1,96 @@
+// stack_probe: one contact scenario on rtp with chosen solver settings, and what the stack did —
+// the tool behind docs/solver.md's "what was tried" figures. Prints the drift and the top box's
+// height change every simulated second (stderr) and one summary line (stdout): drift as the
+// harness defines it (the largest horizontal displacement of any box), the top's height change,
+// the deepest penetration the narrow phase saw, the energy change and ms per step. Not a
+// benchmark: time it only against itself, in turn, on one machine (docs/metrics.md).
+//
+//   build/bench/bench/stack_probe pyramid-100 10
+//   build/bench/bench/stack_probe pyramid-50 3 substeps 16 hertz 240
+#include <cmath>
+#include <cstdio>
+#include <cstdlib>
+#include <functional>
+#include <map>
+#include <string>
+#include <vector>
+
+#include "physbench/rtp_world.h"
+#include "physbench/scenarios.h"
+
+namespace {
+
+// the settings a run may change, by name
+std::map<std::string, std::function<void(rtp::ContactSettings&, double)>> settings_by_name() {
+  return {
+      {"substeps", [](rtp::ContactSettings& s, double v) { s.substeps = int(v); }},
+      {"relax", [](rtp::ContactSettings& s, double v) { s.relax_iterations = int(v); }},
+      {"hertz", [](rtp::ContactSettings& s, double v) { s.contact_hertz = v; }},
+      {"zeta", [](rtp::ContactSettings& s, double v) { s.damping_ratio = v; }},
+      {"push", [](rtp::ContactSettings& s, double v) { s.max_push_speed = v; }},
+      {"threads", [](rtp::ContactSettings& s, double v) { s.threads = int(v); }},
+      {"cache", [](rtp::ContactSettings& s, double v) { s.pair_cache_distance = v; }},
+      {"match", [](rtp::ContactSettings& s, double v) { s.match_distance = v; }},
+      {"local", [](rtp::ContactSettings& s, double v) { s.local_iterations = int(v); }},
+      {"alternate", [](rtp::ContactSettings& s, double v) { s.alternate_order = v != 0.0; }},
+  };
+}
+
+int usage(const char* why) {
+  std::fprintf(stderr, "stack_probe: %s\nusage: stack_probe SCENARIO SECONDS [SETTING VALUE]...\nsettings:", why);
+  for (const auto& [name, _] : settings_by_name()) std::fprintf(stderr, " %s", name.c_str());
+  std::fprintf(stderr, "\n");
+  return 2;
+}
+
+}  // namespace
+
+int main(int argc, char** argv) {
+  if (argc < 3 || argc % 2 == 0) return usage("wrong number of arguments");
+  const physbench::Scenario* scenario = physbench::find_scenario(argv[1]);
+  if (!scenario) return usage((std::string("no scenario ") + argv[1]).c_str());
+  char* end = nullptr;
+  const double seconds = std::strtod(argv[2], &end);
+  if (*end || !(seconds > 0.0 && seconds <= 3600.0)) return usage("SECONDS must be in (0, 3600]");
+  rtp::ContactSettings settings;
+  const auto known = settings_by_name();
+  for (int i = 3; i + 1 < argc; i += 2) {
+    const auto setting = known.find(argv[i]);
+    if (setting == known.end()) return usage((std::string("unknown setting ") + argv[i]).c_str());
+    const double value = std::strtod(argv[i + 1], &end);
+    if (*end || !std::isfinite(value)) return usage((std::string("not a number: ") + argv[i + 1]).c_str());
+    setting->second(settings, value);
+  }
+  const physbench::Scene scene = scenario->build();
+  if (!scene.has_contacts()) return usage("the scenario has no contacts");
+  rtp::World world = physbench::make_rtp_world(scene, rtp::Integrator::SemiImplicitEuler, settings);
+  const int n = int(world.body_count());
+  std::vector<rtp::Vec3> start(n);
+  int top = -1;
+  for (int i = 0; i < n; ++i) {
+    start[i] = world.state(i).position;
+    if (world.mass(i) > 0.0 && (top < 0 || start[i].y() > start[top].y())) top = i;
+  }
+  if (top < 0) return usage("the scenario has no dynamic body");
+  const double energy = world.mechanical_energy();
+  const int steps = int(std::lround(seconds / scene.dt));
+  const int per_second = std::max(1, int(std::lround(1.0 / scene.dt)));
+  double drift = 0.0, seconds_stepping = 0.0, deepest = 0.0;
+  for (int k = 0; k < steps; ++k) {
+    world.step(scene.dt);
+    seconds_stepping += world.profile().total;
+    deepest = std::max(deepest, world.deepest_penetration());
+    for (int i = 0; i < n; ++i) {
+      if (world.mass(i) == 0.0) continue;
+      const rtp::Vec3 d = world.state(i).position - start[i];
+      drift = std::max(drift, std::hypot(d.x(), d.z()));
+    }
+    if ((k + 1) % per_second == 0)
+      std::fprintf(stderr, "t = %.0f s  drift %.4f m  top %+.4f m\n", (k + 1) * scene.dt, drift,
+                   world.state(top).position.y() - start[top].y());
+  }
+  std::printf("%s %.3g s: drift %.4f m, top %+.4f m, deepest penetration %.4f m, energy %+.3f J, %.2f ms a step\n",
+              argv[1], seconds, drift, world.state(top).position.y() - start[top].y(), deepest,
+              world.mechanical_energy() - energy, 1e3 * seconds_stepping / steps);
+  return 0;
+}
