@@ -38,6 +38,40 @@ SERIES = [
 
 STATUS_ORDER = ["ok", "diverged", "exploded", "unsupported", "timeout", "crashed", "error"]
 
+# one hue an engine and one line style and marker a variant, the same on every chart of a page
+ENGINE_HUES = {"rtp": "#d62728", "bullet": "#1f77b4", "ode": "#2ca02c", "box2d": "#9467bd",
+               "box2d-v3": "#8c564b", "mujoco": "#ff7f0e", "mujoco-2.2": "#bcbd22", "jolt": "#17becf",
+               "rapier": "#e377c2", "test-fault": "#7f7f7f"}
+SPARE_HUES = ["#393b79", "#637939", "#8c6d31", "#843c39", "#7b4173"]
+DASHES = ["solid", "dash", "dot", "dashdot", "longdash", "longdashdot"]
+SYMBOLS = ["circle", "square", "diamond", "triangle-up", "x", "star", "cross", "pentagon", "hexagon", "triangle-down"]
+_variant_index: dict[str, int] = {}
+
+
+def learn_styles(results: pd.DataFrame) -> None:
+    """Each engine's variants numbered in the order the results first name them, for the page."""
+    _variant_index.clear()
+    counts: dict[str, int] = {}
+    for engine, variant in zip(results["engine"], results["variant"]):
+        label = f"{engine}/{variant}"
+        if label not in _variant_index:
+            _variant_index[label] = counts.get(engine, 0)
+            counts[engine] = _variant_index[label] + 1
+
+
+def hue(engine: str) -> str:
+    if engine in ENGINE_HUES:
+        return ENGINE_HUES[engine]
+    return SPARE_HUES[sum(map(ord, engine)) % len(SPARE_HUES)]
+
+
+def trace_style(label: str) -> dict:
+    """go.Scatter arguments: the engine's hue, the variant's dash and marker."""
+    engine = label.split("/")[0]
+    index = _variant_index.get(label, 0)
+    return dict(line=dict(color=hue(engine), dash=DASHES[index % len(DASHES)]),
+                marker=dict(color=hue(engine), symbol=SYMBOLS[index % len(SYMBOLS)]))
+
 # the contact table of a contact scenario: results.csv column, heading (docs/metrics.md, "Contact")
 CONTACT_COLUMNS = [
     ("contact_verdict", "verdict"), ("stack_drift_max", "drift max (m)"), ("top_height_change", "top height change (m)"),
@@ -204,7 +238,7 @@ def error_over_time(folder: Path, rows: pd.DataFrame, column: str, title: str, u
         per_time = traj.groupby("time", sort=True)[column].max()
         # a log axis cannot show zeros: exact values sit at the floor
         fig.add_trace(go.Scatter(x=per_time.index, y=per_time.clip(lower=1e-16).values, mode="lines",
-                                 name=row["label"]))
+                                 name=row["label"], **trace_style(row["label"])))
     if not fig.data:
         return None
     if column in ("stack_drift", "penetration"):
@@ -228,7 +262,7 @@ def error_by_body(folder: Path, rows: pd.DataFrame) -> str | None:
             continue
         per_body = traj.groupby("body", sort=True)["body_position_err"].max()
         fig.add_trace(go.Scatter(x=per_body.index, y=per_body.clip(lower=1e-16).values, mode="lines+markers",
-                                 name=row["label"]))
+                                 name=row["label"], **trace_style(row["label"])))
     if not fig.data:
         return None
     fig.update_layout(title="Max position error of each body (body index along the scene)",
@@ -246,7 +280,8 @@ def throughput_chart(rows: pd.DataFrame) -> str | None:
         error_y=dict(type="data", symmetric=False,
                      array=(ok["steps_per_s_max"] - ok["steps_per_s"]).clip(lower=0),
                      arrayminus=(ok["steps_per_s"] - ok["steps_per_s_min"]).clip(lower=0)),
-        text=[fmt(v) for v in ok["steps_per_s"]], textposition="outside"))
+        text=[fmt(v) for v in ok["steps_per_s"]], textposition="outside",
+        marker_color=[hue(e) for e in ok["engine"]]))
     fig.update_layout(title="Throughput: median steps/s (bars: min to max over repeats)", yaxis_title="steps/s")
     fig.update_yaxes(type="log", exponentformat="power")
     return figure_html(fig)
@@ -310,6 +345,7 @@ def speed_error(rows: pd.DataFrame, floors: dict[float, float] | None = None) ->
         name = f"{label} (order {order:.2f})" if order is not None else label
         fig.add_trace(go.Scatter(
             x=curve["cost"], y=curve[error_column].clip(lower=1e-16), mode="lines+markers", name=name,
+            **trace_style(label),
             text=[f"dt = 1/{1 / dt:.0f} s" for dt in curve["dt"]],
             hovertemplate="%{text}<br>cost %{x:.3g}<br>error %{y:.3g}"))
     front = pareto_front(points, error_column)
@@ -531,7 +567,7 @@ def broadphase_benchmark(folder: Path) -> dict | None:
     for engine in dict.fromkeys(r["engine"] for r in coherent):
         points = sorted((r["boxes"], r["us"]) for r in coherent if r["engine"] == engine)
         fig.add_trace(go.Scatter(x=[p for p, _ in points], y=[u for _, u in points], mode="lines+markers",
-                                 name=engine))
+                                 name=engine, line=dict(color=hue(engine)), marker=dict(color=hue(engine))))
     fig.update_layout(title="broadphase, coherent motion: time per update against box count",
                       xaxis_title="boxes", yaxis_title="µs per update, median of 5 repetitions")
     fig.update_xaxes(type="log", exponentformat="power")
@@ -617,7 +653,8 @@ def drift_cost_views(results: pd.DataFrame) -> list[dict]:
                 fig.add_trace(go.Scatter(x=[r["cost"]], y=[r["drift"]], mode="markers+text", text=[r["engine"]],
                                          textposition="top center", name=r["label"], legendgroup=r["label"],
                                          showlegend=r["label"] not in seen,
-                                         marker=dict(size=10, symbol="circle-open" if failed else "circle"),
+                                         marker=dict(size=10, symbol="circle-open" if failed else "circle",
+                                                     color=hue(r["engine"])),
                                          hovertemplate=f"{r['label']}: {verdict}<br>%{{x:.3g}} ms per step<br>"
                                                        f"drift max {fmt(r['stack_drift_max'])} m<extra></extra>"),
                               row=1, col=col)
@@ -703,7 +740,7 @@ def scaling_charts(results: pd.DataFrame, meta: dict, benchmark: dict | None = N
             for label, curve in rows[rows["steps_per_s"].notna()].groupby("label", sort=False):
                 curve = curve.sort_values("bodies")
                 fig.add_trace(go.Scatter(x=curve["bodies"], y=1e3 / curve["steps_per_s"], mode="lines+markers",
-                                         name=label))
+                                         name=label, **trace_style(label)))
             if not fig.data:
                 continue
             if contacts and family == "pyramid":
@@ -725,7 +762,7 @@ def scaling_charts(results: pd.DataFrame, meta: dict, benchmark: dict | None = N
             counts = curve["scenario"].map(parameter)
             order = counts.argsort()
             fig.add_trace(go.Scatter(x=counts.iloc[order], y=curve["body_steps_per_s"].iloc[order],
-                                     mode="lines+markers", name=label))
+                                     mode="lines+markers", name=label, **trace_style(label)))
         if not fig.data:
             continue
         if benchmark and family == "particles-scaling":
@@ -1002,6 +1039,7 @@ def comparison_section(old: Path | None, folder: Path) -> dict | None:
 
 def build_report(folder: Path, compare_with: Path | None = None) -> Path:
     results, meta = load_results(folder)
+    learn_styles(results)
     comparison = comparison_section(compare_with, folder)
     present = [(c, t) for c, t, _, summary in SERIES if summary in results and results[summary].notna().any()]
     summary_columns = [(c, f"{c.replace('_', ' ')} max") for c, _ in present]

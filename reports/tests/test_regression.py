@@ -288,3 +288,38 @@ def test_the_front_page_names_the_fastest_the_most_accurate_and_the_failures(tmp
     assert "test-fault/abort crashed at dt = " in line
     # every scenario links to its section
     assert 'id="s-tumbling-box"' in page and 'id="s-projectile"' in page
+
+
+def plotted_traces(page: str) -> list[dict]:
+    """Every trace of every plotly chart in the page, as plotly was given it."""
+    decoder = json.JSONDecoder()
+    traces, at = [], 0
+    while (at := page.find("Plotly.newPlot(", at)) >= 0:
+        start = page.index("[", page.index(",", at))
+        data, _ = decoder.raw_decode(page, start)
+        traces.extend(data)
+        at = start
+    return traces
+
+
+def test_each_engine_has_one_hue_and_each_variant_one_line_style_on_every_chart(tmp_path):
+    import build_report
+
+    run = physbench_run(tmp_path / "run", "-s", "tumbling-box,projectile", "-e", "rtp,ode",
+                        "--variant", "rk4,euler,midpoint,quickstep,step")
+    traces = [t for t in plotted_traces(build_report.build_report(run).read_text()) if t.get("type") == "scatter"]
+    styles: dict[str, set] = {}
+    for t in traces:
+        name = t.get("name", "").split(" (order")[0]
+        if "/" in name:
+            styles.setdefault(name, set()).add((t["line"]["color"], t["line"].get("dash")))
+    # rk4, euler and midpoint of rtp, quickstep and step of ODE, each on several charts
+    assert {"rtp/rk4", "rtp/euler", "ode/quickstep", "ode/step"} <= styles.keys(), styles.keys()
+    for label, seen in styles.items():
+        assert len(seen) == 1, (label, seen)  # the same on every chart
+    hues = {label.split("/")[0]: next(iter(seen))[0] for label, seen in styles.items()}
+    assert styles["rtp/rk4"] != styles["rtp/euler"]                      # variants differ by dash
+    assert next(iter(styles["rtp/rk4"]))[0] == next(iter(styles["rtp/euler"]))[0]  # one engine, one hue
+    assert hues["rtp"] != hues["ode"]
+    bars = [t for t in plotted_traces(build_report.build_report(run).read_text()) if t.get("type") == "bar"]
+    assert bars and all(len(set(b["marker"]["color"])) == 2 for b in bars if len(set(b["x"])) > 3)
