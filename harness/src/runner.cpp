@@ -538,7 +538,10 @@ int run_suite(const RunOptions& options, const fs::path& self) {
 
   // the replay viewer's pose files (docs/viewer.md): each scene at its own step, within the caps
   json& poses_meta = metadata["poses"];
-  poses_meta = {{"format", "PBPOSES1: float32 px py pz qx qy qz qw |v| per body per frame"},
+  poses_meta = {{"format",
+                 "PBPOSES2: float32 px py pz qx qy qz qw |v| per body per frame; contact scenes "
+                 "also each body's deepest penetration per frame and every contact point "
+                 "(x y z depth), docs/viewer.md"},
                 {"frame_rate", kPoseFrameRate},
                 {"bytes_per_job_cap", kPoseBytesPerJob},
                 {"bytes_per_run_cap", kPoseBytesPerRun},
@@ -735,13 +738,17 @@ int run_suite(const RunOptions& options, const fs::path& self) {
             write_trajectory_csv(trajectory, r.trajectory, series, against, int(scene.bodies.size()));
             row["trajectory"] = fs::relative(trajectory, out).string();
             if (std::abs(dt - p.scene.dt) <= 1e-9 * p.scene.dt) {
-              const PoseLayout layout = pose_layout(r.trajectory);
+              // a contact scene's file also holds its contacts, counted against the same caps
+              std::optional<OverlapGauge> contacts;
+              if (scene.has_contacts()) contacts.emplace(scene, r.trajectory.bodies);
+              const OverlapGauge* gauge = contacts ? &*contacts : nullptr;
+              const PoseLayout layout = pose_layout(r.trajectory, gauge);
               if (layout.frames == 0)
                 poses_meta["not_written"][job] = "no samples, or two frames exceed the job cap";
               else if (pose_bytes + layout.bytes > kPoseBytesPerRun)
                 poses_meta["not_written"][job] = "the run's pose files reached their cap";
               else {
-                write_pose_file(out / "poses" / (job + ".bin"), r.trajectory, layout);
+                write_pose_file(out / "poses" / (job + ".bin"), r.trajectory, layout, gauge);
                 pose_bytes += layout.bytes;
                 poses_meta["files"] = poses_meta["files"].get<int>() + 1;
                 poses_meta["bytes"] = pose_bytes;
