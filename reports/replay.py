@@ -7,6 +7,7 @@ import base64
 import gzip
 import json
 from pathlib import Path
+from typing import NamedTuple
 
 import numpy as np
 
@@ -21,7 +22,10 @@ PAGE_BYTES = 8_000_000
 SHOWN_VARIANTS = {"rtp": ["soft-step", "rk4", "midpoint"], "bullet": ["float"], "ode": ["quickstep"], "box2d": ["default"],
                   "mujoco": ["euler"], "box2d-v3": ["default"], "rapier": ["default"]}
 FLOATS = 8  # px py pz qx qy qz qw |v|
-MAGIC = b"PBPOSES1"
+CONTACT_FLOATS = 4  # x y z depth
+SECTION_CONTACTS = 1  # the header's sections bit: contact sections follow the poses
+MAGIC = b"PBPOSES2"
+MAGIC_1 = b"PBPOSES1"  # before contacts: a 24-byte header and poses only (still read)
 VIEWER_JS = Path(__file__).resolve().parent / "viewer" / "dist" / "viewer.js"
 
 
@@ -29,38 +33,93 @@ class PoseFileError(Exception):
     pass
 
 
-def read_pose_file(path: Path) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
-    """(scene body indices [B], times [F], poses [F, B, 8]) from a pose file."""
+class PoseFile(NamedTuple):
+    index: np.ndarray  # [B] scene body indices
+    times: np.ndarray  # [F] s
+    poses: np.ndarray  # [F, B, 8] px py pz qx qy qz qw |v|
+    depth: np.ndarray | None  # [F, B] each body's deepest penetration (m); None: no contacts recorded
+    contact_counts: np.ndarray | None  # [F] contact points per frame
+    contacts: np.ndarray | None  # [C, 4] x y z depth, frame by frame
+
+    def contacts_of(self, frame: int) -> np.ndarray:
+        """Frame `frame`'s contact points [n, 4] (x y z depth)."""
+        start = int(self.contact_counts[:frame].sum())
+        return self.contacts[start:start + int(self.contact_counts[frame])]
+
+
+def read_pose_file(path: Path) -> PoseFile:
+    """A pose file (docs/viewer.md): PBPOSES2, or PBPOSES1 from before contacts were recorded."""
     raw = path.read_bytes()
-    if len(raw) < 24 or raw[:8] != MAGIC:
+    if len(raw) >= 24 and raw[:8] == MAGIC_1:
+        header, sections, points = 24, 0, 0
+    elif len(raw) >= 32 and raw[:8] == MAGIC:
+        header = 32
+        sections, points = (int(v) for v in np.frombuffer(raw, "<u4", 2, 20))
+    else:
         raise PoseFileError(f"{path}: not a physbench pose file")
-    frames, bodies = np.frombuffer(raw, "<u4", 2, 8)
-    want = 24 + 4 * bodies + 4 * frames + 4 * FLOATS * frames * bodies
+    frames, bodies = (int(v) for v in np.frombuffer(raw, "<u4", 2, 8))
+    contacts = bool(sections & SECTION_CONTACTS)
+    want = header + 4 * bodies + 4 * frames + 4 * FLOATS * frames * bodies
+    if contacts:
+        want += 4 * frames * bodies + 4 * frames + 4 * CONTACT_FLOATS * points
     if len(raw) != want:
         raise PoseFileError(f"{path}: {len(raw)} bytes, the header says {want}")
-    at = 24
-    index = np.frombuffer(raw, "<i4", bodies, at)
-    at += 4 * bodies
-    times = np.frombuffer(raw, "<f4", frames, at)
-    at += 4 * frames
-    poses = np.frombuffer(raw, "<f4", frames * bodies * FLOATS, at).reshape(frames, bodies, FLOATS)
-    return index, times, poses
+    at = header
+
+    def take(dtype: str, count: int) -> np.ndarray:
+        nonlocal at
+        array = np.frombuffer(raw, dtype, count, at)
+        at += 4 * count
+        return array
+
+    index = take("<i4", bodies)
+    times = take("<f4", frames)
+    poses = take("<f4", frames * bodies * FLOATS).reshape(frames, bodies, FLOATS)
+    if not contacts:
+        return PoseFile(index, times, poses, None, None, None)
+    depth = take("<f4", frames * bodies).reshape(frames, bodies)
+    counts = take("<u4", frames)
+    if int(counts.sum()) != points:
+        raise PoseFileError(f"{path}: the frames hold {int(counts.sum())} contact points, the header says {points}")
+    return PoseFile(index, times, poses, depth, counts, take("<f4", points * CONTACT_FLOATS).reshape(points, CONTACT_FLOATS))
 
 
 def packed(array: np.ndarray) -> str:
     return base64.b64encode(gzip.compress(np.ascontiguousarray(array).tobytes(), compresslevel=6, mtime=0)).decode()
 
 
-def encode_run(times: np.ndarray, poses: np.ndarray, keep: np.ndarray) -> dict:
+def halves(array: np.ndarray) -> np.ndarray:
+    with np.errstate(over="ignore"):
+        return array.astype("<f2")
+
+
+def encode_run(pose_file: PoseFile, keep: np.ndarray) -> dict:
     """One engine's frames `keep`: times as float32, positions as float16 offsets from the first
-    frame (so a body at rest keeps sub-millimetre detail far from the origin), the rest float16."""
-    chosen = poses[keep].astype(np.float32)
+    frame (so a body at rest keeps sub-millimetre detail far from the origin), the rest float16;
+    with contacts, each body's deepest penetration per frame as float16."""
+    chosen = pose_file.poses[keep].astype(np.float32)
     origin = np.nan_to_num(chosen[0, :, 0:3].copy(), nan=0.0, posinf=0.0, neginf=0.0)
     chosen[:, :, 0:3] -= origin
-    with np.errstate(over="ignore"):
-        halves = chosen.astype("<f2")
-    return dict(frames=int(len(keep)), times=packed(times[keep].astype("<f4")), origin=packed(origin.astype("<f4")),
-                poses=packed(halves))
+    encoded = dict(frames=int(len(keep)), times=packed(pose_file.times[keep].astype("<f4")),
+                   origin=packed(origin.astype("<f4")), poses=packed(halves(chosen)))
+    if pose_file.depth is not None:
+        encoded["depth"] = packed(halves(pose_file.depth[keep]))
+    return encoded
+
+
+def encode_contacts(pose_file: PoseFile, keep: np.ndarray, step: int) -> dict:
+    """The contact points of every step-th kept frame (kept frame 0, step, 2 step, …): the count
+    of each as uint32 and the points as float16 x y z depth (a point 16 m from the origin is placed
+    to 1 cm, which a marker hides)."""
+    frames = keep[::step]
+    points = [pose_file.contacts_of(int(f)) for f in frames]
+    return dict(contact_step=step, contact_counts=packed(np.array([len(p) for p in points], "<u4")),
+                contacts=packed(halves(np.concatenate(points).reshape(-1, CONTACT_FLOATS))))
+
+
+def embedded_bytes(encoded: dict) -> int:
+    return sum(len(v) for k, v in encoded.items() if k in ("times", "origin", "poses", "depth", "contacts",
+                                                             "contact_counts"))
 
 
 def frames_every(count: int, step: int) -> np.ndarray:
@@ -124,34 +183,55 @@ def replay_for(folder: Path, name: str, rows, meta: dict, budget: int) -> tuple[
         pose_file = folder / "poses" / (Path(trajectory).stem + ".bin")
         if not pose_file.is_file():
             continue
-        index, times, poses = read_pose_file(pose_file)
-        if len(times) == 0:
+        recorded = read_pose_file(pose_file)
+        if len(recorded.times) == 0:
             continue
         ended = ""
         if r["status"] != "ok":
             ended = f"{r['status']}: {r['message']}" if isinstance(r.get("message"), str) else r["status"]
         runs.append(dict(label=f"{r['engine']}/{r['variant']}", engine=r["engine"], status=r["status"], ended=ended,
-                         bodies=[int(i) for i in index], times_all=times, poses_all=poses))
+                         bodies=[int(i) for i in recorded.index], recorded=recorded))
     if not runs:
         return None, "no engine left a pose file for it (poses/)", 0
     cap = min(SCENE_BYTES, budget)
-    longest = max(len(run["times_all"]) for run in runs)
+    longest = max(len(run["recorded"].times) for run in runs)
+    # the poses first: one recorded frame in 2, 4, … until every engine's fits
     step = 1
     while True:
-        encoded = [encode_run(run["times_all"], run["poses_all"], frames_every(len(run["times_all"]), step))
-                   for run in runs]
-        size = sum(len(e["times"]) + len(e["origin"]) + len(e["poses"]) for e in encoded)
+        keeps = [frames_every(len(run["recorded"].times), step) for run in runs]
+        encoded = [encode_run(run["recorded"], keep) for run, keep in zip(runs, keeps)]
+        size = sum(embedded_bytes(e) for e in encoded)
         if size <= cap or step >= longest:
             break
         step *= 2
     if size > cap:
         return None, f"even two frames per engine take {size:,} bytes, over the {cap:,} left to it", 0
+    # then the contacts in what is left: those of one kept frame in 1, 2, 4, …, or none
+    contact_note = ""
+    if any(run["recorded"].contacts is not None for run in runs):
+        contact_step = 1
+        while True:
+            contacts = [encode_contacts(run["recorded"], keep, contact_step) if run["recorded"].contacts is not None
+                        else {} for run, keep in zip(runs, keeps)]
+            extra = sum(embedded_bytes(c) for c in contacts)
+            if size + extra <= cap or contact_step >= longest:
+                break
+            contact_step *= 2
+        if size + extra <= cap:
+            for e, c in zip(encoded, contacts):
+                e.update(c)
+            size += extra
+            contact_note = (f"; contact points of one shown frame in {contact_step}" if contact_step > 1
+                            else "; contact points of every frame")
+        else:
+            contact_note = "; no contact points: they do not fit"
     data = scene_shapes(json.loads(scene_file.read_text()))
     data["runs"] = [dict(label=run["label"], engine=run["engine"], status=run["status"], ended=run["ended"],
                          bodies=run["bodies"], **e) for run, e in zip(runs, encoded)]
-    frames_per_s = [(len(run["times_all"]) - 1) / max(1e-9, float(run["times_all"][-1])) / step for run in runs]
+    frames_per_s = [(len(run["recorded"].times) - 1) / max(1e-9, float(run["recorded"].times[-1])) / step
+                    for run in runs]
     note = (f"{len(runs)} engines, {size:,} bytes embedded, about {min(frames_per_s):.3g} frames per simulated second"
-            + (f" (one recorded frame in {step}, to fit {cap:,} bytes)" if step > 1 else ""))
+            + (f" (one recorded frame in {step}, to fit {cap:,} bytes)" if step > 1 else "") + contact_note)
     return data, note, size
 
 
