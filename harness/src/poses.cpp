@@ -15,14 +15,15 @@ static_assert(std::endian::native == std::endian::little, "pose files are writte
 
 constexpr std::uint64_t kHeaderBytes = 32;
 
-// the whole file: header, body indices, times, poses, and with contacts each body's depth per
-// frame, the points per frame and the points
-std::uint64_t file_bytes(std::uint64_t frames, std::uint64_t bodies, bool contacts,
-                         std::uint64_t contact_points) {
-  std::uint64_t bytes =
-      kHeaderBytes + 4 * bodies + 4 * frames + 4ull * kPoseFloats * frames * bodies;
-  if (contacts) bytes += 4 * frames * bodies + 4 * frames + 4ull * kContactFloats * contact_points;
-  return bytes;
+// the poses' part of the file: header, body indices, times, poses
+std::uint64_t pose_bytes(std::uint64_t frames, std::uint64_t bodies) {
+  return kHeaderBytes + 4 * bodies + 4 * frames + 4ull * kPoseFloats * frames * bodies;
+}
+
+// the contact sections: each contact frame's body depths and point count, and the points
+std::uint64_t contact_bytes(std::uint64_t contact_frames, std::uint64_t bodies,
+                            std::uint64_t points) {
+  return 4 * contact_frames * bodies + 4 * contact_frames + 4ull * kContactFloats * points;
 }
 
 // the samples kept as frames: every stride-th, and the last even when the stride steps over it
@@ -39,7 +40,6 @@ PoseLayout pose_layout(const Trajectory& run, const OverlapGauge* contacts,
                        std::uint64_t byte_cap) {
   PoseLayout layout;
   layout.bodies = static_cast<std::uint32_t>(run.bodies.size());
-  layout.contacts = contacts != nullptr;
   const std::size_t samples = run.samples.size();
   if (samples == 0 || layout.bodies == 0) return layout;
   std::size_t stride = 1;
@@ -48,34 +48,38 @@ PoseLayout pose_layout(const Trajectory& run, const OverlapGauge* contacts,
     if (interval > 0.0)
       stride = std::max<std::size_t>(1, std::lround(1.0 / (kPoseFrameRate * interval)));
   }
-  // each sample's contact points, measured once when a stride first picks it
-  constexpr std::uint64_t kUnmeasured = ~std::uint64_t{0};
-  std::vector<std::uint64_t> points_at(samples, kUnmeasured);
-  Overlaps overlaps;
-  auto bytes_at = [&](std::size_t stride_now, std::uint32_t& frames, std::uint64_t& points) {
-    const std::vector<std::size_t> picked = picked_samples(samples, stride_now);
-    frames = static_cast<std::uint32_t>(picked.size());
-    points = 0;
-    if (contacts)
-      for (std::size_t k : picked) {
-        if (points_at[k] == kUnmeasured) {
-          contacts->measure(run.samples[k], overlaps);
-          points_at[k] = overlaps.points.size();
-        }
-        points += points_at[k];
-      }
-    return file_bytes(frames, layout.bodies, layout.contacts, points);
-  };
-  // fewer frames per second until the file fits; at least the first and last sample
-  std::uint32_t frames = 0;
-  std::uint64_t points = 0;
-  while (bytes_at(stride, frames, points) > byte_cap && frames > 2) ++stride;
-  const std::uint64_t bytes = bytes_at(stride, frames, points);
-  if (bytes > byte_cap) return layout;
-  layout.frames = frames;
+  // the poses first: fewer frames per second until they fit; at least the first and last sample
+  std::vector<std::size_t> picked = picked_samples(samples, stride);
+  while (picked.size() > 2 && pose_bytes(picked.size(), layout.bodies) > byte_cap)
+    picked = picked_samples(samples, ++stride);
+  if (pose_bytes(picked.size(), layout.bodies) > byte_cap) return layout;
+  layout.frames = static_cast<std::uint32_t>(picked.size());
   layout.stride = static_cast<std::uint32_t>(stride);
-  layout.contact_points = points;
-  layout.bytes = bytes;
+  layout.bytes = pose_bytes(layout.frames, layout.bodies);
+  if (!contacts) return layout;
+
+  // then the contacts in what the cap leaves: those of every contact_stride-th frame from the
+  // first, the stride growing until they fit, or none; each frame's points measured once
+  constexpr std::uint64_t kUnmeasured = ~std::uint64_t{0};
+  std::vector<std::uint64_t> points_at(picked.size(), kUnmeasured);
+  Overlaps overlaps;
+  for (std::size_t contact_stride = 1; contact_stride <= picked.size(); ++contact_stride) {
+    std::uint64_t contact_frames = 0, points = 0;
+    for (std::size_t f = 0; f < picked.size(); f += contact_stride, ++contact_frames) {
+      if (points_at[f] == kUnmeasured) {
+        contacts->measure(run.samples[picked[f]], overlaps);
+        points_at[f] = overlaps.points.size();
+      }
+      points += points_at[f];
+    }
+    const std::uint64_t bytes = layout.bytes + contact_bytes(contact_frames, layout.bodies, points);
+    if (bytes > byte_cap) continue;
+    layout.contact_stride = static_cast<std::uint32_t>(contact_stride);
+    layout.contact_frames = static_cast<std::uint32_t>(contact_frames);
+    layout.contact_points = points;
+    layout.bytes = bytes;
+    break;
+  }
   return layout;
 }
 
@@ -83,7 +87,7 @@ void write_pose_file(const std::filesystem::path& path, const Trajectory& run,
                      const PoseLayout& layout, const OverlapGauge* contacts) {
   if (layout.frames == 0) throw std::invalid_argument("write_pose_file: no frames to write");
   const std::vector<std::size_t> picked = picked_samples(run.samples.size(), layout.stride);
-  if (picked.size() != layout.frames || layout.contacts != (contacts != nullptr))
+  if (picked.size() != layout.frames || (layout.contact_stride > 0 && !contacts))
     throw std::logic_error("write_pose_file: layout does not match");
 
   std::vector<char> bytes;
@@ -100,12 +104,11 @@ void write_pose_file(const std::filesystem::path& path, const Trajectory& run,
   put(&layout.frames, 4);
   put(&layout.bodies, 4);
   put_f(picked.size() > 1 ? run.samples[picked[1]].time - run.samples[picked[0]].time : 0.0);
-  const std::uint32_t sections = layout.contacts ? kPoseSectionContacts : 0;
+  const std::uint32_t sections = layout.contact_stride > 0 ? kPoseSectionContacts : 0;
   const std::uint32_t contact_points = static_cast<std::uint32_t>(layout.contact_points);
-  const std::uint32_t reserved = 0;
   put(&sections, 4);
   put(&contact_points, 4);
-  put(&reserved, 4);
+  put(&layout.contact_stride, 4);
   for (int b : run.bodies) {
     const std::int32_t i = b;
     put(&i, 4);
@@ -124,12 +127,12 @@ void write_pose_file(const std::filesystem::path& path, const Trajectory& run,
       put_f(st.linear_velocity.norm());
     }
   }
-  if (contacts) {
-    // each body's deepest penetration per frame, then the points: counts first, so a reader
-    // finds frame k's points without walking the ones before
-    std::vector<Overlaps> frames(picked.size());
-    for (std::size_t f = 0; f < picked.size(); ++f)
-      contacts->measure(run.samples[picked[f]], frames[f]);
+  if (layout.contact_stride > 0) {
+    // each contact frame's body depths, then its point counts, then the points: counts first, so
+    // a reader finds a frame's points without walking the ones before
+    std::vector<Overlaps> frames(layout.contact_frames);
+    for (std::size_t j = 0; j < frames.size(); ++j)
+      contacts->measure(run.samples[picked[j * layout.contact_stride]], frames[j]);
     for (const Overlaps& o : frames)
       for (double depth : o.body_depth) put_f(depth);
     std::uint64_t written = 0;

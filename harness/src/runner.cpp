@@ -547,7 +547,8 @@ int run_suite(const RunOptions& options, const fs::path& self) {
                 {"bytes_per_run_cap", kPoseBytesPerRun},
                 {"files", 0},
                 {"bytes", 0},
-                {"not_written", json::object()}};
+                {"not_written", json::object()},
+                {"contacts_not_written", json::object()}};
   std::uint64_t pose_bytes = 0;
 
   int failures = 0;
@@ -742,7 +743,16 @@ int run_suite(const RunOptions& options, const fs::path& self) {
               std::optional<OverlapGauge> contacts;
               if (scene.has_contacts()) contacts.emplace(scene, r.trajectory.bodies);
               const OverlapGauge* gauge = contacts ? &*contacts : nullptr;
-              const PoseLayout layout = pose_layout(r.trajectory, gauge);
+              PoseLayout layout = pose_layout(r.trajectory, gauge);
+              if (gauge && layout.frames > 0 && layout.contact_stride == 0)
+                poses_meta["contacts_not_written"][job] =
+                    "one frame's contacts exceed what the job cap leaves";
+              // near the run's cap the poses go without their contacts rather than not at all
+              if (layout.contact_stride > 0 && pose_bytes + layout.bytes > kPoseBytesPerRun) {
+                layout = pose_layout(r.trajectory);
+                gauge = nullptr;
+                poses_meta["contacts_not_written"][job] = "the run's pose files neared their cap";
+              }
               if (layout.frames == 0)
                 poses_meta["not_written"][job] = "no samples, or two frames exceed the job cap";
               else if (pose_bytes + layout.bytes > kPoseBytesPerRun)

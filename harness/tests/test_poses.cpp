@@ -97,7 +97,7 @@ TEST(PoseFiles, TheFileHoldsItsHeaderTimesAndPoses) {
   EXPECT_FLOAT_EQ(float_at(at + 28), 5.0f);
 }
 
-// one frame's contacts as the file holds them
+// one contact frame's contacts as the file holds them
 struct FrameContacts {
   std::vector<float> body_depth;     // per recorded body (m)
   std::vector<OverlapPoint> points;  // x y z depth
@@ -107,15 +107,18 @@ std::vector<FrameContacts> contacts_in(const std::vector<char>& bytes) {
   const auto frames = value_at<std::uint32_t>(bytes, 8);
   const auto bodies = value_at<std::uint32_t>(bytes, 12);
   EXPECT_EQ(value_at<std::uint32_t>(bytes, 20), kPoseSectionContacts);
+  const auto stride = value_at<std::uint32_t>(bytes, 28);
+  EXPECT_GT(stride, 0u);
+  const std::uint32_t contact_frames = (frames + stride - 1) / stride;
   std::size_t at = 32 + 4 * bodies + 4 * frames + 4 * kPoseFloats * frames * bodies;
-  std::vector<FrameContacts> out(frames);
+  std::vector<FrameContacts> out(contact_frames);
   for (FrameContacts& f : out)
     for (std::uint32_t b = 0; b < bodies; ++b, at += 4)
       f.body_depth.push_back(value_at<float>(bytes, at));
   std::vector<std::uint32_t> counts;
-  for (std::uint32_t f = 0; f < frames; ++f, at += 4)
+  for (std::uint32_t f = 0; f < contact_frames; ++f, at += 4)
     counts.push_back(value_at<std::uint32_t>(bytes, at));
-  for (std::uint32_t f = 0; f < frames; ++f)
+  for (std::uint32_t f = 0; f < contact_frames; ++f)
     for (std::uint32_t k = 0; k < counts[f]; ++k, at += 4 * kContactFloats)
       out[f].points.push_back({Vec3(value_at<float>(bytes, at), value_at<float>(bytes, at + 4),
                                     value_at<float>(bytes, at + 8)),
@@ -207,7 +210,7 @@ TEST(PoseFiles, TwoOverlappingBoxesRecordTheirDepthWhereTheirFacesOverlap) {
   EXPECT_NEAR(gauge.deepest(run.samples[1]), 0.05, 1e-9);
 }
 
-TEST(PoseFiles, ContactBytesCountAgainstTheJobCap) {
+TEST(PoseFiles, ContactsFillWhatTheJobCapLeavesAfterThePoses) {
   // tower-20 at rest for 10 s: 20 touching pairs (19 box-box, one on the ground) of 4 points
   // each, every frame
   const Scene scene = tower_scene(20);
@@ -222,14 +225,29 @@ TEST(PoseFiles, ContactBytesCountAgainstTheJobCap) {
   const OverlapGauge gauge(scene, run.bodies);
   const PoseLayout plain = pose_layout(run), with = pose_layout(run, &gauge);
   EXPECT_EQ(with.frames, plain.frames);
+  EXPECT_EQ(with.contact_stride, 1u);
   EXPECT_EQ(with.contact_points, 301u * 20 * 4);
   EXPECT_EQ(with.bytes, plain.bytes + 301ull * (4 * 20 + 4) + 16ull * with.contact_points);
-  // a cap the poses alone fit: the contacts make the file keep fewer frames, within it
-  const PoseLayout capped = pose_layout(run, &gauge, plain.bytes);
-  EXPECT_LT(capped.frames, plain.frames);
-  EXPECT_GT(capped.stride, with.stride);
-  EXPECT_LE(capped.bytes, plain.bytes);
-  EXPECT_EQ(written(run, capped, &gauge).size(), capped.bytes);
+  // a cap with room for 101 frames' contacts (4 bytes a body's depth, 4 the count, 16 a point):
+  // every pose frame stays, and the contacts of one frame in 3 (0, 3, …, 300) fill what is left
+  const std::uint64_t per_contact_frame = 4 * 20 + 4 + 16 * 80;
+  const PoseLayout capped = pose_layout(run, &gauge, plain.bytes + 101 * per_contact_frame);
+  EXPECT_EQ(capped.frames, plain.frames);
+  EXPECT_EQ(capped.stride, plain.stride);
+  EXPECT_EQ(capped.contact_stride, 3u);
+  EXPECT_EQ(capped.contact_frames, 101u);
+  EXPECT_EQ(capped.contact_points, 101u * 80);
+  EXPECT_EQ(capped.bytes, plain.bytes + 101 * per_contact_frame);
+  // one byte less: one frame in 4 (76 frames)
+  EXPECT_EQ(pose_layout(run, &gauge, plain.bytes + 101 * per_contact_frame - 1).contact_frames, 76u);
+  const std::vector<char> bytes = written(run, capped, &gauge);
+  EXPECT_EQ(bytes.size(), capped.bytes);
+  EXPECT_EQ(contacts_in(bytes).size(), 101u);
+  // a cap the poses alone fill: no contact sections, the poses as they were
+  const PoseLayout full = pose_layout(run, &gauge, plain.bytes);
+  EXPECT_EQ(full.contact_stride, 0u);
+  EXPECT_EQ(full.bytes, plain.bytes);
+  EXPECT_EQ(value_at<std::uint32_t>(written(run, full, &gauge), 20), 0u);
 }
 
 }  // namespace

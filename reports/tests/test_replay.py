@@ -116,7 +116,8 @@ def test_the_report_embeds_each_engines_replay_and_the_viewer(run):
             assert ("depth" in r) == (recorded.depth is not None) == ("contacts" in r)
             if recorded.depth is None:
                 continue
-            assert r["contact_step"] == 1
+            assert recorded.contact_stride == 1
+            assert np.array_equal(unpack(r["contact_frames"], "<u4"), np.arange(frames))
             depth = unpack(r["depth"], "<f2").astype(np.float32).reshape(frames, bodies)
             assert np.allclose(depth, recorded.depth, rtol=1e-3, atol=1e-7)
             assert np.array_equal(unpack(r["contact_counts"], "<u4"), recorded.contact_counts)
@@ -161,6 +162,7 @@ def test_a_contact_scene_records_its_contacts_with_its_poses(run):
         recorded = replay.read_pose_file(run / "poses" / (Path(row["trajectory"]).stem + ".bin"))
         label = f"{row['engine']}/{row['variant']}"
         frames, bodies = recorded.poses.shape[:2]
+        assert recorded.contact_stride == 1  # a short tower's contacts fit beside every frame
         assert recorded.depth.shape == (frames, bodies) and len(recorded.contact_counts) == frames
         # frame 0 is the scene as built: ten unit boxes stacked exactly touching on the ground,
         # so ten touching pairs of four corners each, all at depth 0, at whole-metre heights
@@ -197,12 +199,29 @@ def test_a_pose_file_from_before_contacts_is_still_read(tmp_path):
     assert recorded.contacts is None and recorded.depth is None
 
 
+def test_contacts_every_third_frame_are_read_at_their_frames(tmp_path):
+    # 5 frames of 1 body, contacts at frames 0 and 3 (stride 3): 2 points, then 1
+    path = tmp_path / "c.bin"
+    path.write_bytes(pose_header(b"PBPOSES2", 5, 1, replay.SECTION_CONTACTS, 3, 3) + np.array([1], "<i4").tobytes()
+                     + np.arange(5, dtype="<f4").tobytes() + np.zeros(5 * 8, "<f4").tobytes()
+                     + np.array([0.01, 0.02], "<f4").tobytes() + np.array([2, 1], "<u4").tobytes()
+                     + np.arange(12, dtype="<f4").tobytes())
+    recorded = replay.read_pose_file(path)
+    assert list(recorded.contact_frames) == [0, 3]
+    assert recorded.depth[:, 0].tolist() == pytest.approx([0.01, 0.02])
+    assert recorded.contacts_of(1).tolist() == [[8, 9, 10, 11]]
+    # the page keeps one frame in 2 (0, 2, 4): only kept frame 0 has contacts recorded
+    encoded = replay.encode_contacts(recorded, replay.frames_every(5, 2), 1)
+    assert unpack(encoded["contact_frames"], "<u4").tolist() == [0]
+    assert unpack(encoded["contact_counts"], "<u4").tolist() == [2]
+
+
 def test_a_truncated_pose_file_is_named(tmp_path):
     path = tmp_path / "x.bin"
     path.write_bytes(pose_header(b"PBPOSES1", 2, 1, 0))
     with pytest.raises(replay.PoseFileError, match="header says"):
         replay.read_pose_file(path)
     # contact sections promised by the header but not there
-    path.write_bytes(pose_header(b"PBPOSES2", 1, 1, replay.SECTION_CONTACTS, 4, 0) + bytes(4 + 4 + 32))
+    path.write_bytes(pose_header(b"PBPOSES2", 1, 1, replay.SECTION_CONTACTS, 4, 1) + bytes(4 + 4 + 32))
     with pytest.raises(replay.PoseFileError, match="header says"):
         replay.read_pose_file(path)

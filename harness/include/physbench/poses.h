@@ -30,26 +30,30 @@ struct PoseLayout {
   std::uint32_t frames = 0;
   std::uint32_t bodies = 0;
   std::uint32_t stride = 1;           // samples per frame
-  bool contacts = false;              // the contact sections are written
-  std::uint64_t contact_points = 0;   // over all frames
+  std::uint32_t contact_stride = 0;   // frames per contact frame; 0: no contact sections
+  std::uint32_t contact_frames = 0;   // frames 0, contact_stride, 2 contact_stride, …
+  std::uint64_t contact_points = 0;   // over all contact frames
   std::uint64_t bytes = 0;            // the whole file, contacts included
 };
 
-// The frames a trajectory gives at kPoseFrameRate within byte_cap, contacts counted: every
-// stride-th sample from the first, and the last sample too. frames = 0 when even two frames exceed
-// the cap. contacts: the scene's gauge, or null for a scene without contacts (no contact sections).
+// The file a trajectory gives within byte_cap. The poses first, as if there were no contacts:
+// kPoseFrameRate, or fewer frames per second until they fit (every stride-th sample from the
+// first, and the last sample too; frames = 0 when even two frames exceed the cap). Then, given
+// the scene's gauge (null: no contacts), the contacts of every contact_stride-th frame, the
+// stride growing until they fit in what the cap leaves, or none (contact_stride = 0). So contacts
+// never cost a pose frame.
 PoseLayout pose_layout(const Trajectory& run, const OverlapGauge* contacts = nullptr,
                        std::uint64_t byte_cap = kPoseBytesPerJob);
 
 // Writes the pose file (little-endian); contacts must be the gauge pose_layout was given:
 //   char[8] "PBPOSES2"; uint32 frames F, bodies B; float32 seconds per frame (nominal);
-//   uint32 sections (kPoseSectionContacts); uint32 contact points C; uint32 0
+//   uint32 sections (kPoseSectionContacts); uint32 contact points C; uint32 contact stride S
 //   int32 scene body index [B]        (particle i is body index scene.bodies.size() + i)
 //   float32 time [F]
 //   float32 [F][B][8]                 px py pz qx qy qz qw |v|
-// and with kPoseSectionContacts:
-//   float32 [F][B]                    each body's deepest penetration (m)
-//   uint32 contact points per frame [F]
+// and with kPoseSectionContacts, for the Fc = ceil(F / S) contact frames 0, S, 2S, …:
+//   float32 [Fc][B]                   each body's deepest penetration (m)
+//   uint32 contact points per contact frame [Fc]
 //   float32 [C][4]                    x y z depth, frame by frame
 void write_pose_file(const std::filesystem::path& path, const Trajectory& run,
                      const PoseLayout& layout, const OverlapGauge* contacts = nullptr);

@@ -59,8 +59,9 @@ async function decodeHalves(base64) {
 }
 
 // one engine's run: times, per frame and body [px py pz qx qy qz qw speed]; a contact scene's
-// also each body's deepest penetration per frame (depth, [frame][body]) and the contact points
-// [x y z depth] of every contact_step-th frame, contactStart[j] the first of contact frame j's
+// also, at its contact frames (contact_frames: which frames), each body's deepest penetration
+// (depth, [contact frame][body]) and the contact points [x y z depth], contactStart[j] the first
+// of contact frame j's; contactIndexOf[frame] is the contact frame at or before a frame
 async function decodeRun(run) {
   const bodies = run.bodies.length;
   const frames = run.frames;
@@ -71,12 +72,18 @@ async function decodeRun(run) {
     for (let b = 0; b < bodies; b++)
       for (let k = 0; k < 3; k++) poses[(f * bodies + b) * 8 + k] += origin[b * 3 + k];
   const decoded = { ...run, times, poses, depth: null, contacts: null };
-  if (run.depth) decoded.depth = await decodeHalves(run.depth);
   if (run.contacts) {
+    const shown = new Uint32Array((await gunzip(bytesOf(run.contact_frames))).buffer);
     const counts = new Uint32Array((await gunzip(bytesOf(run.contact_counts))).buffer);
+    decoded.depth = await decodeHalves(run.depth);
     decoded.contacts = await decodeHalves(run.contacts);
     decoded.contactStart = new Uint32Array(counts.length + 1);
     counts.forEach((n, j) => { decoded.contactStart[j + 1] = decoded.contactStart[j] + n; });
+    decoded.contactIndexOf = new Int32Array(frames);
+    for (let f = 0, j = 0; f < frames; f++) {
+      while (j + 1 < shown.length && shown[j + 1] <= f) j++;
+      decoded.contactIndexOf[f] = j;
+    }
   }
   return decoded;
 }
@@ -259,14 +266,14 @@ class EngineView {
     return lo;
   }
 
-  // the contact points shown at recorded frame `frame`: those of the last contact frame at or
-  // before it, coloured by depth; returns how many (null without contacts or when hidden)
+  // the contact points shown at recorded frame `frame`: those of the contact frame at or before
+  // it, coloured by depth; returns how many (null without contacts or when hidden)
   showContacts(frame, visible, depthScale) {
     if (!this.contactCloud) return null;
     this.contactCloud.visible = this.contactRing.visible = visible;
     if (!visible) return null;
     const run = this.run;
-    const j = Math.min(Math.floor(frame / run.contact_step), run.contactStart.length - 2);
+    const j = run.contactIndexOf[frame];
     const first = run.contactStart[j], count = run.contactStart[j + 1] - first;
     const geometry = this.contactCloud.geometry;
     const p = geometry.attributes.position, c = geometry.attributes.color;
@@ -300,9 +307,12 @@ class EngineView {
     const colourOf = (column) => {
       if (colouring === 'engine') return engineColour(this.index, colour);
       if (colouring === 'body') return bodyColour(this.run.bodies[column], colour);
-      // the recorded frame's own depth, as its contact points are (no depth: none measured)
-      if (colouring === 'penetration')
-        return paletteColour(this.run.depth ? this.run.depth[frame * n + column] / scales.depth : 0, colour);
+      // the depth at the contact frame at or before, as the contact points shown (no depth: none
+      // measured)
+      if (colouring === 'penetration') {
+        const depth = this.run.depth ? this.run.depth[this.run.contactIndexOf[frame] * n + column] : 0;
+        return paletteColour(depth / scales.depth, colour);
+      }
       const o = column * 8 + 7;
       return paletteColour((poses[base + o] * (1 - alpha) + poses[nextBase + o] * alpha) / scales.speed, colour);
     };

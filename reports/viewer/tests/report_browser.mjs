@@ -96,8 +96,7 @@ async function contactChecks(page, replays) {
   // contact points on: every engine draws its frame's points, and their dark rings show
   await root.locator('input[type=checkbox]').check();
   const shown = await page.evaluate((r) => window.physbenchReplays[r].views.map((view) => {
-    const run = view.run, frame = view.frameAt(window.physbenchReplays[r].time);
-    const j = Math.floor(frame / run.contact_step);
+    const run = view.run, j = run.contactIndexOf[view.frameAt(window.physbenchReplays[r].time)];
     return { drawn: view.contactCloud.geometry.drawRange.count, recorded: run.contactStart[j + 1] - run.contactStart[j] };
   }), tower);
   const marked = await viewPictures(page, tower, views);
@@ -116,12 +115,14 @@ async function contactChecks(page, replays) {
   await root.locator('select').nth(1).selectOption('penetration');
   const painted = await viewPictures(page, tower, views);
   const ordered = await page.evaluate((r) => window.physbenchReplays[r].views.map((view) => {
-    const n = view.run.bodies.length, frame = view.frameAt(window.physbenchReplays[r].time);
+    const n = view.run.bodies.length, j = view.run.contactIndexOf[view.frameAt(window.physbenchReplays[r].time)];
     const colours = view.boxMesh.instanceColor.array;
     const bodies = view.boxes.map(([column], i) => ({
-      depth: view.run.depth[frame * n + column], warmth: colours[3 * i] - colours[3 * i + 2],
+      depth: view.run.depth[j * n + column], warmth: colours[3 * i] - colours[3 * i + 2],
     })).sort((a, b) => a.depth - b.depth);
-    const rising = bodies.every((b, i) => i === 0 || b.warmth >= bodies[i - 1].warmth - 1e-6);
+    // never cooler with more depth, and the deepest warmer than the shallowest
+    const rising = bodies.every((b, i) => i === 0 || b.warmth >= bodies[i - 1].warmth - 1e-6) &&
+      bodies[bodies.length - 1].warmth > bodies[0].warmth + 1e-3;
     return { rising, spread: bodies[bodies.length - 1].depth - bodies[0].depth };
   }), tower);
   for (let v = 0; v < views; v++) {
