@@ -18,6 +18,11 @@ REPLAY_SCENES = ["tower-20", "pyramid-20", "rain", "tumbling-box", "spring-cube"
 SCENE_BYTES = 1_500_000
 # all the viewers of one page; a scene past it gets a note instead of a viewer
 PAGE_BYTES = 8_000_000
+# the contacts' own budgets, on top of the poses' (contact points compress worse than poses: a
+# pyramid-20's every contact point is 3.4 MB for nine engines), so contacts never cost a pose frame
+# or a scene its viewer, and a full page of poses still leaves them room
+CONTACT_SCENE_BYTES = 500_000
+CONTACT_PAGE_BYTES = 2_500_000
 # the variant each engine is shown in (its default); an engine not named shows its first row
 SHOWN_VARIANTS = {"rtp": ["soft-step", "rk4", "midpoint"], "bullet": ["float"], "ode": ["quickstep"], "box2d": ["default"],
                   "mujoco": ["euler"], "box2d-v3": ["default"], "rapier": ["default"]}
@@ -118,13 +123,14 @@ def encode_run(pose_file: PoseFile, keep: np.ndarray) -> dict:
 def encode_contacts(pose_file: PoseFile, keep: np.ndarray, step: int) -> dict:
     """The contacts of every step-th kept frame that has them: which kept frames (uint32), each
     one's body depths (float16), point counts (uint32) and points (float16 x y z depth; a point 16 m
-    from the origin is placed to 1 cm, which its marker hides)."""
+    from the origin is placed to 1 cm, which its marker hides) as four columns, all x, then all y,
+    z and depth (a third smaller compressed than point by point)."""
     shown = [k for k, f in enumerate(keep) if f % pose_file.contact_stride == 0][::step]
     recorded = [int(keep[k]) // pose_file.contact_stride for k in shown]
     points = [pose_file.contacts_of(j) for j in recorded]
     return dict(contact_frames=packed(np.array(shown, "<u4")), depth=packed(halves(pose_file.depth[recorded])),
                 contact_counts=packed(np.array([len(p) for p in points], "<u4")),
-                contacts=packed(halves(np.concatenate(points).reshape(-1, CONTACT_FLOATS))))
+                contacts=packed(halves(np.concatenate(points).reshape(-1, CONTACT_FLOATS).T)))
 
 
 def unpacked_frames(encoded: dict) -> np.ndarray:
@@ -226,7 +232,7 @@ def replay_for(folder: Path, name: str, rows, meta: dict, budget: int) -> tuple[
     frames_per_s = [(len(run["recorded"].times) - 1) / max(1e-9, float(run["recorded"].times[-1])) / step
                     for run in runs]
     note = (f"about {min(frames_per_s):.3g} frames per simulated second"
-            + (f" (one recorded frame in {step}, to fit {cap:,} bytes)" if step > 1 else ""))
+            + (f" (one recorded frame in {step}, to fit the poses in {cap:,} bytes)" if step > 1 else ""))
     return dict(data=data, runs=runs, keeps=keeps, size=size), note
 
 
@@ -257,9 +263,9 @@ def add_contacts(scene: dict, room: int) -> tuple[int, str]:
 def replays(folder: Path, results, meta: dict) -> dict:
     """Per scenario name: dict(json=the viewer's data as text, bytes=its compressed bytes,
     note=what it holds), or dict(json=None, note=why it has no viewer), for the scenes
-    REPLAY_SCENES names. PAGE_BYTES counts compressed bytes, as SCENE_BYTES does. Every scene's
-    poses are placed first, then the contacts in what the scene's and the page's budgets leave, so
-    contacts never cost a pose frame or a scene its viewer."""
+    REPLAY_SCENES names. PAGE_BYTES counts compressed pose bytes, as SCENE_BYTES does; the contacts
+    have budgets of their own, CONTACT_SCENE_BYTES and CONTACT_PAGE_BYTES, filled scene by scene in
+    the same order once every scene's poses are placed."""
     out, scenes, budget = {}, {}, PAGE_BYTES
     present = set(results["scenario"])
     for name in REPLAY_SCENES:
@@ -278,9 +284,10 @@ def replays(folder: Path, results, meta: dict) -> dict:
             continue
         budget -= scene["size"]
         scenes[name] = (scene, note)
+    contact_budget = CONTACT_PAGE_BYTES
     for name, (scene, note) in scenes.items():
-        extra, contact_note = add_contacts(scene, min(SCENE_BYTES - scene["size"], budget))
-        budget -= extra
+        extra, contact_note = add_contacts(scene, min(CONTACT_SCENE_BYTES, contact_budget))
+        contact_budget -= extra
         size = scene["size"] + extra
         text = json.dumps(scene["data"], separators=(",", ":"), allow_nan=False)
         # inside <script type="application/json">: no "</" may end the block early

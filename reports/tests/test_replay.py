@@ -121,7 +121,7 @@ def test_the_report_embeds_each_engines_replay_and_the_viewer(run):
             depth = unpack(r["depth"], "<f2").astype(np.float32).reshape(frames, bodies)
             assert np.allclose(depth, recorded.depth, rtol=1e-3, atol=1e-7)
             assert np.array_equal(unpack(r["contact_counts"], "<u4"), recorded.contact_counts)
-            points = unpack(r["contacts"], "<f2").astype(np.float32).reshape(-1, 4)
+            points = unpack(r["contacts"], "<f2").astype(np.float32).reshape(4, -1).T  # columns
             assert np.allclose(points, recorded.contacts, rtol=1e-3, atol=1e-3)
 
 
@@ -134,6 +134,26 @@ def test_a_scene_over_its_budget_keeps_fewer_frames_and_says_so(run, monkeypatch
     assert "one recorded frame in" in cut["tower-10"]["note"]
     assert data["runs"][0]["frames"] < json.loads(full["tower-10"]["json"])["runs"][0]["frames"]
     assert sum(len(r["poses"]) + len(r["times"]) + len(r["origin"]) for r in data["runs"]) <= size // 3
+
+
+def test_contacts_take_their_own_budget_and_never_a_pose_frame(run, monkeypatch):
+    results, meta = pd.read_csv(run / "results.csv"), json.loads((run / "metadata.json").read_text())
+    full = json.loads(replay.replays(run, results, meta)["tower-10"]["json"])
+    contacts = sum(len(r["contacts"]) + len(r["contact_counts"]) + len(r["depth"]) + len(r["contact_frames"])
+                   for r in full["runs"])
+    # room for about half of them: one contact frame in 2 or more, the poses as they were
+    monkeypatch.setattr(replay, "CONTACT_SCENE_BYTES", contacts // 2)
+    half = replay.replays(run, results, meta)["tower-10"]
+    data = json.loads(half["json"])
+    for whole, cut in zip(full["runs"], data["runs"]):
+        assert cut["poses"] == whole["poses"] and cut["frames"] == whole["frames"]
+        shown = unpack(cut["contact_frames"], "<u4")
+        assert 1 < len(shown) <= (whole["frames"] + 1) // 2 and shown[0] == 0
+    assert "contacts and penetration at about" in half["note"]
+    # no room: no contacts, and the note says so
+    monkeypatch.setattr(replay, "CONTACT_PAGE_BYTES", 100)
+    none = replay.replays(run, results, meta)["tower-10"]
+    assert "no contacts" in none["note"] and "contacts" not in json.loads(none["json"])["runs"][0]
 
 
 def test_past_the_page_budget_a_scene_gets_a_note_not_a_viewer(run, monkeypatch):

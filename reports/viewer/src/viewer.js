@@ -60,8 +60,9 @@ async function decodeHalves(base64) {
 
 // one engine's run: times, per frame and body [px py pz qx qy qz qw speed]; a contact scene's
 // also, at its contact frames (contact_frames: which frames), each body's deepest penetration
-// (depth, [contact frame][body]) and the contact points [x y z depth], contactStart[j] the first
-// of contact frame j's; contactIndexOf[frame] is the contact frame at or before a frame
+// (depth, [contact frame][body]) and the contact points as four columns (all x, then all y, z and
+// depth), contactStart[j] the first of contact frame j's; contactIndexOf[frame] is the contact
+// frame at or before a frame
 async function decodeRun(run) {
   const bodies = run.bodies.length;
   const frames = run.frames;
@@ -278,10 +279,11 @@ class EngineView {
     const geometry = this.contactCloud.geometry;
     const p = geometry.attributes.position, c = geometry.attributes.color;
     const colour = new THREE.Color();
+    const column = run.contacts.length / 4;  // the points in all
     for (let i = 0; i < count; i++) {
-      const o = (first + i) * 4;
-      p.setXYZ(i, run.contacts[o], run.contacts[o + 1], run.contacts[o + 2]);
-      paletteColour(run.contacts[o + 3] / depthScale, colour);
+      const o = first + i;
+      p.setXYZ(i, run.contacts[o], run.contacts[column + o], run.contacts[2 * column + o]);
+      paletteColour(run.contacts[3 * column + o] / depthScale, colour);
       c.setXYZ(i, colour.r, colour.g, colour.b);
     }
     geometry.setDrawRange(0, count);
