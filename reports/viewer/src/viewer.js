@@ -417,6 +417,18 @@ function bounds(data, runs) {
   return box;
 }
 
+// the 99th percentile of the finite values at `offset` in records of recordLength floats, over
+// several arrays (about 20,000 records of each), or null when there are none
+function percentile99(arrays, offset, recordLength) {
+  const values = [];
+  for (const a of arrays) {
+    const step = recordLength * Math.max(1, Math.floor(a.length / recordLength / 20000));
+    for (let i = offset; i < a.length; i += step) if (Number.isFinite(a[i])) values.push(a[i]);
+  }
+  values.sort((x, y) => x - y);
+  return values.length ? values[Math.floor(0.99 * (values.length - 1))] : null;
+}
+
 class Replay {
   constructor(root, data, runs) {
     this.root = root;
@@ -429,23 +441,13 @@ class Replay {
     this.duration = Math.max(1e-6, ...runs.map((r) => r.times[r.times.length - 1]));
     // the colour scale: the 99th percentile of every engine's speeds, so one runaway body does
     // not wash out the rest
-    const speeds = [];
-    for (const r of runs) for (let i = 7; i < r.poses.length; i += 8 * Math.max(1, Math.floor(r.poses.length / 8 / 20000))) {
-      if (Number.isFinite(r.poses[i])) speeds.push(r.poses[i]);
-    }
-    speeds.sort((a, b) => a - b);
-    this.speedScale = Math.max(1e-3, speeds.length ? speeds[Math.floor(0.99 * (speeds.length - 1))] : 1);
+    this.speedScale = Math.max(1e-3, percentile99(runs.map((r) => r.poses), 7, 8) ?? 1);
     // the penetration scale likewise: every engine's bodies' depths, 99th percentile, at least
     // DEPTH_SCALE_FLOOR; contact points share it
     this.hasDepth = runs.some((r) => r.depth);
     this.hasContacts = runs.some((r) => r.contacts);
     this.showContacts = false;
-    const depths = [];
-    for (const r of runs) if (r.depth) for (let i = 0; i < r.depth.length; i += Math.max(1, Math.floor(r.depth.length / 20000))) {
-      if (Number.isFinite(r.depth[i])) depths.push(r.depth[i]);
-    }
-    depths.sort((a, b) => a - b);
-    this.depthScale = Math.max(DEPTH_SCALE_FLOOR, depths.length ? depths[Math.floor(0.99 * (depths.length - 1))] : 0);
+    this.depthScale = Math.max(DEPTH_SCALE_FLOOR, percentile99(runs.filter((r) => r.depth).map((r) => r.depth), 0, 1) ?? 0);
 
     const box = bounds(data, runs);
     const size = box.getSize(new THREE.Vector3());
