@@ -861,7 +861,8 @@ variant has one); and every run that failed. Contents: {% for g in glance if g.l
 </table>{% endfor %}
 {% if s.replay %}<h3>Replay</h3>
 <p class="note">Each engine's recorded run (its default variant) side by side, on one clock and one camera (drag to
-orbit, scroll to zoom); colours by speed, body or engine (docs/viewer.md). {{ s.replay.note }}.</p>
+orbit, scroll to zoom); colours by speed, body or engine, and on contact scenes by each body's deepest penetration,
+with the contact points on demand (both from rtp's narrow phase on each engine's poses; docs/viewer.md). {{ s.replay.note }}.</p>
 {% if s.replay.json %}<div class="replay" data-replay="replay-{{ loop.index }}"></div>
 <script type="application/json" id="replay-{{ loop.index }}">{{ s.replay.json | safe }}</script>
 {% if not viewerjs %}<p class="error">The replay viewer is not built: scripts/setup.sh builds it (npm ci, then npm run build in reports/viewer).</p>{% endif %}{% endif %}{% endif %}

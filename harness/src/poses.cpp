@@ -13,8 +13,17 @@ namespace {
 
 static_assert(std::endian::native == std::endian::little, "pose files are written little-endian");
 
-std::uint64_t file_bytes(std::uint64_t frames, std::uint64_t bodies) {
-  return 24 + 4 * bodies + 4 * frames + 4ull * kPoseFloats * frames * bodies;
+constexpr std::uint64_t kHeaderBytes = 32;
+
+// the poses' part of the file: header, body indices, times, poses
+std::uint64_t pose_bytes(std::uint64_t frames, std::uint64_t bodies) {
+  return kHeaderBytes + 4 * bodies + 4 * frames + 4ull * kPoseFloats * frames * bodies;
+}
+
+// the contact sections: each contact frame's body depths and point count, and the points
+std::uint64_t contact_bytes(std::uint64_t contact_frames, std::uint64_t bodies,
+                            std::uint64_t points) {
+  return 4 * contact_frames * bodies + 4 * contact_frames + 4ull * kContactFloats * points;
 }
 
 // the samples kept as frames: every stride-th, and the last even when the stride steps over it
@@ -25,13 +34,10 @@ std::vector<std::size_t> picked_samples(std::size_t samples, std::size_t stride)
   return picked;
 }
 
-std::uint32_t frame_count(std::size_t samples, std::size_t stride) {
-  return static_cast<std::uint32_t>(picked_samples(samples, stride).size());
-}
-
 }  // namespace
 
-PoseLayout pose_layout(const Trajectory& run, std::uint64_t byte_cap) {
+PoseLayout pose_layout(const Trajectory& run, const OverlapGauge* contacts,
+                       std::uint64_t byte_cap) {
   PoseLayout layout;
   layout.bodies = static_cast<std::uint32_t>(run.bodies.size());
   const std::size_t samples = run.samples.size();
@@ -42,23 +48,46 @@ PoseLayout pose_layout(const Trajectory& run, std::uint64_t byte_cap) {
     if (interval > 0.0)
       stride = std::max<std::size_t>(1, std::lround(1.0 / (kPoseFrameRate * interval)));
   }
-  // fewer frames per second until the file fits; at least the first and last sample
-  while (frame_count(samples, stride) > 2 &&
-         file_bytes(frame_count(samples, stride), layout.bodies) > byte_cap)
-    ++stride;
-  const std::uint32_t frames = frame_count(samples, stride);
-  if (file_bytes(frames, layout.bodies) > byte_cap) return layout;
-  layout.frames = frames;
+  // the poses first: fewer frames per second until they fit; at least the first and last sample
+  std::vector<std::size_t> picked = picked_samples(samples, stride);
+  while (picked.size() > 2 && pose_bytes(picked.size(), layout.bodies) > byte_cap)
+    picked = picked_samples(samples, ++stride);
+  if (pose_bytes(picked.size(), layout.bodies) > byte_cap) return layout;
+  layout.frames = static_cast<std::uint32_t>(picked.size());
   layout.stride = static_cast<std::uint32_t>(stride);
-  layout.bytes = file_bytes(frames, layout.bodies);
+  layout.bytes = pose_bytes(layout.frames, layout.bodies);
+  if (!contacts) return layout;
+
+  // then the contacts in what the cap leaves: those of every contact_stride-th frame from the
+  // first, the stride growing until they fit, or none; each frame's points measured once
+  constexpr std::uint64_t kUnmeasured = ~std::uint64_t{0};
+  std::vector<std::uint64_t> points_at(picked.size(), kUnmeasured);
+  Overlaps overlaps;
+  for (std::size_t contact_stride = 1; contact_stride <= picked.size(); ++contact_stride) {
+    std::uint64_t contact_frames = 0, points = 0;
+    for (std::size_t f = 0; f < picked.size(); f += contact_stride, ++contact_frames) {
+      if (points_at[f] == kUnmeasured) {
+        contacts->measure(run.samples[picked[f]], overlaps);
+        points_at[f] = overlaps.points.size();
+      }
+      points += points_at[f];
+    }
+    const std::uint64_t bytes = layout.bytes + contact_bytes(contact_frames, layout.bodies, points);
+    if (bytes > byte_cap) continue;
+    layout.contact_stride = static_cast<std::uint32_t>(contact_stride);
+    layout.contact_frames = static_cast<std::uint32_t>(contact_frames);
+    layout.contact_points = points;
+    layout.bytes = bytes;
+    break;
+  }
   return layout;
 }
 
 void write_pose_file(const std::filesystem::path& path, const Trajectory& run,
-                     const PoseLayout& layout) {
+                     const PoseLayout& layout, const OverlapGauge* contacts) {
   if (layout.frames == 0) throw std::invalid_argument("write_pose_file: no frames to write");
   const std::vector<std::size_t> picked = picked_samples(run.samples.size(), layout.stride);
-  if (picked.size() != layout.frames)
+  if (picked.size() != layout.frames || (layout.contact_stride > 0 && !contacts))
     throw std::logic_error("write_pose_file: layout does not match");
 
   std::vector<char> bytes;
@@ -71,12 +100,15 @@ void write_pose_file(const std::filesystem::path& path, const Trajectory& run,
     const float f = static_cast<float>(v);
     put(&f, 4);
   };
-  put("PBPOSES1", 8);
+  put("PBPOSES2", 8);
   put(&layout.frames, 4);
   put(&layout.bodies, 4);
   put_f(picked.size() > 1 ? run.samples[picked[1]].time - run.samples[picked[0]].time : 0.0);
-  const std::uint32_t reserved = 0;
-  put(&reserved, 4);
+  const std::uint32_t sections = layout.contact_stride > 0 ? kPoseSectionContacts : 0;
+  const std::uint32_t contact_points = static_cast<std::uint32_t>(layout.contact_points);
+  put(&sections, 4);
+  put(&contact_points, 4);
+  put(&layout.contact_stride, 4);
   for (int b : run.bodies) {
     const std::int32_t i = b;
     put(&i, 4);
@@ -94,6 +126,28 @@ void write_pose_file(const std::filesystem::path& path, const Trajectory& run,
       put_f(q.w());
       put_f(st.linear_velocity.norm());
     }
+  }
+  if (layout.contact_stride > 0) {
+    // each contact frame's body depths, then its point counts, then the points: counts first, so
+    // a reader finds a frame's points without walking the ones before
+    std::vector<Overlaps> frames(layout.contact_frames);
+    for (std::size_t j = 0; j < frames.size(); ++j)
+      contacts->measure(run.samples[picked[j * layout.contact_stride]], frames[j]);
+    for (const Overlaps& o : frames)
+      for (double depth : o.body_depth) put_f(depth);
+    std::uint64_t written = 0;
+    for (const Overlaps& o : frames) {
+      const std::uint32_t count = static_cast<std::uint32_t>(o.points.size());
+      put(&count, 4);
+      written += count;
+    }
+    if (written != layout.contact_points)
+      throw std::logic_error("write_pose_file: the contacts differ from the layout's");
+    for (const Overlaps& o : frames)
+      for (const OverlapPoint& point : o.points) {
+        for (int i = 0; i < 3; ++i) put_f(point.point[i]);
+        put_f(point.depth);
+      }
   }
   std::ofstream out(path, std::ios::binary);
   out.write(bytes.data(), static_cast<std::streamsize>(bytes.size()));

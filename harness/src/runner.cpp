@@ -591,13 +591,17 @@ int run_suite(const RunOptions& options, const fs::path& self) {
 
   // the replay viewer's pose files (docs/viewer.md): each scene at its own step, within the caps
   json& poses_meta = metadata["poses"];
-  poses_meta = {{"format", "PBPOSES1: float32 px py pz qx qy qz qw |v| per body per frame"},
+  poses_meta = {{"format",
+                 "PBPOSES2: float32 px py pz qx qy qz qw |v| per body per frame; contact scenes "
+                 "also each body's deepest penetration per frame and every contact point "
+                 "(x y z depth), docs/viewer.md"},
                 {"frame_rate", kPoseFrameRate},
                 {"bytes_per_job_cap", kPoseBytesPerJob},
                 {"bytes_per_run_cap", kPoseBytesPerRun},
                 {"files", 0},
                 {"bytes", 0},
-                {"not_written", json::object()}};
+                {"not_written", json::object()},
+                {"contacts_not_written", json::object()}};
   std::uint64_t pose_bytes = 0;
 
   std::size_t total = 0, done = 0, rows_written = 0;
@@ -819,13 +823,26 @@ int run_suite(const RunOptions& options, const fs::path& self) {
             write_trajectory_csv(trajectory, r.trajectory, series, against, int(scene.bodies.size()));
             row["trajectory"] = fs::relative(trajectory, out).string();
             if (std::abs(dt - p.scene.dt) <= 1e-9 * p.scene.dt) {
-              const PoseLayout layout = pose_layout(r.trajectory);
+              // a contact scene's file also holds its contacts, counted against the same caps
+              std::optional<OverlapGauge> contacts;
+              if (scene.has_contacts()) contacts.emplace(scene, r.trajectory.bodies);
+              const OverlapGauge* gauge = contacts ? &*contacts : nullptr;
+              PoseLayout layout = pose_layout(r.trajectory, gauge);
+              if (gauge && layout.frames > 0 && layout.contact_stride == 0)
+                poses_meta["contacts_not_written"][job] =
+                    "one frame's contacts exceed what the job cap leaves";
+              // near the run's cap the poses go without their contacts rather than not at all
+              if (layout.contact_stride > 0 && pose_bytes + layout.bytes > kPoseBytesPerRun) {
+                layout = pose_layout(r.trajectory);
+                gauge = nullptr;
+                poses_meta["contacts_not_written"][job] = "the run's pose files neared their cap";
+              }
               if (layout.frames == 0)
                 poses_meta["not_written"][job] = "no samples, or two frames exceed the job cap";
               else if (pose_bytes + layout.bytes > kPoseBytesPerRun)
                 poses_meta["not_written"][job] = "the run's pose files reached their cap";
               else {
-                write_pose_file(out / "poses" / (job + ".bin"), r.trajectory, layout);
+                write_pose_file(out / "poses" / (job + ".bin"), r.trajectory, layout, gauge);
                 pose_bytes += layout.bytes;
                 poses_meta["files"] = poses_meta["files"].get<int>() + 1;
                 poses_meta["bytes"] = pose_bytes;

@@ -3,12 +3,11 @@
 #include <algorithm>
 #include <cmath>
 #include <limits>
-#include <map>
 #include <numeric>
 #include <sstream>
 #include <stdexcept>
 
-#include "rtp/collision.h"
+#include "physbench/overlaps.h"
 
 namespace physbench {
 
@@ -89,114 +88,10 @@ SeriesSummary summary_of(const std::vector<double>& values) {
   return s;
 }
 
-
 // the world's up: against gravity, or y without gravity
 Vec3 up_of(const Scene& scene) {
   return scene.gravity.norm() > 0.0 ? Vec3(-scene.gravity.normalized()) : Vec3::UnitY();
 }
-
-// The deepest overlap of any two bodies at one sample, by rtp's narrow phase on the scene's true
-// shapes (so no engine's skin or margin hides or adds depth). Dynamic bodies take their sampled
-// pose, static ones the scene's; unprobed dynamic bodies are left out. Pairs are found by a sweep
-// of bounding boxes along x; planes are tested against every body.
-class PenetrationGauge {
- public:
-  PenetrationGauge(const Scene& scene, const std::vector<int>& probed) : scene_(scene) {
-    for (std::size_t i = 0; i < probed.size(); ++i)
-      if (probed[i] < static_cast<int>(scene.bodies.size())) slot_[probed[i]] = i;
-    for (int i = 0; i < static_cast<int>(scene.bodies.size()); ++i) {
-      const BodySpec& b = scene.bodies[i];
-      if (b.mass > 0.0 && !slot_.count(i)) continue;
-      if (b.shape.kind == ShapeKind::Box) {
-        shapes_.push_back(rtp::Shape::box(std::uint32_t(hulls_.size()), b.shape.half_extents));
-        hulls_.push_back(rtp::make_box_hull(b.shape.half_extents));
-      } else if (b.shape.kind == ShapeKind::Sphere) {
-        shapes_.push_back(rtp::Shape::sphere(b.shape.radius));
-      } else {
-        shapes_.push_back(rtp::Shape::plane(Vec3::UnitY(), 0.0));
-      }
-      bodies_.push_back(i);
-    }
-  }
-
-  double deepest(const Sample& sample) const {
-    const std::size_t n = bodies_.size();
-    std::vector<rtp::Pose> poses(n);
-    std::vector<Vec3> low(n), high(n);
-    std::vector<std::size_t> solids, planes;
-    for (std::size_t k = 0; k < n; ++k) {
-      const BodySpec& b = scene_.bodies[bodies_[k]];
-      const auto slot = slot_.find(bodies_[k]);
-      const bool moving = b.mass > 0.0 && slot != slot_.end();
-      const Vec3 position = moving ? sample.bodies[slot->second].position : b.position;
-      const Quat orientation =
-          moving ? sample.bodies[slot->second].orientation.normalized() : b.orientation;
-      poses[k] = rtp::Pose(position, orientation);
-      if (b.shape.kind == ShapeKind::Plane) {
-        planes.push_back(k);
-        continue;
-      }
-      const Vec3 reach = b.shape.kind == ShapeKind::Box
-                             ? Vec3(poses[k].rotation.cwiseAbs() * b.shape.half_extents)
-                             : Vec3::Constant(b.shape.radius);
-      low[k] = position - reach;
-      high[k] = position + reach;
-      solids.push_back(k);
-    }
-    double worst = 0.0;
-    rtp::Manifold manifold;
-    auto test = [&](std::size_t a, std::size_t b) {
-      if (!rtp::collide(hulls_, shapes_[a], poses[a], shapes_[b], poses[b], manifold)) return;
-      double depth = manifold.count ? manifold.depth : 0.0;
-      for (std::uint8_t p = 0; p < manifold.count; ++p)
-        depth = std::max(depth, manifold.points[p].depth);
-      // two boxes overlap by no more than along any of their six face normals; rtp's box path
-      // has been seen to answer 0.98 m for two nearly aligned boxes 1 mm apart (docs/metrics.md)
-      if (shapes_[a].kind == rtp::ShapeKind::Box && shapes_[b].kind == rtp::ShapeKind::Box)
-        depth = std::min(depth, face_axis_overlap(a, b, poses));
-      worst = std::max(worst, depth);
-    };
-    auto is_static = [&](std::size_t k) { return scene_.bodies[bodies_[k]].mass == 0.0; };
-    std::sort(solids.begin(), solids.end(),
-              [&](std::size_t a, std::size_t b) { return low[a].x() < low[b].x(); });
-    for (std::size_t i = 0; i < solids.size(); ++i) {
-      const std::size_t a = solids[i];
-      for (std::size_t j = i + 1; j < solids.size() && low[solids[j]].x() <= high[a].x(); ++j) {
-        const std::size_t b = solids[j];
-        if (is_static(a) && is_static(b)) continue;
-        if (low[b].y() > high[a].y() || low[a].y() > high[b].y() || low[b].z() > high[a].z() ||
-            low[a].z() > high[b].z())
-          continue;
-        test(a, b);
-      }
-      if (!is_static(a))
-        for (std::size_t p : planes) test(a, p);
-    }
-    return worst;
-  }
-
- private:
-  // the least overlap of two boxes along the face normals of either (0 when one separates them)
-  double face_axis_overlap(std::size_t a, std::size_t b, const std::vector<rtp::Pose>& poses) const {
-    const Vec3& ha = scene_.bodies[bodies_[a]].shape.half_extents;
-    const Vec3& hb = scene_.bodies[bodies_[b]].shape.half_extents;
-    const Vec3 between = poses[b].position - poses[a].position;
-    double least = std::numeric_limits<double>::infinity();
-    for (int k = 0; k < 6; ++k) {
-      const Vec3 axis = k < 3 ? Vec3(poses[a].rotation.col(k)) : Vec3(poses[b].rotation.col(k - 3));
-      const double reach = (poses[a].rotation.transpose() * axis).cwiseAbs().dot(ha) +
-                           (poses[b].rotation.transpose() * axis).cwiseAbs().dot(hb);
-      least = std::min(least, reach - std::abs(between.dot(axis)));
-    }
-    return std::max(least, 0.0);
-  }
-
-  const Scene& scene_;
-  std::map<int, std::size_t> slot_;  // scene body → index in a sample
-  std::vector<int> bodies_;          // the scene bodies measured
-  std::vector<rtp::ConvexHull> hulls_;
-  std::vector<rtp::Shape> shapes_;   // one per bodies_ entry
-};
 
 }  // namespace
 
@@ -224,7 +119,7 @@ ErrorSeries compare(const Scene& scene, const Trajectory& run, const Trajectory*
       initial.angular_momentum.norm() > 0.0 ? initial.angular_momentum.norm() : 1.0;
 
   const bool drift = wants(scene, Metric::StackDrift);
-  std::optional<PenetrationGauge> gauge;
+  std::optional<OverlapGauge> gauge;
   if (wants(scene, Metric::Penetration)) gauge.emplace(scene, run.bodies);
   const Vec3 up = up_of(scene);
 

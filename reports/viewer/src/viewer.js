@@ -22,6 +22,10 @@ const BOX_EDGES = (() => {
 })();
 const ENGINE_HUES = [0.58, 0.08, 0.33, 0.78, 0.0, 0.14, 0.5, 0.9];
 const PALETTE_STOPS = [[0.19, 0.33, 0.72], [0.25, 0.72, 0.65], [0.95, 0.85, 0.3], [0.84, 0.19, 0.15]];
+// the penetration scale's least top (m): a stack's sub-millimetre resting overlap is not painted red
+const DEPTH_SCALE_FLOOR = 1e-3;
+// contact markers, in pixels: a dark ring under a dot coloured by depth, seen on any body's colour
+const CONTACT_DOT = 6, CONTACT_RING = 9;
 
 // ---- data: base64 → gzip → float16 (positions as offsets from frame 0) ----------------------
 
@@ -46,20 +50,43 @@ function halfToFloat(h) {
   return sign * (1 + fraction / 1024) * 2 ** (exponent - 15);
 }
 
-// one engine's run: times, per frame and body [px py pz qx qy qz qw speed]
+async function decodeHalves(base64) {
+  const raw = await gunzip(bytesOf(base64));
+  const halves = new Uint16Array(raw.buffer, raw.byteOffset, raw.byteLength / 2);
+  const floats = new Float32Array(halves.length);
+  for (let i = 0; i < halves.length; i++) floats[i] = halfToFloat(halves[i]);
+  return floats;
+}
+
+// one engine's run: times, per frame and body [px py pz qx qy qz qw speed]; a contact scene's
+// also, at its contact frames (contact_frames: which frames), each body's deepest penetration
+// (depth, [contact frame][body]) and the contact points as four columns (all x, then all y, z and
+// depth), contactStart[j] the first of contact frame j's; contactIndexOf[frame] is the contact
+// frame at or before a frame
 async function decodeRun(run) {
   const bodies = run.bodies.length;
   const frames = run.frames;
   const times = new Float32Array((await gunzip(bytesOf(run.times))).buffer);
   const origin = new Float32Array((await gunzip(bytesOf(run.origin))).buffer);
-  const raw = await gunzip(bytesOf(run.poses));
-  const halves = new Uint16Array(raw.buffer, raw.byteOffset, raw.byteLength / 2);
-  const poses = new Float32Array(frames * bodies * 8);
-  for (let i = 0; i < halves.length; i++) poses[i] = halfToFloat(halves[i]);
+  const poses = await decodeHalves(run.poses);
   for (let f = 0; f < frames; f++)
     for (let b = 0; b < bodies; b++)
       for (let k = 0; k < 3; k++) poses[(f * bodies + b) * 8 + k] += origin[b * 3 + k];
-  return { ...run, times, poses };
+  const decoded = { ...run, times, poses, depth: null, contacts: null };
+  if (run.contacts) {
+    const shown = new Uint32Array((await gunzip(bytesOf(run.contact_frames))).buffer);
+    const counts = new Uint32Array((await gunzip(bytesOf(run.contact_counts))).buffer);
+    decoded.depth = await decodeHalves(run.depth);
+    decoded.contacts = await decodeHalves(run.contacts);
+    decoded.contactStart = new Uint32Array(counts.length + 1);
+    counts.forEach((n, j) => { decoded.contactStart[j + 1] = decoded.contactStart[j] + n; });
+    decoded.contactIndexOf = new Int32Array(frames);
+    for (let f = 0, j = 0; f < frames; f++) {
+      while (j + 1 < shown.length && shown[j + 1] <= f) j++;
+      decoded.contactIndexOf[f] = j;
+    }
+  }
+  return decoded;
 }
 
 // ---- colours ---------------------------------------------------------------------------------
@@ -197,6 +224,27 @@ class EngineView {
       this.pointCloud.frustumCulled = false;
       this.scene.add(this.pointCloud);
     }
+    // contact points: a dark ring under a dot coloured by depth, drawn over the bodies
+    if (run.contacts) {
+      let most = 0;
+      for (let j = 1; j < run.contactStart.length; j++) most = Math.max(most, run.contactStart[j] - run.contactStart[j - 1]);
+      const geometry = new THREE.BufferGeometry();
+      geometry.setAttribute('position', new THREE.BufferAttribute(new Float32Array(Math.max(1, most) * 3), 3));
+      geometry.setAttribute('color', new THREE.BufferAttribute(new Float32Array(Math.max(1, most) * 3), 3));
+      const marker = (size, options) => {
+        const points = new THREE.Points(geometry, new THREE.PointsMaterial({
+          size, sizeAttenuation: false, depthTest: false, depthWrite: false, ...options,
+        }));
+        points.frustumCulled = false;
+        points.visible = false;
+        this.scene.add(points);
+        return points;
+      };
+      this.contactRing = marker(CONTACT_RING, { color: 0x10161c });
+      this.contactRing.renderOrder = 10;
+      this.contactCloud = marker(CONTACT_DOT, { vertexColors: true });
+      this.contactCloud.renderOrder = 11;
+    }
     // springs: a line from the body's point to its anchor or the other body's point
     this.springs = (data.springs || []).map((s) => {
       const geometry = new THREE.BufferGeometry();
@@ -219,7 +267,31 @@ class EngineView {
     return lo;
   }
 
-  show(time, colouring, speedScale) {
+  // the contact points shown at recorded frame `frame`: those of the contact frame at or before
+  // it, coloured by depth; returns how many (null without contacts or when hidden)
+  showContacts(frame, visible, depthScale) {
+    if (!this.contactCloud) return null;
+    this.contactCloud.visible = this.contactRing.visible = visible;
+    if (!visible) return null;
+    const run = this.run;
+    const j = run.contactIndexOf[frame];
+    const first = run.contactStart[j], count = run.contactStart[j + 1] - first;
+    const geometry = this.contactCloud.geometry;
+    const p = geometry.attributes.position, c = geometry.attributes.color;
+    const colour = new THREE.Color();
+    const column = run.contacts.length / 4;  // the points in all
+    for (let i = 0; i < count; i++) {
+      const o = first + i;
+      p.setXYZ(i, run.contacts[o], run.contacts[column + o], run.contacts[2 * column + o]);
+      paletteColour(run.contacts[3 * column + o] / depthScale, colour);
+      c.setXYZ(i, colour.r, colour.g, colour.b);
+    }
+    geometry.setDrawRange(0, count);
+    p.needsUpdate = true; c.needsUpdate = true;
+    return count;
+  }
+
+  show(time, colouring, scales) {
     const frame = this.frameAt(time);
     const n = this.run.bodies.length;
     const poses = this.run.poses, times = this.run.times;
@@ -237,8 +309,14 @@ class EngineView {
     const colourOf = (column) => {
       if (colouring === 'engine') return engineColour(this.index, colour);
       if (colouring === 'body') return bodyColour(this.run.bodies[column], colour);
+      // the depth at the contact frame at or before, as the contact points shown (no depth: none
+      // measured)
+      if (colouring === 'penetration') {
+        const depth = this.run.depth ? this.run.depth[this.run.contactIndexOf[frame] * n + column] : 0;
+        return paletteColour(depth / scales.depth, colour);
+      }
       const o = column * 8 + 7;
-      return paletteColour((poses[base + o] * (1 - alpha) + poses[nextBase + o] * alpha) / speedScale, colour);
+      return paletteColour((poses[base + o] * (1 - alpha) + poses[nextBase + o] * alpha) / scales.speed, colour);
     };
     const pose = (column) => {
       const o = base + column * 8, p = nextBase + column * 8;
@@ -339,6 +417,18 @@ function bounds(data, runs) {
   return box;
 }
 
+// the 99th percentile of the finite values at `offset` in records of recordLength floats, over
+// several arrays (about 20,000 records of each), or null when there are none
+function percentile99(arrays, offset, recordLength) {
+  const values = [];
+  for (const a of arrays) {
+    const step = recordLength * Math.max(1, Math.floor(a.length / recordLength / 20000));
+    for (let i = offset; i < a.length; i += step) if (Number.isFinite(a[i])) values.push(a[i]);
+  }
+  values.sort((x, y) => x - y);
+  return values.length ? values[Math.floor(0.99 * (values.length - 1))] : null;
+}
+
 class Replay {
   constructor(root, data, runs) {
     this.root = root;
@@ -351,12 +441,13 @@ class Replay {
     this.duration = Math.max(1e-6, ...runs.map((r) => r.times[r.times.length - 1]));
     // the colour scale: the 99th percentile of every engine's speeds, so one runaway body does
     // not wash out the rest
-    const speeds = [];
-    for (const r of runs) for (let i = 7; i < r.poses.length; i += 8 * Math.max(1, Math.floor(r.poses.length / 8 / 20000))) {
-      if (Number.isFinite(r.poses[i])) speeds.push(r.poses[i]);
-    }
-    speeds.sort((a, b) => a - b);
-    this.speedScale = Math.max(1e-3, speeds.length ? speeds[Math.floor(0.99 * (speeds.length - 1))] : 1);
+    this.speedScale = Math.max(1e-3, percentile99(runs.map((r) => r.poses), 7, 8) ?? 1);
+    // the penetration scale likewise: every engine's bodies' depths, 99th percentile, at least
+    // DEPTH_SCALE_FLOOR; contact points share it
+    this.hasDepth = runs.some((r) => r.depth);
+    this.hasContacts = runs.some((r) => r.contacts);
+    this.showContacts = false;
+    this.depthScale = Math.max(DEPTH_SCALE_FLOOR, percentile99(runs.filter((r) => r.depth).map((r) => r.depth), 0, 1) ?? 0);
 
     const box = bounds(data, runs);
     const size = box.getSize(new THREE.Vector3());
@@ -433,11 +524,20 @@ class Replay {
     this.speedSelect = select('speed', [['0.25', '¼×'], ['0.5', '½×'], ['1', '1×'], ['2', '2×'], ['4', '4×']],
       (v) => { this.speed = Number(v); });
     this.speedSelect.value = '1';
-    this.colourSelect = select('colour by', [['speed', 'speed'], ['body', 'body'], ['engine', 'engine']],
-      (v) => { this.colouring = v; this.setTime(this.time); });
+    const colourings = [['speed', 'speed'], ['body', 'body'], ['engine', 'engine']];
+    if (this.hasDepth) colourings.splice(1, 0, ['penetration', 'penetration']);
+    this.colourSelect = select('colour by', colourings, (v) => { this.colouring = v; this.setTime(this.time); });
     // a scene whose bodies never move their centres (a box spinning in place) is coloured by body
     if (this.speedScale < 1e-2) this.colouring = 'body';
     this.colourSelect.value = this.colouring;
+    if (this.hasContacts) {
+      const l = document.createElement('label');
+      this.contactsBox = document.createElement('input');
+      this.contactsBox.type = 'checkbox';
+      this.contactsBox.addEventListener('change', () => { this.showContacts = this.contactsBox.checked; this.setTime(this.time); });
+      l.append(this.contactsBox, ' contact points');
+      bar.appendChild(l);
+    }
     this.legend = document.createElement('span');
     this.legend.className = 'replay-legend';
     bar.appendChild(this.legend);
@@ -468,13 +568,20 @@ class Replay {
     this.time = Math.min(this.duration, Math.max(0, time));
     this.slider.value = String(Math.round((this.time / this.duration) * 1000) || 0);
     this.clock.textContent = `t = ${this.time.toFixed(2)} s of ${this.duration.toFixed(2)} s`;
-    this.legend.textContent = this.colouring === 'speed'
-      ? `blue 0 → red ≥ ${this.speedScale.toPrecision(2)} m/s` : '';
+    const depthLegend = `blue 0 → red ≥ ${(1000 * this.depthScale).toPrecision(2)} mm`;
+    const legend = [];
+    if (this.colouring === 'speed') legend.push(`blue 0 → red ≥ ${this.speedScale.toPrecision(2)} m/s`);
+    if (this.colouring === 'penetration') legend.push(`each body's deepest overlap: ${depthLegend}`);
+    if (this.showContacts) legend.push(`contact points by depth: ${depthLegend}`);
+    this.legend.textContent = legend.join(' · ');
+    const scales = { speed: this.speedScale, depth: this.depthScale };
     this.views.forEach((view, i) => {
-      const frame = view.show(this.time, this.colouring, this.speedScale);
+      const frame = view.show(this.time, this.colouring, scales);
+      const contacts = view.showContacts(frame, this.showContacts, this.depthScale);
       const run = view.run;
       const ended = run.ended && this.time > run.times[run.times.length - 1] ? ` — ${run.ended}` : '';
-      this.labels[i].textContent = `${run.label} (frame ${frame + 1}/${run.frames})${ended}`;
+      const shown = contacts === null ? '' : `, ${contacts} contact point${contacts === 1 ? '' : 's'}`;
+      this.labels[i].textContent = `${run.label} (frame ${frame + 1}/${run.frames}${shown})${ended}`;
     });
     this.render();
   }

@@ -2,7 +2,9 @@
 // which headless Chromium opens from file://. Any page: no JavaScript error, no console error, no
 // failed request. The replay viewer: every replay started; two engines' viewports draw bodies
 // (coloured pixels read back from the canvas); the decoded poses match the scene file; moving the
-// slider changes each engine's picture. Screenshots go to PHYSBENCH_ARTIFACTS (viewer.png).
+// slider changes each engine's picture; on the tower, the contact points toggle on and off (their
+// dark rings appear and go) and colouring by penetration paints each body by its own depth.
+// Screenshots go to PHYSBENCH_ARTIFACTS (viewer.png, viewer-tumbling-box.png, viewer-contacts.png).
 //
 //   node reports/viewer/tests/report_browser.mjs            (CTest sets the environment)
 //   node reports/viewer/tests/report_browser.mjs PAGE.html  (the page checks on any built report)
@@ -56,13 +58,15 @@ async function viewportPixels(page, replay, view) {
     const context = copy.getContext('2d');
     context.drawImage(replay.canvas, box.x, box.y, box.w, box.h, 0, 0, box.w, box.h);
     const pixels = context.getImageData(0, 0, box.w, box.h).data;
-    let coloured = 0, sum = 0;
+    let coloured = 0, sum = 0, dark = 0;
     for (let i = 0; i < pixels.length; i += 4) {
       const [red, green, blue] = [pixels[i], pixels[i + 1], pixels[i + 2]];
       if (Math.max(red, green, blue) - Math.min(red, green, blue) > 60) coloured++;
+      // the contact markers' rings (0x10161c); box edges are drawn lighter (translucent)
+      if (red < 30 && green < 36 && blue < 44) dark++;
       sum = (sum * 31 + red + 7 * green + 13 * blue) % 1000000007;
     }
-    return { coloured: coloured / (box.w * box.h), sum };
+    return { coloured: coloured / (box.w * box.h), sum, dark };
   }, [replay, view]);
 }
 
@@ -72,6 +76,70 @@ async function setSlider(page, replay, value) {
     slider.value = String(value);
     slider.dispatchEvent(new Event('input'));
   }, [replay, value]);
+}
+
+async function viewPictures(page, replay, views) {
+  const pictures = [];
+  for (let v = 0; v < views; v++) pictures.push(await viewportPixels(page, replay, v));
+  return pictures;
+}
+
+// the tower: contact points on and off, and colouring by each body's penetration
+async function contactChecks(page, replays) {
+  const tower = replays.findIndex((r) => r.name === 'tower-10');
+  check(tower >= 0, 'the tower-10 replay is on the page');
+  if (tower < 0) return;
+  const views = replays[tower].labels.length;
+  const root = page.locator('.replay[data-replay]').nth(tower);
+  await setSlider(page, tower, 500);
+  const plain = await viewPictures(page, tower, views);
+  // contact points on: every engine draws its frame's points, and their dark rings show
+  await root.locator('input[type=checkbox]').check();
+  const shown = await page.evaluate((r) => window.physbenchReplays[r].views.map((view) => {
+    const run = view.run, j = run.contactIndexOf[view.frameAt(window.physbenchReplays[r].time)];
+    return { drawn: view.contactCloud.geometry.drawRange.count, recorded: run.contactStart[j + 1] - run.contactStart[j] };
+  }), tower);
+  const marked = await viewPictures(page, tower, views);
+  for (let v = 0; v < views; v++) {
+    const label = replays[tower].labels[v];
+    check(shown[v].drawn > 0 && shown[v].drawn === shown[v].recorded,
+      `tower-10 ${label}: the frame's contact points are drawn (${shown[v].drawn} of ${shown[v].recorded})`);
+    check(marked[v].sum !== plain[v].sum && marked[v].dark > plain[v].dark + 4 * shown[v].drawn,
+      `tower-10 ${label}: contact markers change the picture (${plain[v].dark} → ${marked[v].dark} dark pixels)`);
+  }
+  // contact points off: the picture is the one before
+  await root.locator('input[type=checkbox]').uncheck();
+  const hidden = await viewPictures(page, tower, views);
+  check(hidden.every((p, v) => p.sum === plain[v].sum), 'tower-10: hiding the contact points restores the picture');
+  // colour by penetration: each body's colour rises with its own depth in the frame shown
+  await root.locator('select').nth(1).selectOption('penetration');
+  const painted = await viewPictures(page, tower, views);
+  const ordered = await page.evaluate((r) => window.physbenchReplays[r].views.map((view) => {
+    const n = view.run.bodies.length, j = view.run.contactIndexOf[view.frameAt(window.physbenchReplays[r].time)];
+    const colours = view.boxMesh.instanceColor.array;
+    const bodies = view.boxes.map(([column], i) => ({
+      depth: view.run.depth[j * n + column], warmth: colours[3 * i] - colours[3 * i + 2],
+    })).sort((a, b) => a.depth - b.depth);
+    // never cooler with more depth, and the deepest warmer than the shallowest
+    const rising = bodies.every((b, i) => i === 0 || b.warmth >= bodies[i - 1].warmth - 1e-6) &&
+      bodies[bodies.length - 1].warmth > bodies[0].warmth + 1e-3;
+    return { rising, spread: bodies[bodies.length - 1].depth - bodies[0].depth };
+  }), tower);
+  for (let v = 0; v < views; v++) {
+    const label = replays[tower].labels[v];
+    check(painted[v].sum !== plain[v].sum, `tower-10 ${label}: colouring by penetration changes the picture`);
+    check(ordered[v].rising && ordered[v].spread > 0,
+      `tower-10 ${label}: deeper bodies are warmer (depths span ${(1000 * ordered[v].spread).toFixed(2)} mm)`);
+  }
+  const legend = await root.locator('.replay-legend').textContent();
+  check(/deepest overlap: blue 0 → red ≥ [\d.]+ mm/.test(legend), `the penetration legend reads "${legend}"`);
+  mkdirSync(artifacts, { recursive: true });
+  await root.locator('input[type=checkbox]').check();
+  await root.scrollIntoViewIfNeeded();
+  await root.screenshot({ path: join(artifacts, 'viewer-contacts.png') });
+  // back to how the page started, for the screenshots that follow
+  await root.locator('input[type=checkbox]').uncheck();
+  await root.locator('select').nth(1).selectOption('speed');
 }
 
 async function viewerChecks(page, results) {
@@ -115,6 +183,7 @@ async function viewerChecks(page, results) {
     const clock = await page.evaluate((r) => window.physbenchReplays[r].time, tumbling);
     check(clock > 0, `the slider moved the clock (t = ${clock.toFixed(3)} s)`);
   }
+  await contactChecks(page, replays);
   // screenshots: the first replay half-way, and the tumbling box where the slider left it
   mkdirSync(artifacts, { recursive: true });
   await setSlider(page, 0, 500);
