@@ -190,7 +190,7 @@ def test_the_history_keeps_runs_small_compares_each_with_the_last_and_draws_tren
     assert entry_bytes < 0.05 * run_bytes, (entry_bytes, run_bytes)
     assert history.read_entry_rows(entry).keys() == {
         (r["scenario"], r["engine"], r["variant"], float(r["dt"])) for r in rows_of(first)}
-    with pytest.raises(history.HistoryError, match="in the history"):
+    with pytest.raises(history.HistoryError, match="in the history already"):
         history.add(first, store)
     assert history.report(store, store / "index.html") == 2
     page = (store / "index.html").read_text()
