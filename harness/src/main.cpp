@@ -140,12 +140,14 @@ int main(int argc, char** argv) {
   // run with the project's .venv
   auto* merge = app.add_subcommand(
       "merge", "join the results folders of a sharded run (--shard K/N) into one: "
-               "merge -o OUT SHARD_DIR... (merge -- --help for its options)");
+               "merge -o OUT SHARD_DIR... (merge --help for its options)");
   merge->prefix_command();
+  merge->set_help_flag();  // --help goes on to the tool, which knows its options
   auto* compare = app.add_subcommand(
       "compare", "compare two results folders, OLD then NEW: faster, slower, more or less "
-                 "accurate; exit 1 on a regression (compare -- --help for its options)");
+                 "accurate; exit 1 on a regression (compare --help for its options)");
   compare->prefix_command();
+  compare->set_help_flag();
 
   auto* check = app.add_subcommand("check", "validate scene files and print what is wrong");
   std::vector<std::string> check_files;
