@@ -420,8 +420,10 @@ void check_row(const std::map<std::string, std::string>& row) {
     } else if (type == "integer") {
       fits = value.find_first_not_of("-0123456789") == std::string::npos && is_number(value);
     } else if (type == "numbers") {
+      // an empty part is a value that could not be computed, as an empty cell is
       std::stringstream parts(value);
-      for (std::string part; std::getline(parts, part, ';');) fits = fits && is_number(part);
+      for (std::string part; std::getline(parts, part, ';');)
+        fits = fits && (part.empty() || is_number(part));
     } else if (type == "status") {
       fits = std::any_of(std::begin(kResultStatuses), std::end(kResultStatuses),
                          [&](const char* s) { return value == s; });
