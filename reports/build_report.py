@@ -360,6 +360,12 @@ def speed_error(rows: pd.DataFrame, floors: dict[float, float] | None = None) ->
     return figure_html(fig), table
 
 
+# the error a scenario's question is about, in this order of preference (results.csv column, words)
+GLANCE_METRICS = [("position_err_max", "position error"), ("orientation_err_max", "orientation error"),
+                  ("apex_rel_err_max", "apex error"), ("slide_accel_rel_err", "slide acceleration error"),
+                  ("exchange_err", "velocity exchange error"), ("stack_drift_max", "stack drift"),
+                  ("penetration_max", "deepest penetration"), ("energy_drift_max", "energy drift")]
+
 FAILED = {"exploded": "exploded", "crashed": "crashed", "timeout": "timed out", "error": "failed",
           "diverged": "diverged"}
 
@@ -378,10 +384,10 @@ def at_a_glance(results: pd.DataFrame, meta: dict) -> list[dict]:
         if not ok.empty:
             best = ok.loc[ok["steps_per_s"].idxmax()]
             entry["fastest"] = f"{best['label']} ({fmt(best['steps_per_s'])} steps/s)"
-        metric = headline_metric(rows)
+        metric = next(((c, t) for c, t in GLANCE_METRICS if c in rows and rows[c].notna().any()), None)
         if metric:
             column, title = metric
-            entry["metric"] = title.lower()
+            entry["metric"] = title
             scored = ok[ok[column].notna()]
             if not scored.empty:
                 best = scored.loc[scored[column].abs().idxmin()]
@@ -392,12 +398,12 @@ def at_a_glance(results: pd.DataFrame, meta: dict) -> list[dict]:
                 points[column] = points[column].abs()
                 front = pareto_front(points, column)
                 entry["front"] = ", ".join(f"{r['label']} at 1/{1 / r['dt']:.0f} s" for _, r in front.iterrows())
-                # equal time budget: the cheapest run of the costliest engine variant, so that every
-                # variant has a run within it; each variant's best error at that cost or less
-                cheapest = points.groupby("label")["cost"].min()
+                # equal time budget: the cheapest run of the costliest engine, so that every engine
+                # has a run within it; each engine's best error (any variant, any step) at that cost
+                cheapest = points.groupby("engine")["cost"].min()
                 budget = cheapest.max()
                 within = points[points["cost"] <= budget * (1 + 1e-9)]
-                best_within = within.loc[within.groupby("label")[column].idxmin()].sort_values(column)
+                best_within = within.loc[within.groupby("engine")[column].idxmin()].sort_values(column)
                 entry["budget"] = fmt(budget)
                 entry["budget_rows"] = [dict(label=r["label"], error=fmt(r[column]), dt=f"1/{1 / r['dt']:.0f}")
                                         for _, r in best_within.iterrows()]
@@ -827,11 +833,11 @@ TEMPLATE = jinja2.Template("""<!doctype html>
 
 {% if glance %}<section id="glance"><h2>At a glance</h2>
 <p class="note">Per scenario: the fastest and the most accurate engine variant at the scene's own step;
-the runs on the Pareto front of cost (wall s per simulated s) against the scenario's first error; the best
-error each variant reaches within an equal time budget (the cheapest run of the costliest variant, so every
-variant has one); and every run that failed. Contents: {% for g in glance if g.linked %}<a href="#{{ g.anchor }}">{{ g.name }}</a>{% if not loop.last %} · {% endif %}{% endfor %}.</p>
+the runs on the Pareto front of cost (wall s per simulated s) against the error the scenario asks about; the
+best error each engine reaches, with any of its variants and steps, within an equal time budget (the cheapest
+run of the costliest engine, so every engine has one); and every run that failed. Contents: {% for g in glance if g.linked %}<a href="#{{ g.anchor }}">{{ g.name }}</a>{% if not loop.last %} · {% endif %}{% endfor %}.</p>
 <table><tr><th class="l">scenario</th><th class="l">fastest</th><th class="l">most accurate</th><th class="l">Pareto front</th>
-<th class="l">equal budget: best error each</th><th class="l">failures</th></tr>
+<th class="l">equal budget: each engine's best error</th><th class="l">failures</th></tr>
 {% for g in glance %}<tr><td class="l">{% if g.linked %}<a href="#{{ g.anchor }}">{{ g.name }}</a>{% else %}{{ g.name }}{% endif %}</td><td class="l">{{ g.fastest }}</td>
 <td class="l">{{ g.accurate }}{% if g.metric %}<br><span class="note">{{ g.metric }}</span>{% endif %}</td><td class="l">{{ g.front }}</td>
 <td class="l">{% if g.budget_rows %}<span class="note">≤ {{ g.budget }} s/s:</span> {% for b in g.budget_rows %}{{ b.label }} {{ b.error }} (dt {{ b.dt }} s){% if not loop.last %}; {% endif %}{% endfor %}{% endif %}</td>
