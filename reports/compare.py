@@ -119,18 +119,24 @@ def fastest(row: dict) -> float | None:
     return value if value and value > 0 else None
 
 
+def named_by(key: tuple, against: str) -> bool:
+    """Whether a row is of --against's ENGINE or ENGINE/VARIANT."""
+    engine, _, variant = against.partition("/")
+    return key[1] == engine and (not variant or key[2] == variant)
+
+
 def peers_change(old: dict, new: dict, of: tuple, against: str | None) -> tuple[float, int] | None:
     """(median of new/old fastest over the peer rows timed ok in both runs, how many) for the row `of`:
     the rows of the same scene and step, which ran seconds apart from it, of --against (ENGINE or
     ENGINE/VARIANT; its own engine's other variants too), else of every other engine. The machine's
     speed wanders over seconds, and a scene's jobs run one after another, so its own peers share its
     spell (docs/regression.md); the median sets aside a peer whose job ran in a slow process."""
-    a_engine, _, a_variant = (against or "").partition("/")
     logs = []
     for key in set(old) & set(new):
-        if key == of or key[0] != of[0] or key[3] != of[3] or (not against and key[1] == of[1]):
+        if key == of or key[0] != of[0] or key[3] != of[3]:
             continue
-        if against and (key[1] != a_engine or (a_variant and key[2] != a_variant)):
+        peer = named_by(key, against) if against else key[1] != of[1]
+        if not peer:
             continue
         x, y = fastest(old[key]), fastest(new[key])
         if x and y and old[key]["status"] in GOOD_STATUS and new[key]["status"] in GOOD_STATUS:
@@ -160,9 +166,7 @@ def speed_change(a: dict, b: dict, peers: float, alpha: float) -> tuple[float, b
 
 def compare(old: dict, new: dict, against: str | None = None, speed_threshold: float = 0.15,
             accuracy_tolerance: float = 0.05, accuracy_floor: float = 1e-9, alpha: float = 0.01) -> Comparison:
-    if against and not any(k[1] == against.partition("/")[0] and (not against.partition("/")[2] or
-                                                                     k[2] == against.partition("/")[2])
-                           for k in set(old) & set(new)):
+    if against and not any(named_by(k, against) for k in set(old) & set(new)):
         raise CompareError(f"--against {against}: no such engine variant in both runs")
     result = Comparison(against=against or "every other engine")
 
