@@ -15,9 +15,7 @@ from __future__ import annotations
 import argparse
 import csv
 import gzip
-import io
 import json
-import math
 import re
 import statistics
 import sys
