@@ -19,6 +19,9 @@ struct ContactPipeline::BodyShapeData {
   bool is_static = false;
   double friction = 0.0, restitution = 0.0;
   ProxyId proxy = 0;
+  Aabb bounds;  // this step's, grown (not for planes)
+  Vec3 plane_normal = Vec3::UnitY();  // a plane's, in the world, this step
+  double plane_offset = 0.0;          // (m), grown by half the speculative distance
 };
 
 namespace {
@@ -154,7 +157,10 @@ void ContactPipeline::update_bounds(std::span<const BodyState> states, double dt
     Aabb box;
     switch (data.kind) {
       case BodyShape::None:
+        continue;
       case BodyShape::Plane:
+        data.plane_normal = s.orientation * data.shape.plane_normal;
+        data.plane_offset = data.shape.plane_offset + data.plane_normal.dot(s.position);
         continue;
       case BodyShape::Sphere:
         box = bounds_of_sphere(s.position, data.shape.radius + extra);
@@ -166,6 +172,7 @@ void ContactPipeline::update_bounds(std::span<const BodyState> states, double dt
         box = bounds_of_points(hull_of(data.shape, hulls_).vertices, s.position, s.orientation);
         break;
     }
+    data.bounds = box;
     broad_phase_->move(data.proxy, box);
   }
 }
@@ -178,10 +185,21 @@ void ContactPipeline::find_pairs() {
     if (shapes_[a].is_static && shapes_[b].is_static) continue;
     candidates_.push_back(pair_key(a, b));
   }
-  // every dynamic body against every plane; the narrow phase rejects the far ones in a few
-  // operations
-  for (BodyId plane : planes_)
-    for (BodyId body : dynamic_shaped_) candidates_.push_back(pair_key(plane, body));
+  // every dynamic body whose bounds reach a plane (its lowest corner along the normal at or below
+  // the plane's grown surface, 0.1 mm of slack for the bounds' single precision): a pyramid's
+  // 5,050 boxes are 100 that touch the ground and 4,950 the narrow phase need not see
+  constexpr double kSlack = 1e-4;
+  for (BodyId plane : planes_) {
+    const Vec3& n = shapes_[plane].plane_normal;
+    const double surface = shapes_[plane].plane_offset + kSlack;
+    for (BodyId body : dynamic_shaped_) {
+      const Aabb& box = shapes_[body].bounds;
+      double lowest = 0.0;
+      for (int k = 0; k < 3; ++k)
+        lowest += n[k] * (n[k] >= 0.0 ? double(box.min[k]) : double(box.max[k]));
+      if (lowest <= surface) candidates_.push_back(pair_key(plane, body));
+    }
+  }
   // by pair: the order the contacts are solved in, whatever order the broad phase found them
   // in, and the order the match with last step's contacts walks
   boost::sort::spreadsort::integer_sort(candidates_.begin(), candidates_.end());
