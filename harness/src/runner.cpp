@@ -146,7 +146,6 @@ std::string number(double value) {
   return out.str();
 }
 
-// every bit of a double, for values that are matched rather than read
 // 64-bit FNV-1a of a text, in hex: the plan's fingerprint (the same text gives the same value on
 // every machine, which std::hash does not promise)
 std::string fingerprint(const std::string& text) {
@@ -157,6 +156,7 @@ std::string fingerprint(const std::string& text) {
   return out.str();
 }
 
+// every bit of a double, for values that are matched rather than read
 std::string exact(double value) {
   std::ostringstream out;
   out << std::setprecision(17) << value;
@@ -528,13 +528,14 @@ int run_suite(const RunOptions& options, const fs::path& self) {
       jobs_engines.push_back(ev);
   if (jobs_engines.empty()) throw RunError("no engine variant matches the filters given");
 
-  // ---- the plan: every job in order (scene, step, engine variant), numbered from 0; a shard runs
-  // the scene steps whose number is K−1 modulo N, every engine of a step in one shard, so that the
-  // engines of a scene are always timed on one machine, one after another. Its fingerprint covers
-  // each scene as it will run, the engine variants and the timing budget, so `merge` can refuse
-  // shards of different plans
+  // ---- the plan: every scene step (a scene at one of its steps) in order, numbered from 0, each
+  // with every engine variant; job s·E + e is step s on engine variant e. A shard runs the steps
+  // whose number is K−1 modulo N, every engine of a step in one shard, so that the engines of a
+  // scene are always timed on one machine, one after another. The plan's fingerprint covers each
+  // scene as it will run, the engine variants and the timing budget, so `merge` can refuse shards
+  // of different plans
   const std::size_t engines_per_step = jobs_engines.size();
-  std::size_t planned = 0;
+  std::size_t steps_planned = 0;
   std::string plan_text = "budget " + exact(options.timing_budget) + "\n";
   for (const PreparedScene& p : scenes)
     for (double dt : p.dts) {
@@ -542,14 +543,11 @@ int run_suite(const RunOptions& options, const fs::path& self) {
       scene.dt = dt;
       plan_text += to_json(scene).dump() + "\n";
       for (const EngineVariant& ev : jobs_engines) plan_text += ev.engine + "/" + ev.variant + "\n";
-      planned += engines_per_step;
+      ++steps_planned;
     }
-  const auto in_shard = [&](std::size_t job) {
-    return job / engines_per_step % std::size_t(options.shard_count) ==
-           std::size_t(options.shard_index - 1);
+  const auto step_in_shard = [&](std::size_t step) {
+    return step % std::size_t(options.shard_count) == std::size_t(options.shard_index - 1);
   };
-  // does this shard run the step whose first job has this number?
-  const auto shard_runs_step = [&](std::size_t first_job) { return in_shard(first_job); };
 
   // ---- the results folder; results.csv appears only when complete
   const fs::path out = options.out;
@@ -607,23 +605,22 @@ int run_suite(const RunOptions& options, const fs::path& self) {
   std::uint64_t pose_bytes = 0;
 
   std::size_t total = 0, done = 0, rows_written = 0;
-  for (std::size_t j = 0; j < planned; ++j) total += in_shard(j);
+  for (std::size_t s = 0; s < steps_planned; ++s) total += step_in_shard(s) ? engines_per_step : 0;
   metadata["plan"] = {{"fingerprint", fingerprint(plan_text)},
-                      {"jobs", planned},
+                      {"jobs", steps_planned * engines_per_step},
                       {"shard", {{"index", options.shard_index}, {"count", options.shard_count}}},
                       {"jobs_in_shard", total},
                       {"row_jobs", json::array()}};  // each row's job number, in row order
   json& row_jobs = metadata["plan"]["row_jobs"];
 
   int failures = 0;
-  std::size_t job_number = 0;  // in the whole plan
+  std::size_t step_number = 0;  // in the whole plan
   try {
   for (const PreparedScene& p : scenes) {
     bool any_step = false;
-    for (std::size_t i = 0; i < p.dts.size(); ++i)
-      any_step = any_step || shard_runs_step(job_number + i * engines_per_step);
+    for (std::size_t i = 0; i < p.dts.size(); ++i) any_step |= step_in_shard(step_number + i);
     if (!any_step) {
-      job_number += p.dts.size() * engines_per_step;
+      step_number += p.dts.size();
       continue;
     }
     json& scenario_meta = metadata["scenarios"][p.scene.name];
@@ -641,10 +638,8 @@ int run_suite(const RunOptions& options, const fs::path& self) {
                      {"parameter", p.parameter},
                      {"scene_file", json::object()}};
     for (double dt : p.dts) {
-      if (!shard_runs_step(job_number)) {
-        job_number += engines_per_step;
-        continue;
-      }
+      const std::size_t this_step = step_number++;
+      if (!step_in_shard(this_step)) continue;
       Scene scene = p.scene;
       scene.dt = dt;
       // one file per step when the scene is swept, else the scene's own name
@@ -668,9 +663,9 @@ int run_suite(const RunOptions& options, const fs::path& self) {
       // particles count as bodies here: body_steps_per_s is particle-steps/s in a particle scene
       if (scene.particles) dynamic_bodies += static_cast<int>(scene.particles->count);
 
-      for (const EngineVariant& ev : jobs_engines) {
-        const std::size_t this_job = job_number++;
-        if (!in_shard(this_job)) continue;
+      for (std::size_t e = 0; e < engines_per_step; ++e) {
+        const EngineVariant& ev = jobs_engines[e];
+        const std::size_t this_job = this_step * engines_per_step + e;
         ++done;
         const std::string job = tag + "__" + safe_name(ev.engine + "__" + ev.variant);
         std::cerr << "[" << done << "/" << total << "] " << tag << "  " << ev.engine << "/"
