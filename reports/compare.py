@@ -119,21 +119,30 @@ def fastest(row: dict) -> float | None:
     return value if value and value > 0 else None
 
 
+def by_scene_step(rows: dict) -> dict[tuple, list[tuple]]:
+    """Row keys grouped by (scenario, dt): a row's peers are its own scene step's rows."""
+    groups: dict[tuple, list[tuple]] = {}
+    for key in rows:
+        groups.setdefault((key[0], key[3]), []).append(key)
+    return groups
+
+
 def named_by(key: tuple, against: str) -> bool:
     """Whether a row is of --against's ENGINE or ENGINE/VARIANT."""
     engine, _, variant = against.partition("/")
     return key[1] == engine and (not variant or key[2] == variant)
 
 
-def peers_change(old: dict, new: dict, of: tuple, against: str | None) -> tuple[float, int] | None:
+def peers_change(old: dict, new: dict, of: tuple, against: str | None,
+                 groups: dict[tuple, list[tuple]]) -> tuple[float, int] | None:
     """(median of new/old fastest over the peer rows timed ok in both runs, how many) for the row `of`:
     the rows of the same scene and step, which ran seconds apart from it, of --against (ENGINE or
     ENGINE/VARIANT; its own engine's other variants too), else of every other engine. The machine's
     speed wanders over seconds, and a scene's jobs run one after another, so its own peers share its
     spell (docs/regression.md); the median sets aside a peer whose job ran in a slow process."""
     logs = []
-    for key in set(old) & set(new):
-        if key == of or key[0] != of[0] or key[3] != of[3]:
+    for key in groups.get((of[0], of[3]), []):
+        if key == of or key not in new:
             continue
         peer = named_by(key, against) if against else key[1] != of[1]
         if not peer:
@@ -169,6 +178,7 @@ def compare(old: dict, new: dict, against: str | None = None, speed_threshold: f
     if against and not any(named_by(k, against) for k in set(old) & set(new)):
         raise CompareError(f"--against {against}: no such engine variant in both runs")
     result = Comparison(against=against or "every other engine")
+    groups = by_scene_step(old)
 
     result.only_old = sorted(set(old) - set(new))
     result.only_new = sorted(set(new) - set(old))
@@ -201,7 +211,7 @@ def compare(old: dict, new: dict, against: str | None = None, speed_threshold: f
             result.changes.append(Change(key, "less accurate", "; ".join(worse)))
         if better:
             result.changes.append(Change(key, "more accurate", "; ".join(better)))
-        peers = peers_change(old, new, key, against)
+        peers = peers_change(old, new, key, against, groups)
         told = speed_change(a, b, peers[0], alpha) if peers else None
         if told:
             result.speed_compared += 1

@@ -13,6 +13,7 @@ the suite, then `add`, then `report`, and exits with `add`'s code.
 from __future__ import annotations
 
 import argparse
+import html
 import csv
 import gzip
 import json
@@ -24,6 +25,7 @@ from pathlib import Path
 import plotly.graph_objects as go
 import plotly.offline
 
+import build_report
 import compare
 
 # a row's main error: the first of these it has (the scenario's own question)
@@ -90,12 +92,12 @@ def add(run: Path, history: Path, **compare_options) -> tuple[Path, int]:
     return entry, code
 
 
-def relative_speed(rows: dict, key: tuple) -> float | None:
+def relative_speed(rows: dict, key: tuple, groups: dict[tuple, list[tuple]]) -> float | None:
     """A row's fastest steps/s over the median of its scene step's other engines' fastest (a number
     that means the same on any machine, as far as the engines' relative speeds do)."""
     own = compare.fastest(rows[key])
-    peers = [compare.fastest(r) for k, r in rows.items()
-             if k[0] == key[0] and k[3] == key[3] and k[1] != key[1] and r["status"] == "ok"]
+    peers = [compare.fastest(rows[k]) for k in groups[(key[0], key[3])]
+             if k[1] != key[1] and rows[k]["status"] == "ok"]
     peers = [p for p in peers if p]
     return own / statistics.median(peers) if own and peers else None
 
@@ -115,16 +117,18 @@ def report(history: Path, out: Path) -> int:
     table = [(e, read_entry_rows(e), read_entry_metadata(e)) for e in runs]
     labels = [f"{m.get('created', e.name)[:16]} {(m.get('git_commit') or '')[:8]}" for e, _, m in table]
     scenarios = sorted({k[0] for _, rows, _ in table for k in rows})
+    grouped = [compare.by_scene_step(rows) for _, rows, _ in table]  # once an entry
     sections = []
     for scenario in scenarios:
         series: dict[str, dict] = {}
         for i, (_, rows, _) in enumerate(table):
+            groups = grouped[i]
             for key, row in rows.items():
                 if key[0] != scenario or row["status"] != "ok":
                     continue
                 name = f"{key[1]}/{key[2]} dt {key[3]:.4g}"
                 s = series.setdefault(name, {"speed": [None] * len(table), "error": [None] * len(table), "metric": None})
-                s["speed"][i] = relative_speed(rows, key)
+                s["speed"][i] = relative_speed(rows, key, groups)
                 found = main_error(row)
                 if found:
                     s["metric"] = found[0]
@@ -154,24 +158,16 @@ def report(history: Path, out: Path) -> int:
         "</head><body><h1>physbench: the history</h1>",
         f"<p>{len(runs)} runs, {total:,} bytes in all ({total // len(runs):,} a run on average), "
         f"from {labels[0]} to {labels[-1]}.</p>",
-        "<h2>The latest run against the one before</h2><pre>" + _escape(latest) + "</pre>",
-        "<h2>Contents</h2><ul>" + "".join(f"<li><a href='#{_anchor(s)}'>{_escape(s)}</a></li>" for s, _ in sections) + "</ul>",
+        "<h2>The latest run against the one before</h2><pre>" + html.escape(latest) + "</pre>",
+        "<h2>Contents</h2><ul>" + "".join(f"<li><a href='#{build_report.anchor_of(s)}'>{html.escape(s)}</a></li>" for s, _ in sections) + "</ul>",
     ]
     for scenario, divs in sections:
-        parts.append(f"<h2 id='{_anchor(scenario)}'>{_escape(scenario)}</h2>" + "".join(divs))
+        parts.append(f"<h2 id='{build_report.anchor_of(scenario)}'>{html.escape(scenario)}</h2>" + "".join(divs))
     parts.append("</body></html>")
     partial = out.with_name(out.name + ".partial")
     partial.write_text("\n".join(parts))
     partial.rename(out)
     return len(runs)
-
-
-def _escape(text: str) -> str:
-    return text.replace("&", "&amp;").replace("<", "&lt;").replace(">", "&gt;")
-
-
-def _anchor(text: str) -> str:
-    return "s-" + re.sub(r"[^A-Za-z0-9_-]", "-", text)
 
 
 def main(argv: list[str] | None = None) -> int:

@@ -51,12 +51,11 @@ def read_shard(folder: Path) -> dict:
 def check_together(shards: list[dict]) -> int:
     """The shards' count N, once they are shown to be the N slices of one plan, one build."""
     first = shards[0]
-    for key, what in (("fingerprint", "plan"),):
-        for s in shards[1:]:
-            if s["plan"][key] != first["plan"][key]:
-                raise MergeError(f"{s['folder']} ran another {what} than {first['folder']} "
-                                 f"(plan fingerprint {s['plan'][key]} against {first['plan'][key]}): "
-                                 "shards must come from one command line")
+    for s in shards[1:]:
+        if s["plan"]["fingerprint"] != first["plan"]["fingerprint"]:
+            raise MergeError(f"{s['folder']} ran another plan than {first['folder']} (plan fingerprint "
+                             f"{s['plan']['fingerprint']} against {first['plan']['fingerprint']}): "
+                             "shards must come from one command line")
     for key in ("git_commit", "build", "compiler"):
         for s in shards[1:]:
             if s["metadata"].get(key) != first["metadata"].get(key):
