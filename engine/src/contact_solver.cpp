@@ -84,6 +84,11 @@ V3 gather3(const float* base, LaneIndex index) {
   return {simd::gather<Lane>(base, index), simd::gather<Lane>(base + 1, index),
           simd::gather<Lane>(base + 2, index)};
 }
+void scatter3(float* base, LaneIndex index, const V3& v, LaneMask where) {
+  simd::scatter(base, index, v.x, where);
+  simd::scatter(base + 1, index, v.y, where);
+  simd::scatter(base + 2, index, v.z, where);
+}
 
 // a point's normal row: the angular parts r × n on each body and their response I⁻¹ (r × n).
 // Computed where read rather than kept in the block: the solve at a large pyramid is bound by the
@@ -101,28 +106,23 @@ struct NormalRow {
 // the two bodies of each lane, gathered from the body array, and scattered back
 struct LanePair {
   V3 va, wa, vb, wb;
+  LaneIndex a, b;  // each lane's bodies as offsets into the body array's floats
 
-  LanePair(const std::vector<SolverBody>& bodies, const ContactBlock& block) {
+  LanePair(const std::vector<SolverBody>& bodies, const ContactBlock& block)
+      : a(body_offsets(block.body_a)), b(body_offsets(block.body_b)) {
     const float* base = reinterpret_cast<const float*>(bodies.data());
-    const LaneIndex a = body_offsets(block.body_a), b = body_offsets(block.body_b);
     va = gather3(base + kLinearVelocity, a), wa = gather3(base + kAngularVelocity, a);
     vb = gather3(base + kLinearVelocity, b), wb = gather3(base + kAngularVelocity, b);
   }
   // static bodies and the body at rest are never written: colours share them, and their
-  // threads may not write the same memory
+  // threads may not write the same memory (a colour's dynamic bodies are each in one lane)
   void store(std::vector<SolverBody>& bodies, const ContactBlock& block) const {
-    for (std::size_t i = 0; i < W; ++i) {
-      if (block.inverse_mass_a[i] > 0.0f) {
-        SolverBody& a = bodies[block.body_a[i]];
-        a.linear_velocity = {va.x[i], va.y[i], va.z[i]};
-        a.angular_velocity = {wa.x[i], wa.y[i], wa.z[i]};
-      }
-      if (block.inverse_mass_b[i] > 0.0f) {
-        SolverBody& b = bodies[block.body_b[i]];
-        b.linear_velocity = {vb.x[i], vb.y[i], vb.z[i]};
-        b.angular_velocity = {wb.x[i], wb.y[i], wb.z[i]};
-      }
-    }
+    float* base = reinterpret_cast<float*>(bodies.data());
+    const Lane zero = splat(0.0f);
+    scatter3(base + kLinearVelocity, a, va, block.inverse_mass_a > zero);
+    scatter3(base + kAngularVelocity, a, wa, block.inverse_mass_a > zero);
+    scatter3(base + kLinearVelocity, b, vb, block.inverse_mass_b > zero);
+    scatter3(base + kAngularVelocity, b, wb, block.inverse_mass_b > zero);
   }
   // the relative velocity at a point: (v_b + ω_b × r_b) − (v_a + ω_a × r_a)
   V3 relative_velocity(const ContactBlock::Point& p) const {
@@ -213,10 +213,27 @@ void set_symmetric(Lane (&lanes)[6], std::size_t i, const Mat3& m) {
 std::size_t contact_block_lanes() { return W; }
 
 namespace {
-// the next block's cache lines, asked for while this one is solved: a pass streams the blocks in
-// order, and at a large pyramid they come from L3, whose latency the kernel otherwise waits on
-// (docs/solver.md, "Cost")
-void prefetch(const ContactBlock& block) { simd::prefetch(&block, sizeof(ContactBlock)); }
+// The next block's cache lines, asked for a few at a time while this one is solved: a pass
+// streams the blocks in order, and at a large pyramid they come from L3, whose latency the kernel
+// otherwise waits on (docs/solver.md, "Cost"). Asked for all at once, the 96 lines a block fill
+// the core's line-fill buffers and the prefetches stall the kernel behind them.
+class Prefetch {
+ public:
+  explicit Prefetch(const ContactBlock* next) : next_(reinterpret_cast<const char*>(next)) {}
+  // the next `lines` lines of the block; nothing past its end, or without a next block
+  void ahead(std::size_t lines) {
+    if (!next_) return;
+    const std::size_t end = std::min(line_ + lines, kLines);
+    simd::prefetch(next_ + line_ * 64, (end - line_) * 64);
+    line_ = end;
+  }
+  void rest() { ahead(kLines); }
+
+ private:
+  static constexpr std::size_t kLines = sizeof(ContactBlock) / 64;
+  const char* next_;
+  std::size_t line_ = 0;
+};
 }  // namespace
 
 // a colour's blocks go to threads only past this many contacts: below it the barrier costs more
@@ -276,12 +293,14 @@ void ContactPipeline::for_each_block(Kernel&& kernel, bool backwards) {
     const int c = colour(k);
     return c + 1 < kColours && start[c + 1] - start[c] >= parallel_blocks;
   };
+  auto run_block = [&](std::size_t i, std::size_t end) {
+    Prefetch ahead(i + 1 < end ? &blocks[i + 1] : nullptr);
+    kernel(blocks[i], ahead);
+    ahead.rest();
+  };
   auto run_colour = [&](int k) {
     const int c = colour(k);
-    for (std::size_t i = start[c]; i < start[c + 1]; ++i) {
-      if (i + 1 < start[c + 1]) prefetch(blocks[i + 1]);
-      kernel(blocks[i]);
-    }
+    for (std::size_t i = start[c]; i < start[c + 1]; ++i) run_block(i, start[c + 1]);
   };
   // threads only when some colour is wide enough to share: each colour ends in a barrier, and
   // a barrier among threads that have nothing to share costs more than the colour
@@ -296,10 +315,7 @@ void ContactPipeline::for_each_block(Kernel&& kernel, bool backwards) {
     if (wide(k)) {
       const int c = colour(k);
 #pragma omp for schedule(static)
-      for (std::size_t i = start[c]; i < start[c + 1]; ++i) {
-        if (i + 1 < start[c + 1]) prefetch(blocks[i + 1]);
-        kernel(blocks[i]);
-      }
+      for (std::size_t i = start[c]; i < start[c + 1]; ++i) run_block(i, start[c + 1]);
       ++k;
       continue;
     }
@@ -456,12 +472,14 @@ void ContactPipeline::prepare_lanes(ContactBlock& c, const std::array<LaneMask, 
 }
 
 void ContactPipeline::warm_start() {
-  for_each_block([&](const ContactBlock& c) {
+  for_each_block([&](const ContactBlock& c, Prefetch& ahead) {
     LanePair pair(bodies_, c);
     const V3 n = load3(c.normal), t0 = load3(c.tangent[0]), t1 = load3(c.tangent[1]);
-    for (const ContactBlock::Point& p : c.points)
+    for (const ContactBlock::Point& p : c.points) {
+      ahead.ahead(24);
       pair.apply(c, p, p.normal_impulse * n + p.tangent_impulse[0] * t0 +
                            p.tangent_impulse[1] * t1);
+    }
     pair.store(bodies_, c);
   });
 }
@@ -475,9 +493,10 @@ void ContactPipeline::solve(double h, bool bias, bool backwards) {
   const Lane slop = splat(float(settings_.linear_slop));
   const Lane max_push = splat(float(settings_.max_push_speed));
   const Lane zero = splat(0.0f), one = splat(1.0f);
-  for_each_block([&](ContactBlock& c) {
+  for_each_block([&](ContactBlock& c, Prefetch& ahead) {
     LanePair pair(bodies_, c);
     const V3 n = load3(c.normal), t0 = load3(c.tangent[0]), t1 = load3(c.tangent[1]);
+    ahead.ahead(16);
     // the approach speed restitution reverses, for points that started the step touching: each
     // one's last before it first pushed, all read before this manifold pushes at all (read one
     // by one, the points after the first would see the first's push, and bounce unequally)
@@ -496,6 +515,7 @@ void ContactPipeline::solve(double h, bool bias, bool backwards) {
     for (int round = 0; round < rounds; ++round) {
       const LaneMask active = round == 0 ? LaneMask(zero == zero) : c.fresh;
       for (ContactBlock::Point& p : c.points) {
+        ahead.ahead(10);
         const Lane s = motion.separation(p);
         const NormalRow row(c, p, n);
         const Lane vn = pair.normal_velocity(n, row);
@@ -527,6 +547,7 @@ void ContactPipeline::solve(double h, bool bias, bool backwards) {
     // Coulomb friction: the friction impulse accumulates on the two tangents and its length
     // stays within μ times the normal impulse (the friction cone as a circle)
     for (ContactBlock::Point& p : c.points) {
+      ahead.ahead(10);
       const Lane limit = c.friction * p.normal_impulse;
       const V3 dv = pair.relative_velocity(p);
       const Lane old0 = p.tangent_impulse[0], old1 = p.tangent_impulse[1];
@@ -553,7 +574,7 @@ void ContactPipeline::restitution() {
   const Lane threshold = splat(float(-settings_.restitution_threshold));
   const Lane zero = splat(0.0f);
   for (int iteration = 0; iteration < settings_.restitution_iterations; ++iteration)
-    for_each_block([&](ContactBlock& c) {
+    for_each_block([&](ContactBlock& c, Prefetch&) {
       if (!simd::any_of(c.restitution > zero)) return;
       LanePair pair(bodies_, c);
       const V3 n = load3(c.normal);

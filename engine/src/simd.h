@@ -279,6 +279,22 @@ V gather(const LaneOf<V>* base, MaskOf<V> index) {
   return r;
 }
 
+// base[index[i]] = value[i] where lane i of `where` is set: the scatter instruction where the
+// build has one for the pack, else lane by lane (the same stores either way; two set lanes with
+// one index store in lane order)
+template <typename V>
+void scatter(LaneOf<V>* base, MaskOf<V> index, V value, MaskOf<V> where) {
+#if defined(RTP_SIMD_VECTORS) && defined(__AVX512F__)
+  if constexpr (std::is_same_v<V, Pack<float, 16>>) {
+    const __mmask16 k = _mm512_cmpneq_epi32_mask((__m512i)where, _mm512_setzero_si512());
+    _mm512_mask_i32scatter_ps(base, k, (__m512i)index, value, 4);
+    return;
+  }
+#endif
+  for (std::size_t i = 0; i < kLanesOf<V>; ++i)
+    if (where[i]) base[index[i]] = value[i];
+}
+
 // lanes rearranged: lane i of the result is lane I_i of x
 template <std::size_t... I, typename V>
 V shuffle(V x) {
