@@ -94,6 +94,11 @@ class ContactPipeline {
   void solve(double h, bool bias, bool backwards = false);
   void solve_seed(double dt);
   void restitution();
+  // continuous collision: each body that moved further this step than its speculative contacts
+  // reach is swept from its start pose to its end against the static shapes, and stopped where it
+  // first comes within the speculative distance of one (its velocity kept: the next step's
+  // contact meets it). Returns the bodies stopped.
+  std::size_t sweep_fast_bodies(std::span<BodyState> states);
   // the accumulated impulses back into the contacts, for the next step's warm start
   void store_impulses();
 
@@ -118,6 +123,13 @@ class ContactPipeline {
   std::vector<BodyId> proxy_body_;     // proxy id → body
   std::vector<BodyId> planes_;
   std::vector<BodyId> dynamic_shaped_;  // bodies that meet the planes
+  std::vector<BodyId> static_shaped_;   // what a fast body is swept against
+  struct FastBody {
+    BodyId id;
+    Vec3 position;  // at the step's start
+    Quat orientation;
+  };
+  std::vector<FastBody> fast_;  // this step's bodies that move beyond their bounds' growth
   std::vector<std::uint64_t> candidates_;  // pair keys, sorted
   std::vector<ContactConstraint> contacts_, previous_;
   // contacts by colour (graph colouring, as Box2D v3's constraint graph): no two contacts of a

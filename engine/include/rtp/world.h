@@ -160,11 +160,13 @@ struct StepProfile {
   double integrate_positions = 0.0;
   double relax = 0.0;         // velocity iterations without bias
   double restitution = 0.0;
+  double continuous = 0.0;  // fast bodies swept against the static shapes
   double total = 0.0;
   std::size_t contact_pairs = 0;   // touching manifolds this step
   std::size_t contact_points = 0;
   std::size_t matched_points = 0;  // points that carried last step's impulses
   std::size_t reused_pairs = 0;    // candidate pairs the pair cache found still apart
+  std::size_t swept_stops = 0;     // fast bodies the continuous stage stopped short
 };
 
 class ContactPipeline;
