@@ -189,8 +189,11 @@ class BoxPruning final : public ProxyStore {
   static void sort_keyed(std::vector<Keyed>& keyed) {
     boost::sort::spreadsort::float_sort(
         keyed.begin(), keyed.end(),
+        // the key's bits widened to 64: spreadsort sizes its bins in the shift's type, and a
+        // range of float bit patterns from a negative to a positive key overflows 32 bits
         [](const Keyed& k, unsigned offset) {
-          return boost::sort::spreadsort::float_mem_cast<float, int>(k.key) >> offset;
+          return std::int64_t{boost::sort::spreadsort::float_mem_cast<float, std::int32_t>(k.key)} >>
+                 offset;
         },
         [](const Keyed& a, const Keyed& b) { return a.key < b.key; });
   }
