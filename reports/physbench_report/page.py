@@ -18,7 +18,7 @@ from .scenarios import scenario_sections
 from .settings import engine_settings
 from .stability import stability_maps
 from .style import learn_styles
-from .table import results_table
+from .table import results_table, table_script
 
 
 TEMPLATES = jinja2.Environment(loader=jinja2.PackageLoader("physbench_report", "templates"), autoescape=True)
@@ -41,7 +41,7 @@ def build_report(folder: Path, compare_with: Path | None = None) -> Path:
     nominal = results[[is_nominal(meta, r) for _, r in results.iterrows()]]
     page = TEMPLATES.get_template("page.html.j2").render(
         meta=meta, plotlyjs=plotly.offline.get_plotlyjs(), comparison=comparison, glance=glance,
-        table=results_table(results, meta), scenarios=scenarios, verdicts=verdict_table(nominal),
+        table=results_table(results, meta), tablejs=table_script(), scenarios=scenarios, verdicts=verdict_table(nominal),
         drift_cost=drift_cost_views(nominal), contact_views=CONTACT_VIEWS, contacts=contacts,
         families=stability_maps(results, meta), scaling=scaling_charts(results, meta, benchmark, contacts),
         benchmark=benchmark, narrowphase=narrowphase_benchmark(folder), broadphase=broadphase_benchmark(folder),

@@ -13,7 +13,7 @@ import pytest
 
 from support import PHYSBENCH, physbench_run
 import build_report  # noqa: E402  (found through support's path)
-from physbench_report import benchmarks, contacts, speed, table  # noqa: E402
+from physbench_report import benchmarks, contacts, load, speed, table  # noqa: E402
 
 
 @pytest.fixture(scope="module")
@@ -65,6 +65,23 @@ def test_unsupported_rows_show_their_reason(results):
     page = build_report.build_report(results).read_text()
     for message in unsupported["message"]:
         assert html.escape(message) in page
+
+
+def test_full_table_has_every_run_at_its_own_step_with_values_to_sort_by(results):
+    frame, meta = load.load_results(results)
+    full = table.results_table(frame, meta)
+    own = pd.read_csv(results / "results.csv")
+    own = own[(own["dt"] - 1 / 60).abs() < 1e-9]  # --sweep-hz 30,60,120: the scenes' own step is 1/60
+    assert [(r["engine"], r["status"]) for r in full["rows"]] == list(zip(own["engine"], own["status"]))
+    assert set(full["engines"]) == set(own["engine"]) and set(full["statuses"]) == set(own["status"])
+    # each number cell sorts by its full value, not its rounded text; an empty cell by nothing
+    steps = full["columns"].index("steps/s (median)")
+    for row, (_, expected) in zip(full["rows"], own.iterrows()):
+        text, value = row["numbers"][steps]
+        if pd.isna(expected["steps_per_s"]):
+            assert (text, value) == ("", "")
+        else:
+            assert float(value) == expected["steps_per_s"] and text == build_report.fmt(expected["steps_per_s"])
 
 
 def test_missing_results_is_a_clear_error(tmp_path):
@@ -416,7 +433,7 @@ def test_a_failed_reference_is_shown_on_its_rows_and_its_section(tmp_path):
     assert row["reference_status"] == "error"
     assert table.reference_failed(row) == "error"
     page = build_report.build_report(out).read_text()
-    summary = page.split("<h2>Summary</h2>")[1].split("</table>")[0]
+    summary = page.split("<h2>All results</h2>")[1].split("</table>")[0]
     assert re.search(r'<td class="l ok">ok<br><span class="error">reference error</span></td>', summary)
     section = page.split("<h2>capped</h2>")[1]
     assert "the reference at dt 0.001 s did not run" in section
