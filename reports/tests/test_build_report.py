@@ -36,8 +36,13 @@ def test_report_is_self_contained_and_names_every_row(results):
         assert f"<h2>{scenario}</h2>" in page
 
 
-def test_every_scenario_has_error_and_throughput_charts(results):
+def test_every_scenario_has_error_and_throughput_charts(results, monkeypatch):
+    # each trajectory is read once, however many of its scenario's charts draw from it
+    reads, read_csv = [], pd.read_csv
+    monkeypatch.setattr(pd, "read_csv", lambda path, *args, **kwargs: reads.append(Path(path)) or read_csv(path, *args, **kwargs))
     page = build_report.build_report(results).read_text()
+    trajectories = [path for path in reads if path.parent.name == "trajectories"]
+    assert trajectories and len(trajectories) == len(set(trajectories))
     # each scenario's section carries its anchor (the front page's contents link to it)
     sections = [s.split("</section>")[0] for s in page.split('<section id="s-')[1:]]
     assert len(sections) == 3

@@ -7,7 +7,7 @@
 // full results table: linked from the front page, scrolling sideways in its own box, not the
 // page; a click on a number column's header puts its least value first, a second click its
 // largest, empty cells last both times; a click on a text column's header orders the rows by it;
-// the text and engine filters show exactly the rows that match.
+// the text, engine and status filters show exactly the rows that match.
 // Screenshots go to PHYSBENCH_ARTIFACTS (viewer.png, viewer-tumbling-box.png, viewer-contacts.png).
 //
 //   node reports/viewer/tests/report_browser.mjs            (CTest sets the environment)
@@ -112,9 +112,16 @@ async function tableChecks(page) {
     `and engine ${engine}: ${both.length} rows (${shown.length} shown)`);
   const count = await page.locator('#results-controls .table-count').textContent();
   check(count === `${both.length} of ${all.length} runs shown`, `the count says "${count}"`);
-  // cleared, every row is back
+  // cleared, every row is back; then the status filter alone: the rarest status's rows exactly
   await page.locator('#results-controls input[type=search]').fill('');
   await page.locator('#results-controls select[name=engine]').selectOption('');
+  const statuses = await page.evaluate(() => [...document.querySelectorAll('#results-table tbody tr')].map((tr) => tr.dataset.status));
+  const rarest = [...new Set(statuses)].sort((a, b) => statuses.filter((s) => s === a).length - statuses.filter((s) => s === b).length)[0];
+  await page.locator('#results-controls select[name=status]').selectOption(rarest);
+  const byStatus = await page.evaluate(() => [...document.querySelectorAll('#results-table tbody tr')].filter((tr) => !tr.hidden).map((tr) => tr.dataset.status));
+  const wanted = statuses.filter((s) => s === rarest).length;
+  check(byStatus.length === wanted && byStatus.every((s) => s === rarest), `status ${rarest}: ${wanted} rows (${byStatus.length} shown)`);
+  await page.locator('#results-controls select[name=status]').selectOption('');
   check((await tableRows(page)).length === all.length, 'clearing the filters shows every row again');
   console.log(`table checks: ${Date.now() - started} ms`);
 }
