@@ -13,8 +13,7 @@ GLANCE_METRICS = [("position_err_max", "position error"), ("orientation_err_max"
                   ("apex_rel_err_max", "apex error"), ("slide_accel_rel_err", "slide acceleration error"),
                   ("exchange_err", "velocity exchange error"), ("stack_drift_max", "stack drift"),
                   ("penetration_max", "deepest penetration"), ("energy_drift_max", "energy drift")]
-
-
+# a failed run's status in words
 FAILED = {"exploded": "exploded", "crashed": "crashed", "timeout": "timed out", "error": "failed",
           "diverged": "diverged"}
 

@@ -20,7 +20,7 @@ from .stability import stability_maps
 from .style import learn_styles
 from .table import results_table, table_script
 
-
+# the page and its sections (templates/*.html.j2, report.css), escaped unless marked safe
 TEMPLATES = jinja2.Environment(loader=jinja2.PackageLoader("physbench_report", "templates"), autoescape=True)
 
 
@@ -39,12 +39,14 @@ def build_report(folder: Path, compare_with: Path | None = None) -> Path:
     benchmark = particle_benchmark(folder)
     contacts = contacts_benchmark(folder)
     nominal = results[[is_nominal(meta, r) for _, r in results.iterrows()]]
+    # in page order
     page = TEMPLATES.get_template("page.html.j2").render(
         meta=meta, plotlyjs=plotly.offline.get_plotlyjs(), comparison=comparison, glance=glance,
-        table=results_table(results, meta), tablejs=table_script(), scenarios=scenarios, verdicts=verdict_table(nominal),
-        drift_cost=drift_cost_views(nominal), contact_views=CONTACT_VIEWS, contacts=contacts,
-        families=stability_maps(results, meta), scaling=scaling_charts(results, meta, benchmark, contacts),
-        benchmark=benchmark, narrowphase=narrowphase_benchmark(folder), broadphase=broadphase_benchmark(folder),
+        table=results_table(results, meta), tablejs=table_script(), scenarios=scenarios,
+        verdicts=verdict_table(nominal), drift_cost=drift_cost_views(nominal), contact_views=CONTACT_VIEWS,
+        contacts=contacts, families=stability_maps(results, meta),
+        scaling=scaling_charts(results, meta, benchmark, contacts), benchmark=benchmark,
+        narrowphase=narrowphase_benchmark(folder), broadphase=broadphase_benchmark(folder),
         engines=engine_settings(meta), viewerjs=replay.viewer_script(),
         has_replays=any(r["json"] for r in replays.values()))
     out = folder / "index.html"

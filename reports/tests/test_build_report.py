@@ -39,7 +39,11 @@ def test_report_is_self_contained_and_names_every_row(results):
 def test_every_scenario_has_error_and_throughput_charts(results, monkeypatch):
     # each trajectory is read once, however many of its scenario's charts draw from it
     reads, read_csv = [], pd.read_csv
-    monkeypatch.setattr(pd, "read_csv", lambda path, *args, **kwargs: reads.append(Path(path)) or read_csv(path, *args, **kwargs))
+
+    def counted(path, *args, **kwargs):
+        reads.append(Path(path))
+        return read_csv(path, *args, **kwargs)
+    monkeypatch.setattr(pd, "read_csv", counted)
     page = build_report.build_report(results).read_text()
     trajectories = [path for path in reads if path.parent.name == "trajectories"]
     assert trajectories and len(trajectories) == len(set(trajectories))
