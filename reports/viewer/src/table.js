@@ -3,8 +3,8 @@
 // the filters, a text box and a select each for engine and status.
 //
 // A numeric cell carries its value in data-sort (the text is rounded, "1.2e+05"); an empty cell
-// has none and stays below every value in either direction, since an empty cell says the run had
-// no such measurement, not that it measured nothing.
+// an empty data-sort, and it stays below every value in either direction: the run had no such
+// measurement, which is not a measurement of nothing.
 import Tablesort from 'tablesort';
 
 // tablesort sorts descending with the method's comparison and reverses it for ascending; the
