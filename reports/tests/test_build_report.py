@@ -1,6 +1,7 @@
 """The report builder on a real results folder written by physbench."""
 from __future__ import annotations
 
+import html
 import json
 import re
 import shutil
@@ -12,6 +13,7 @@ import pytest
 
 from support import PHYSBENCH, physbench_run
 import build_report  # noqa: E402  (found through support's path)
+from physbench_report import benchmarks, contacts, load, speed, table  # noqa: E402
 
 
 @pytest.fixture(scope="module")
@@ -34,8 +36,17 @@ def test_report_is_self_contained_and_names_every_row(results):
         assert f"<h2>{scenario}</h2>" in page
 
 
-def test_every_scenario_has_error_and_throughput_charts(results):
+def test_every_scenario_has_error_and_throughput_charts(results, monkeypatch):
+    # each trajectory is read once, however many of its scenario's charts draw from it
+    reads, read_csv = [], pd.read_csv
+
+    def counted(path, *args, **kwargs):
+        reads.append(Path(path))
+        return read_csv(path, *args, **kwargs)
+    monkeypatch.setattr(pd, "read_csv", counted)
     page = build_report.build_report(results).read_text()
+    trajectories = [path for path in reads if path.parent.name == "trajectories"]
+    assert trajectories and len(trajectories) == len(set(trajectories))
     # each scenario's section carries its anchor (the front page's contents link to it)
     sections = [s.split("</section>")[0] for s in page.split('<section id="s-')[1:]]
     assert len(sections) == 3
@@ -62,7 +73,24 @@ def test_unsupported_rows_show_their_reason(results):
         pytest.skip("this build has no engine that refuses one of these scenes")
     page = build_report.build_report(results).read_text()
     for message in unsupported["message"]:
-        assert build_report.html.escape(message) in page
+        assert html.escape(message) in page
+
+
+def test_full_table_has_every_run_at_its_own_step_with_values_to_sort_by(results):
+    frame, meta = load.load_results(results)
+    full = table.results_table(frame, meta)
+    own = pd.read_csv(results / "results.csv")
+    own = own[(own["dt"] - 1 / 60).abs() < 1e-9]  # --sweep-hz 30,60,120: the scenes' own step is 1/60
+    assert [(r["engine"], r["status"]) for r in full["rows"]] == list(zip(own["engine"], own["status"]))
+    assert set(full["engines"]) == set(own["engine"]) and set(full["statuses"]) == set(own["status"])
+    # each number cell sorts by its full value, not its rounded text; an empty cell by nothing
+    steps = full["columns"].index("steps/s (median)")
+    for row, (_, expected) in zip(full["rows"], own.iterrows()):
+        text, value = row["numbers"][steps]
+        if pd.isna(expected["steps_per_s"]):
+            assert (text, value) == ("", "")
+        else:
+            assert float(value) == expected["steps_per_s"] and text == build_report.fmt(expected["steps_per_s"])
 
 
 def test_missing_results_is_a_clear_error(tmp_path):
@@ -90,14 +118,14 @@ def test_swept_scenario_gets_a_pareto_front_and_measured_orders(results):
 
 def test_convergence_order_and_front_on_known_points():
     points = pd.DataFrame({"dt": [0.1, 0.05, 0.025], "err": [1.0, 1 / 16, 1 / 256]})
-    assert build_report.convergence_order(points, "err") == pytest.approx(4.0)
+    assert speed.convergence_order(points, "err") == pytest.approx(4.0)
     # fewer than three steps measure no order
-    assert build_report.convergence_order(points.iloc[:2], "err") is None
+    assert speed.convergence_order(points.iloc[:2], "err") is None
     # points at the reference's own error floor are left out of the fit
     floored = pd.DataFrame({"dt": [0.1, 0.05, 0.025, 0.0125], "err": [1.0, 1 / 16, 1 / 256, 1 / 300]})
-    assert build_report.convergence_order(floored, "err", {0.0125: 1 / 1000}) == pytest.approx(4.0)
+    assert speed.convergence_order(floored, "err", {0.0125: 1 / 1000}) == pytest.approx(4.0)
     costs = pd.DataFrame({"cost": [1.0, 2.0, 3.0, 4.0], "err": [0.5, 0.6, 0.1, 0.01]})
-    front = build_report.pareto_front(costs, "err")
+    front = speed.pareto_front(costs, "err")
     assert list(front["cost"]) == [1.0, 3.0, 4.0]  # (2.0, 0.6) is beaten by (1.0, 0.5)
 
 
@@ -210,7 +238,7 @@ def test_narrowphase_benchmark_rows_carry_time_per_pair_and_agreement(tmp_path):
                  rtp_ns=150.0, peer_ns=300.0, ratio=2.0, ratio_least_block=1.9, ratio_largest_block=2.1, blocks=8,
                  real_time=460.0, time_unit="us"),
         ]}))
-    narrow = build_report.narrowphase_benchmark(tmp_path)
+    narrow = benchmarks.narrowphase_benchmark(tmp_path)
     by_engine = {r["engine"]: r for r in narrow["rows"]}
     # 102.4 µs over 1024 pairs is 100 ns a pair; Bullet's 150 ns is 1.5 times rtp's
     assert by_engine["rtp/sat"]["ns"] == pytest.approx(100.0)
@@ -228,7 +256,7 @@ def test_narrowphase_benchmark_rows_carry_time_per_pair_and_agreement(tmp_path):
 def test_particles_at_rate_takes_the_largest_count_per_thread_count():
     rows = [dict(particles=1000, threads=1, steps=1.0e8), dict(particles=4000000, threads=1, steps=6.0e7),
             dict(particles=4000000, threads=2, steps=1.2e9)]
-    held = build_report.particles_at_rate(rows, 60.0)
+    held = benchmarks.particles_at_rate(rows, 60.0)
     assert [h["threads"] for h in held] == [1, 2]
     assert held[0]["particles"] == pytest.approx(1.0e6) and not held[0]["extrapolated"]
     assert held[1]["particles"] == pytest.approx(2.0e7) and held[1]["extrapolated"]
@@ -252,8 +280,8 @@ def test_a_malformed_benchmark_file_is_named(tmp_path):
     (tmp_path / "benchmarks").mkdir()
     (tmp_path / "benchmarks" / "broadphase.json").write_text('{"benchmarks": [')
     with pytest.raises(build_report.ReportError, match="broadphase.json: not valid JSON"):
-        build_report.broadphase_benchmark(tmp_path)
-    assert build_report.particle_benchmark(tmp_path) is None  # absent: nothing to draw
+        benchmarks.broadphase_benchmark(tmp_path)
+    assert benchmarks.particle_benchmark(tmp_path) is None  # absent: nothing to draw
 
 
 @pytest.fixture(scope="module")
@@ -279,7 +307,7 @@ def test_contact_scenes_have_their_tables(contact_results):
         assert isinstance(row["contact_verdict"], str) and row["contact_verdict"] in page
     # rtp has no contact solver yet: its rows say why, and the report shows it
     for message in table[table["status"] == "unsupported"]["message"]:
-        assert build_report.html.escape(message) in page
+        assert html.escape(message) in page
 
 
 def contact_row(engine, variant, steps_per_s, drift, status="ok", verdict="stands"):
@@ -300,7 +328,7 @@ def test_drift_against_cost_has_a_front_per_view():
         contact_row("box2d", "iterations-10", 8000, 0.02),     # 0.125 ms
         contact_row("rtp", "seed", 1e6, 1e-9),                 # in neither view: must not win one
     ])
-    (section,) = build_report.drift_cost_views(rows)
+    (section,) = contacts.drift_cost_views(rows)
     fronts = {f["view"]: [m.split(" (")[0] for m in f["members"]] for f in section["fronts"]}
     assert fronts["each engine's defaults"] == ["box2d/default", "rtp/soft-step", "bullet/float"]
     assert fronts["equal iterations (10)"] == ["box2d/iterations-10", "bullet/float"]
@@ -313,7 +341,7 @@ def test_drift_against_cost_has_a_front_per_view():
 
 def test_a_scene_without_drift_has_no_drift_chart():
     rows = pd.DataFrame([dict(contact_row("rtp", "soft-step", 1000, 1e-3), stack_drift_max=float("nan"))])
-    assert build_report.drift_cost_views(rows) == []
+    assert contacts.drift_cost_views(rows) == []
 
 
 def contacts_json(runs):
@@ -335,7 +363,7 @@ def test_contacts_benchmark_rows_speedups_and_shares(tmp_path):
     (tmp_path / "benchmarks").mkdir()
     (tmp_path / "benchmarks" / "contacts.json").write_text(contacts_json([
         pyramid_run(10, 1, 2.0), pyramid_run(10, 2, 1.6), pyramid_run(20, 1, 8.0)]))
-    bench = build_report.contacts_benchmark(tmp_path)
+    bench = benchmarks.contacts_benchmark(tmp_path)
     assert [(r["base"], r["threads"], r["bodies"]) for r in bench["rows"]] == [(10, 1, 55), (10, 2, 55), (20, 1, 210)]
     assert bench["rows"][1]["speedup"] == pytest.approx(1.25)
     assert bench["rows"][0]["speedup"] is None and bench["rows"][2]["speedup"] is None
@@ -349,7 +377,7 @@ def test_a_contacts_benchmark_without_its_counters_is_named(tmp_path):
     del broken["ms_per_step"]
     (tmp_path / "benchmarks" / "contacts.json").write_text(contacts_json([broken]))
     with pytest.raises(build_report.ReportError, match=r"contacts.json: benchmark 'Pyramid/base:10.*ms_per_step"):
-        build_report.contacts_benchmark(tmp_path)
+        benchmarks.contacts_benchmark(tmp_path)
 
 
 def test_pyramid_series_draws_cost_against_bodies_with_the_benchmark(tmp_path):
@@ -390,7 +418,7 @@ def test_rain_verdicts_are_coloured_by_what_they_mean():
         dict(scenario="rain", label="ode/quickstep", status="ok", contact_verdict="unsettled", penetration_max=0.2),
         dict(scenario="rain", label="mujoco/euler", status="error", contact_verdict=None, penetration_max=None),
     ])
-    table = build_report.verdict_table(rows)
+    table = contacts.verdict_table(rows)
     assert table["scenarios"] == ["rain"]
     cells = {r["label"]: r["cells"][0] for r in table["rows"]}
     assert cells == {"rtp/soft-step": ("contained", "stable"), "bullet/float": ("escaped", "unstable"),
@@ -412,16 +440,16 @@ def test_a_failed_reference_is_shown_on_its_rows_and_its_section(tmp_path):
                     "--budget", "0", "--out", str(out)], check=True, capture_output=True)
     (row,) = pd.read_csv(out / "results.csv").to_dict("records")
     assert row["reference_status"] == "error"
-    assert build_report.reference_failed(row) == "error"
+    assert table.reference_failed(row) == "error"
     page = build_report.build_report(out).read_text()
-    summary = page.split("<h2>Summary</h2>")[1].split("</table>")[0]
+    summary = page.split("<h2>All results</h2>")[1].split("</table>")[0]
     assert re.search(r'<td class="l ok">ok<br><span class="error">reference error</span></td>', summary)
     section = page.split("<h2>capped</h2>")[1]
     assert "the reference at dt 0.001 s did not run" in section
     assert "over the cap" in section
     # a row whose reference ran carries no such note
-    assert build_report.reference_failed({"reference_status": "ok"}) == ""
-    assert build_report.reference_failed({"reference_status": float("nan")}) == ""
+    assert table.reference_failed({"reference_status": "ok"}) == ""
+    assert table.reference_failed({"reference_status": float("nan")}) == ""
 
 
 def sweep_row(variant, dt, status, error, steps_per_s=1e5):
@@ -441,8 +469,8 @@ def test_speed_against_error_leaves_out_diverged_rows_as_it_does_exploded_ones(m
         sweep_row("midpoint", 1 / 120, "ok", 2e-3),
         sweep_row("euler", 1 / 30, "exploded", 1e9), sweep_row("euler", 1 / 60, "ok", 0.2),
     ])
-    monkeypatch.setattr(build_report, "figure_html", lambda fig: fig)  # the figure, not its HTML
-    fig, front = build_report.speed_error(rows)
+    monkeypatch.setattr(speed, "figure_html", lambda fig: fig)  # the figure, not its HTML
+    fig, front = speed.speed_error(rows)
     curves = {trace.name.split(" (")[0]: list(trace.y) for trace in fig.data if trace.name != "Pareto front"}
     assert curves == {"rtp/rk4": [1e-3, 6e-5, 4e-6], "rtp/midpoint": [1e-2, 2e-3], "rtp/euler": [0.2]}
     # the diverged point is the cheapest of all: were it plotted, it would open the front

@@ -217,7 +217,7 @@ def test_the_report_opens_with_what_changed_since_an_earlier_run(tmp_path):
         writer.writeheader()
         writer.writerows(rows)
     page = build_report.build_report(new, old).read_text()
-    section = page[page.index("<section id=\"compare\">"):page.index("<h2>Summary</h2>")]
+    section = page[page.index("<section id=\"compare\">"):page.index('<section id="results">')]
     assert "1 regression(s)" in section
     assert "less accurate" in section and "tumbling-box" in section and "rtp/rk4" in section
     # without --compare there is no such section, and the same run against itself has no change
@@ -276,7 +276,7 @@ def test_the_front_page_names_the_fastest_the_most_accurate_and_the_failures(tmp
                         "--variant", "rk4,euler,midpoint,abort", "--timeout", "20")
     # --budget 0 times one pass: enough to rank, and the page must rank as the file says
     page = build_report.build_report(run).read_text()
-    glance = page[page.index('<section id="glance">'):page.index("<h2>Summary</h2>")]
+    glance = page[page.index('<section id="glance">'):page.index('<section id="results">')]
     rows = [r for r in rows_of(run) if r["scenario"] == "tumbling-box" and r["status"] == "ok"
             and abs(float(r["dt"]) - 1 / 60) < 1e-9]
     fastest = max(rows, key=lambda r: float(r["steps_per_s"]))

@@ -13,7 +13,7 @@ import pytest
 
 from support import physbench_run
 import build_report  # noqa: E402  (found through support's path)
-import replay  # noqa: E402
+from physbench_report import replay  # noqa: E402
 
 
 @pytest.fixture(scope="module")

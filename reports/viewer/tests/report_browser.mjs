@@ -3,7 +3,11 @@
 // failed request. The replay viewer: every replay started; two engines' viewports draw bodies
 // (coloured pixels read back from the canvas); the decoded poses match the scene file; moving the
 // slider changes each engine's picture; on the tower, the contact points toggle on and off (their
-// dark rings appear and go) and colouring by penetration paints each body by its own depth.
+// dark rings appear and go) and colouring by penetration paints each body by its own depth. The
+// full results table: linked from the front page, scrolling sideways in its own box, not the
+// page; a click on a number column's header puts its least value first, a second click its
+// largest, empty cells last both times; a click on a text column's header orders the rows by it;
+// the text, engine and status filters show exactly the rows that match.
 // Screenshots go to PHYSBENCH_ARTIFACTS (viewer.png, viewer-tumbling-box.png, viewer-contacts.png).
 //
 //   node reports/viewer/tests/report_browser.mjs            (CTest sets the environment)
@@ -42,6 +46,84 @@ export async function openReport(browser, page_path) {
   if (await page.locator('.replay[data-replay]').count())
     await page.waitForFunction(() => window.physbenchReplaysReady === true, null, { timeout: 60000 });
   return { page, errors };
+}
+
+// ---- the full results table: sorting and filters ------------------------------------------
+
+// each body row's cells as [text, data-sort or null], visible rows only unless all
+async function tableRows(page, all = false) {
+  return page.evaluate((all) => [...document.querySelectorAll('#results-table tbody tr')]
+    .filter((tr) => all || !tr.hidden)
+    .map((tr) => ({ engine: tr.dataset.engine, text: tr.textContent.toLowerCase(),
+      cells: [...tr.cells].map((td) => [td.textContent, td.getAttribute('data-sort')]) })), all);
+}
+
+async function tableChecks(page) {
+  const started = Date.now();
+  const table = page.locator('#results-table');
+  check(await table.count() === 1, 'the page has the full results table');
+  if (!await table.count()) return;
+  check(await page.locator('#glance a[href="#results"]').count() > 0, 'the front page links to the full table');
+  const widths = await page.evaluate(() => {
+    const box = document.querySelector('#results-table').parentElement;
+    return { box: box.clientWidth, table: box.scrollWidth, page: document.documentElement.scrollWidth, window: window.innerWidth };
+  });
+  check(widths.page <= widths.window,
+    `the table scrolls in its box, not the page (table ${widths.table} px in a ${widths.box} px box, page ${widths.page} px)`);
+  check(await page.locator('#results-controls').isVisible(), 'the table\'s filters are shown (its script ran)');
+  const headers = await table.locator('thead th').allTextContents();
+  const all = await tableRows(page, true);
+
+  // a number column: least value first, then largest, empty cells last both times
+  const column = headers.indexOf('steps/s (median)');
+  const values = all.map((r) => r.cells[column][1]).filter((v) => v !== null && v !== '').map(Number);
+  const [least, largest] = [Math.min(...values), Math.max(...values)];
+  const header = table.locator('thead th').nth(column);
+  for (const [order, want] of [['ascending', least], ['descending', largest]]) {
+    await header.click();
+    const rows = await tableRows(page, true);
+    const sorted = rows.map((r) => r.cells[column][1]);
+    const filled = sorted.filter((v) => v !== '').map(Number);
+    const inOrder = filled.every((v, i) => i === 0 || (order === 'ascending' ? v >= filled[i - 1] : v <= filled[i - 1]));
+    const emptiesLast = sorted.slice(filled.length).every((v) => v === '');
+    check(Number(sorted[0]) === want && inOrder && emptiesLast,
+      `steps/s ${order}: first row ${rows[0].cells[column][0]} (want ${want.toPrecision(3)}), in order, empty cells last`);
+  }
+  // a text column: engine/variant in alphabetical order
+  const labels = headers.indexOf('engine/variant');
+  await table.locator('thead th').nth(labels).click();
+  const byLabel = (await tableRows(page, true)).map((r) => r.cells[labels][0]);
+  // as tablesort compares text: lower case, by code unit
+  const alphabetical = [...byLabel].sort((a, b) => (a.toLowerCase() < b.toLowerCase() ? -1 : a.toLowerCase() > b.toLowerCase() ? 1 : 0));
+  check(byLabel.join('|') === alphabetical.join('|'), `sorting by engine/variant orders the rows (first ${byLabel[0]})`);
+
+  // the text filter, then the engine filter on top of it: exactly the rows that match
+  const word = all[0].cells[0][0].toLowerCase();  // a scenario's name
+  await page.locator('#results-controls input[type=search]').fill(word);
+  let shown = await tableRows(page);
+  const matching = all.filter((r) => r.text.includes(word));
+  check(shown.length === matching.length && shown.length < all.length && shown.every((r) => r.text.includes(word)),
+    `filtering by "${word}" shows its ${matching.length} of ${all.length} rows (${shown.length} shown)`);
+  const engine = all[0].engine;
+  await page.locator('#results-controls select[name=engine]').selectOption(engine);
+  shown = await tableRows(page);
+  const both = matching.filter((r) => r.engine === engine);
+  check(shown.length === both.length && shown.every((r) => r.engine === engine),
+    `and engine ${engine}: ${both.length} rows (${shown.length} shown)`);
+  const count = await page.locator('#results-controls .table-count').textContent();
+  check(count === `${both.length} of ${all.length} runs shown`, `the count says "${count}"`);
+  // cleared, every row is back; then the status filter alone: the rarest status's rows exactly
+  await page.locator('#results-controls input[type=search]').fill('');
+  await page.locator('#results-controls select[name=engine]').selectOption('');
+  const statuses = await page.evaluate(() => [...document.querySelectorAll('#results-table tbody tr')].map((tr) => tr.dataset.status));
+  const rarest = [...new Set(statuses)].sort((a, b) => statuses.filter((s) => s === a).length - statuses.filter((s) => s === b).length)[0];
+  await page.locator('#results-controls select[name=status]').selectOption(rarest);
+  const byStatus = await page.evaluate(() => [...document.querySelectorAll('#results-table tbody tr')].filter((tr) => !tr.hidden).map((tr) => tr.dataset.status));
+  const wanted = statuses.filter((s) => s === rarest).length;
+  check(byStatus.length === wanted && byStatus.every((s) => s === rarest), `status ${rarest}: ${wanted} rows (${byStatus.length} shown)`);
+  await page.locator('#results-controls select[name=status]').selectOption('');
+  check((await tableRows(page)).length === all.length, 'clearing the filters shows every row again');
+  console.log(`table checks: ${Date.now() - started} ms`);
 }
 
 // ---- the viewer: pixels of one engine's viewport -------------------------------------------
@@ -233,8 +315,9 @@ async function main() {
       return [divs.length, divs.filter((d) => d.querySelector('svg.main-svg') && d.querySelector('.trace')).length];
     });
     check(drawn === plots, `every chart drew (${drawn} of ${plots})`);
+    await tableChecks(page);
     if (results) await viewerChecks(page, results);
-    check(errors.length === 0, `no error while the viewer was driven${errors.length ? ':\n  ' + errors.join('\n  ') : ''}`);
+    check(errors.length === 0, `no error while the table and the viewer were driven${errors.length ? ':\n  ' + errors.join('\n  ') : ''}`);
   } finally {
     await browser.close();
     if (scratch && !failures) rmSync(scratch, { recursive: true, force: true });

@@ -31,7 +31,7 @@ CONTACT_FLOATS = 4  # x y z depth
 SECTION_CONTACTS = 1  # the header's sections bit: contact sections follow the poses
 MAGIC = b"PBPOSES2"
 MAGIC_1 = b"PBPOSES1"  # before contacts: a 24-byte header and poses only (still read)
-VIEWER_JS = Path(__file__).resolve().parent / "viewer" / "dist" / "viewer.js"
+VIEWER_JS = Path(__file__).resolve().parents[1] / "viewer" / "dist" / "viewer.js"
 
 
 class PoseFileError(Exception):

@@ -1,0 +1,133 @@
+"""The contact views: each contact scenario's table, the verdicts of every engine on every contact
+scenario, and the stacks' drift against cost at each engine's defaults and at equal iterations
+(docs/metrics.md, "Contact reports")."""
+from __future__ import annotations
+
+import pandas as pd
+import plotly.graph_objects as go
+from plotly.subplots import make_subplots
+
+from .speed import pareto_front
+from .style import figure_html, fmt, hue
+
+# the contact table of a contact scenario: results.csv column, heading (docs/metrics.md, "Contact")
+CONTACT_COLUMNS = [
+    ("contact_verdict", "verdict"), ("stack_drift_max", "drift max (m)"), ("top_height_change", "top height change (m)"),
+    ("penetration_max", "penetration max (m)"), ("penetration_final", "penetration final (m)"),
+    ("energy_added_max", "energy added max (J)"), ("speed_max", "speed max (m/s)"),
+    ("rest_speed_rms", "RMS speed, last second (m/s)"), ("apex_rel_err", "apex errors (relative)"),
+    ("slide_distance", "slide (m)"), ("slide_accel", "slide a (m/s²)"), ("slide_accel_expected", "closed form a"),
+    ("exchange_err", "exchange error"), ("tunnelled", "tunnelled"), ("escaped", "escaped bodies"),
+]
+# verdicts that answer a contact scene's question badly (reports colour them)
+FAILED_VERDICTS = {"collapsed", "sinks", "drifts", "settles", "tumbled", "no bounce", "tunnelled", "stuck",
+                   "exploded", "slides, should stay", "stays, should slide", "escaped", "unsettled"}
+
+# the two views of drift against cost (docs/engines.md, "Contacts"): each engine at its own
+# defaults, and each at 10 velocity iterations or the nearest it has (Bullet's and Jolt's defaults
+# are 10; rtp's soft step has no iteration count, so its 10-iteration solver stands for it there)
+CONTACT_VIEWS = {
+    "each engine's defaults": {"rtp": "soft-step", "bullet": "float", "ode": "quickstep", "box2d": "default",
+                               "mujoco": "euler", "mujoco-2.2": "euler", "box2d-v3": "default",
+                               "rapier": "default", "jolt": "default"},
+    "equal iterations (10)": {"rtp": "sequential-impulse", "bullet": "float", "ode": "quickstep-10",
+                              "box2d": "iterations-10", "mujoco": "pgs-10", "mujoco-2.2": "pgs-10",
+                              "box2d-v3": "iterations-10", "rapier": "iterations-10", "jolt": "default"},
+}
+# drift below this is drawn at it (a log axis has no zero)
+DRIFT_FLOOR = 1e-6
+
+
+def has_contact_metrics(rows: pd.DataFrame) -> bool:
+    """Whether these rows come from a contact scene (they carry a penetration or drift column)."""
+    return any(c in rows and rows[c].notna().any() for c in ("penetration_max", "stack_drift_max"))
+
+
+def contact_table(rows: pd.DataFrame) -> list[dict]:
+    """One row per engine/variant of a contact scenario: its verdict, the contact metrics it has
+    and ms per step; the columns no row fills are left out."""
+    if not has_contact_metrics(rows):
+        return []
+    present = [(c, t) for c, t in CONTACT_COLUMNS if c in rows and rows[c].notna().any()]
+    table = []
+    for _, r in rows.iterrows():
+        ms = 1e3 / r["steps_per_s"] if pd.notna(r.get("steps_per_s")) and r["steps_per_s"] > 0 else None
+        verdict = r.get("contact_verdict")
+        table.append(dict(label=r["label"], status=r["status"], ms=fmt(ms),
+                          failed=isinstance(verdict, str) and verdict in FAILED_VERDICTS,
+                          cells=[fmt(r.get(c)) for c, _ in present]))
+    return [dict(headings=[t for _, t in present], rows=table)]
+
+
+def verdict_table(results: pd.DataFrame) -> dict | None:
+    """Every contact scenario at its own step against every engine/variant: the verdict (stands,
+    drifts, collapsed, tunnelled, …), or the status when the run did not give one."""
+    contact = [name for name, rows in results.groupby("scenario", sort=False) if has_contact_metrics(rows)]
+    if not contact:
+        return None
+    rows = []
+    for label in results[results["scenario"].isin(contact)]["label"].unique():
+        cells = []
+        for name in contact:
+            hit = results[(results["scenario"] == name) & (results["label"] == label)]
+            if hit.empty:
+                cells.append(("", ""))
+                continue
+            row = hit.iloc[0]
+            verdict = row.get("contact_verdict")
+            text = verdict if isinstance(verdict, str) and verdict else ("ok" if row["status"] == "ok" else row["status"])
+            css = "unstable" if text in FAILED_VERDICTS or row["status"] in ("error", "crashed", "timeout") else (
+                "stable" if text in ("stands", "stays", "slides", "stopped", "contained", "ok") else "")
+            cells.append((text, css))
+        rows.append(dict(label=label, cells=cells))
+    return dict(scenarios=contact, rows=rows)
+
+
+def drift_cost_views(results: pd.DataFrame) -> list[dict]:
+    """Per stack scenario (one with a drift column), max drift against ms per step in the two
+    views of CONTACT_VIEWS side by side, one marker per engine, each view's Pareto front dashed;
+    the fronts as a list, and the engines of a view that gave no point with their status."""
+    sections = []
+    for name, rows in results.groupby("scenario", sort=False):
+        if "stack_drift_max" not in rows or rows["stack_drift_max"].isna().all():
+            continue
+        fig = make_subplots(rows=1, cols=len(CONTACT_VIEWS), subplot_titles=list(CONTACT_VIEWS),
+                            shared_yaxes=True, horizontal_spacing=0.06)
+        fronts, missing, seen = [], [], set()
+        for col, (view, chosen) in enumerate(CONTACT_VIEWS.items(), start=1):
+            picked = rows[rows.apply(lambda r: chosen.get(r["engine"]) == r["variant"], axis=1)]
+            ok = picked[(picked["status"] == "ok") & picked["steps_per_s"].notna() &
+                        picked["stack_drift_max"].notna()].copy()
+            for _, r in picked.drop(ok.index).iterrows():
+                missing.append(f"{view}: {r['label']} {r.get('contact_verdict') or r['status']}")
+            if ok.empty:
+                continue
+            ok["cost"] = 1e3 / ok["steps_per_s"]
+            ok["drift"] = ok["stack_drift_max"].clip(lower=DRIFT_FLOOR)
+            for _, r in ok.iterrows():
+                # a stack that failed its question otherwise (sank, settled) is an open marker
+                verdict = r.get("contact_verdict") if isinstance(r.get("contact_verdict"), str) else ""
+                failed = verdict in FAILED_VERDICTS
+                fig.add_trace(go.Scatter(x=[r["cost"]], y=[r["drift"]], mode="markers+text", text=[r["engine"]],
+                                         textposition="top center", name=r["label"], legendgroup=r["label"],
+                                         showlegend=r["label"] not in seen,
+                                         marker=dict(size=10, symbol="circle-open" if failed else "circle",
+                                                     color=hue(r["engine"])),
+                                         hovertemplate=f"{r['label']}: {verdict}<br>%{{x:.3g}} ms per step<br>"
+                                                       f"drift max {fmt(r['stack_drift_max'])} m<extra></extra>"),
+                              row=1, col=col)
+                seen.add(r["label"])
+            front = pareto_front(ok, "drift")
+            fig.add_trace(go.Scatter(x=front["cost"], y=front["drift"], mode="lines", showlegend=col == 1,
+                                     name="Pareto front", legendgroup="front",
+                                     line=dict(dash="dash", color="black", width=1)), row=1, col=col)
+            fronts.append(dict(view=view, members=[f"{r['label']} ({fmt(r['cost'])} ms, {fmt(r['stack_drift_max'])} m)"
+                                                   for _, r in front.iterrows()]))
+        if not fig.data:
+            continue
+        fig.update_layout(title=f"{name}: max drift against ms per step (drift under {DRIFT_FLOOR:g} m drawn at it)")
+        fig.update_xaxes(type="log", exponentformat="power", title_text="ms per step, median")
+        fig.update_yaxes(type="log", exponentformat="power")
+        fig.update_yaxes(title_text="max drift (m)", row=1, col=1)
+        sections.append(dict(scenario=name, chart=figure_html(fig), fronts=fronts, missing=missing))
+    return sections

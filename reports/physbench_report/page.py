@@ -1,0 +1,56 @@
+"""The whole page: each section's data from its module, rendered by templates/page.html.j2 (one
+template a section, included in page order) into one self-contained index.html."""
+from __future__ import annotations
+
+from pathlib import Path
+
+import jinja2
+import plotly.offline
+
+from . import replay
+from .benchmarks import broadphase_benchmark, contacts_benchmark, narrowphase_benchmark, particle_benchmark
+from .comparison import comparison_section
+from .contacts import CONTACT_VIEWS, drift_cost_views, verdict_table
+from .glance import at_a_glance
+from .load import is_nominal, load_results
+from .scaling import scaling_charts
+from .scenarios import scenario_sections
+from .settings import engine_settings
+from .stability import stability_maps
+from .style import learn_styles
+from .table import results_table, table_script
+
+# the page and its sections (templates/*.html.j2, report.css), escaped unless marked safe
+TEMPLATES = jinja2.Environment(loader=jinja2.PackageLoader("physbench_report", "templates"), autoescape=True)
+
+
+def build_report(folder: Path, compare_with: Path | None = None) -> Path:
+    """index.html in the results folder (and, with compare_with, opening with what changed since
+    that earlier run); a ReportError names what is wrong with either folder."""
+    results, meta = load_results(folder)
+    learn_styles(results)
+    comparison = comparison_section(compare_with, folder)
+    replays = replay.replays(folder, results, meta)
+    scenarios = scenario_sections(folder, results, meta, replays)
+    glance = at_a_glance(results, meta)
+    shown = {s["name"] for s in scenarios}
+    for g in glance:
+        g["linked"] = g["name"] in shown  # a family member is drawn in its family's map or chart
+    benchmark = particle_benchmark(folder)
+    contacts = contacts_benchmark(folder)
+    nominal = results[[is_nominal(meta, r) for _, r in results.iterrows()]]
+    # in page order
+    page = TEMPLATES.get_template("page.html.j2").render(
+        meta=meta, plotlyjs=plotly.offline.get_plotlyjs(), comparison=comparison, glance=glance,
+        table=results_table(results, meta), tablejs=table_script(), scenarios=scenarios,
+        verdicts=verdict_table(nominal), drift_cost=drift_cost_views(nominal), contact_views=CONTACT_VIEWS,
+        contacts=contacts, families=stability_maps(results, meta),
+        scaling=scaling_charts(results, meta, benchmark, contacts), benchmark=benchmark,
+        narrowphase=narrowphase_benchmark(folder), broadphase=broadphase_benchmark(folder),
+        engines=engine_settings(meta), viewerjs=replay.viewer_script(),
+        has_replays=any(r["json"] for r in replays.values()))
+    out = folder / "index.html"
+    partial = folder / "index.html.partial"
+    partial.write_text(page, encoding="utf-8")
+    partial.replace(out)  # never a half-written report
+    return out
