@@ -60,7 +60,7 @@ def anchor_of(name: str) -> str:
     return "s-" + "".join(c if c.isalnum() or c in "-_" else "-" for c in name)
 
 
-def figure_html(fig: go.Figure) -> str:
-    fig.update_layout(template="plotly_white", margin=dict(l=60, r=20, t=50, b=50), height=420,
+def figure_html(fig: go.Figure, height: int = 420) -> str:
+    fig.update_layout(template="plotly_white", margin=dict(l=60, r=20, t=50, b=50), height=height,
                       legend=dict(font=dict(size=11)))
     return plotly.offline.plot(fig, output_type="div", include_plotlyjs=False, config={"displaylogo": False})
