@@ -600,7 +600,12 @@ void ContactPipeline::restitution() {
 
 void ContactPipeline::store_impulses() {
   if (settings_.solver == ContactSolver::Seed || !lanes_) return;
-  for (const ContactBlock& block : lanes_->blocks)
+  // each contact is one lane of one block: the blocks write disjoint contacts
+  const std::vector<ContactBlock>& blocks = lanes_->blocks;
+  const std::size_t block_count = blocks.size();
+#pragma omp parallel for num_threads(settings_.threads) schedule(static) if (block_count >= 64)
+  for (std::size_t b = 0; b < block_count; ++b) {
+    const ContactBlock& block = blocks[b];
     for (std::size_t i = 0; i < W; ++i) {
       if (block.contact[i] == kNoContact) continue;
       ContactConstraint& c = contacts_[block.contact[i]];
@@ -610,6 +615,7 @@ void ContactPipeline::store_impulses() {
         c.points[j].tangent_impulse = {p.tangent_impulse[0][i], p.tangent_impulse[1][i]};
       }
     }
+  }
 }
 
 void ContactPipeline::solve_seed(double dt) {

@@ -353,7 +353,10 @@ void World::integrate_positions(double h) {
   // step's start is kept too, for the contacts' separations
   std::vector<SolverBody>& bodies = pipeline_->bodies();
   const std::vector<SolverMass>& masses = pipeline_->masses();
-  for (std::size_t i = 0; i < states_.size(); ++i) {
+  // each body by itself: the same result on any number of threads
+  const std::ptrdiff_t n = std::ptrdiff_t(states_.size());
+#pragma omp parallel for num_threads(contact_settings_.threads) schedule(static) if (n >= 2048)
+  for (std::ptrdiff_t i = 0; i < n; ++i) {
     if (masses[i].inverse_mass == 0.0) continue;
     SolverBody& body = bodies[i];
     BodyState& s = states_[i];
