@@ -1,0 +1,172 @@
+#include "physbench/evaluate.h"
+
+#include <algorithm>
+#include <iomanip>
+#include <optional>
+#include <sstream>
+
+namespace physbench {
+
+namespace {
+
+// a finished run whose energy in play grew by more than this fraction reads `diverged`
+constexpr double kDivergedEnergyGrowth = 1.0;
+
+double median(std::vector<double> values) {
+  if (values.empty()) return std::nan("");
+  std::sort(values.begin(), values.end());
+  const std::size_t n = values.size();
+  return n % 2 ? values[n / 2] : 0.5 * (values[n / 2 - 1] + values[n / 2]);
+}
+
+void append(std::string& message, const std::string& more) {
+  message += (message.empty() ? "" : "; ") + more;
+}
+
+// the speed columns from the timed repeats
+void put_speed(ResultRow& row, const Scene& scene, const RunResult& r, int dynamic_bodies) {
+  const double wall = median(r.wall_seconds);
+  const double steps = static_cast<double>(r.steps);
+  const auto [lo, hi] = std::minmax_element(r.wall_seconds.begin(), r.wall_seconds.end());
+  row.integer("repeats", static_cast<long long>(r.wall_seconds.size()));
+  row.number("wall_s_median", wall);
+  if (r.status == Status::Exploded) return;  // the run stopped early: its speed is not comparable
+  row.number("steps_per_s", steps / wall);
+  row.number("steps_per_s_min", steps / *hi);
+  row.number("steps_per_s_max", steps / *lo);
+  // every repeat, for `physbench compare`'s rank test (docs/regression.md), to four digits: a
+  // nightly history keeps them for years
+  std::vector<double> repeats;
+  for (double seconds : r.wall_seconds) repeats.push_back(steps / seconds);
+  row.numbers("steps_per_s_repeats", repeats, 4);
+  row.number("body_steps_per_s", steps * dynamic_bodies / wall);
+  row.number("realtime_factor", scene.duration / wall);
+}
+
+// the error metrics the scene asks for; the job's status becomes diverged when its energy more
+// than doubled
+void put_metrics(EvaluatedJob& job, const Scene& scene, const ReferenceRun& reference,
+                 std::string& message) {
+  ResultRow& row = job.row;
+  if (has_analytic_reference(scene)) {
+    job.closed_form = analytic_reference(scene, job.trajectory);
+    job.against_closed_form = true;
+  } else if (scene.reference.kind == ReferenceKind::Converged) {
+    if (reference.available)
+      job.against_run = &reference.trajectory;
+    else
+      append(message, "no position or orientation error: " + reference.failure);
+  }
+  Scene measured = scene;
+  if (!job.against()) {
+    // without a reference only the invariants can be judged
+    std::erase_if(measured.probe.metrics,
+                  [](Metric m) { return m == Metric::Position || m == Metric::Orientation; });
+  }
+  job.series = compare(measured, job.trajectory, job.against());
+  const ErrorSeries& series = job.series;
+  const ErrorSummary summary = summarise(series);
+  auto put = [&](const std::string& prefix, const std::optional<SeriesSummary>& s,
+                 bool with_rms) {
+    if (!s) return;
+    if (with_rms) row.number(prefix + "_rms", s->rms);
+    row.number(prefix + "_max", s->max);
+    row.number(prefix + "_final", s->final);
+  };
+  put("position_err", summary.position, true);
+  put("orientation_err", summary.orientation, true);
+  put("energy_drift", summary.energy, false);
+  if (summary.energy_change_final) row.number("energy_change_final", *summary.energy_change_final);
+  row.text("stability", job.status == Status::Exploded ? "exploded" : stability_of(scene, series));
+  // a finished run whose energy more than doubled is not a success to skim past; contact scenes
+  // are left out: their energy at rest is in joules, not relative
+  if (job.status == Status::Ok && !scene.has_contacts() && !series.energy_change.empty()) {
+    const double grew = *std::max_element(series.energy_change.begin(), series.energy_change.end());
+    if (!(grew <= kDivergedEnergyGrowth)) {
+      job.status = Status::Diverged;
+      std::ostringstream why;
+      why << "energy grew to " << std::setprecision(3) << 1.0 + grew
+          << " times the energy in play (over +100 %)";
+      message = why.str() + (message.empty() ? "" : "; " + message);
+    }
+  }
+  put("linear_momentum_drift", summary.linear_momentum, false);
+  put("angular_momentum_drift", summary.angular_momentum, false);
+  put("stack_drift", summary.stack_drift, false);
+  put("penetration", summary.penetration, false);
+  // the contact scene's own question; an empty value could not be computed
+  const ContactSummary contact = contact_summary(scene, job.trajectory, series);
+  auto put_value = [&](const char* key, const std::optional<double>& v) {
+    if (v) row.number(key, *v);
+  };
+  put_value("top_height_change", contact.top_height_change);
+  put_value("energy_added_max", contact.energy_added_max);
+  put_value("speed_max", contact.speed_max);
+  put_value("rest_speed_rms", contact.rest_speed_rms);
+  row.numbers("apex_rel_err", contact.apex_relative_errors);
+  put_value("apex_rel_err_max", contact.apex_relative_error_max);
+  put_value("slide_distance", contact.slide_distance);
+  put_value("slide_accel", contact.slide_acceleration);
+  put_value("slide_accel_expected", contact.slide_acceleration_expected);
+  put_value("slide_accel_rel_err", contact.slide_acceleration_error);
+  put_value("exchange_err", contact.exchange_error);
+  if (contact.tunnelled) row.integer("tunnelled", *contact.tunnelled ? 1 : 0);
+  if (contact.escaped) row.integer("escaped", *contact.escaped);
+  row.text("contact_verdict", contact.verdict);
+  if (job.status == Status::Exploded && scene.has_contacts())
+    row.text("contact_verdict", "exploded");
+  else if (!contact.message.empty())
+    append(message, contact.message);
+}
+
+}  // namespace
+
+EvaluatedJob evaluate_job(const PlannedScene& p, const Scene& scene, const EngineVariant& ev,
+                          RunResult r, const ReferenceRun& reference) {
+  EvaluatedJob job;
+  job.status = r.status;
+  job.engine_version = r.engine_version;
+  job.settings = std::move(r.settings);
+  job.scene = &scene;
+
+  int dynamic_bodies = 0;
+  for (const BodySpec& b : scene.bodies) dynamic_bodies += b.mass > 0.0;
+  // particles count as bodies here: body_steps_per_s is particle-steps/s in a particle scene
+  if (scene.particles) dynamic_bodies += static_cast<int>(scene.particles->count);
+
+  ResultRow& row = job.row;
+  row.text("scenario", scene.name);
+  row.text("engine", ev.engine);
+  row.text("variant", ev.variant);
+  row.text("engine_version", r.engine_version);
+  row.text("family", p.family);
+  row.number("parameter", p.parameter);
+  row.exact("dt", scene.dt);  // full precision: rows are matched to their scenario's step
+  row.number("duration", scene.duration);
+  row.integer("steps", scene.step_count());
+  row.integer("bodies", dynamic_bodies);
+  row.text("reference", to_string(scene.reference.kind));
+  // a converged reference is a job of its own: whether it ran is on every row that needs it
+  if (scene.reference.kind == ReferenceKind::Converged)
+    row.text("reference_status", reference.available ? "ok" : reference.failed_status);
+  row.number("reference_self_error", reference.self_error);
+  std::string message = r.message;
+
+  if (r.status == Status::Ok || r.status == Status::Exploded) {
+    if (!r.wall_seconds.empty()) put_speed(row, scene, r, dynamic_bodies);
+    job.trajectory = std::move(r.trajectory);
+    try {
+      put_metrics(job, scene, reference, message);
+      job.measured = true;
+    } catch (const RunError&) {
+      throw;
+    } catch (const std::exception& e) {
+      append(message, std::string("metrics failed: ") + e.what());
+    }
+  }
+  row.text("status", to_string(job.status));
+  row.text("message", message);
+  return job;
+}
+
+}  // namespace physbench

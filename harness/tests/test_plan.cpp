@@ -1,0 +1,129 @@
+// The plan, the runner's first stage, by itself: no job runs and no file is written, so these
+// tests take milliseconds. A shard is a stride over the plan's scene steps, and the fingerprint
+// covers what the jobs will run and nothing else.
+#include <gtest/gtest.h>
+
+#include <algorithm>
+#include <map>
+#include <set>
+
+#include "physbench/plan.h"
+
+namespace {
+
+using physbench::EngineVariant;
+using physbench::Plan;
+using physbench::PlannedJob;
+using physbench::RunOptions;
+
+// engine variants as a catalog lists them; the hosts are never started here
+std::vector<EngineVariant> catalog() {
+  return {{"rtp", "rk4", "0", "/nonexistent/physbench"},
+          {"rtp", "euler", "0", "/nonexistent/physbench"},
+          {"bullet", "float", "0", "/nonexistent/physbench"},
+          {"test-fault", "hang", "0", "/nonexistent/physbench", true}};
+}
+
+RunOptions options() {
+  RunOptions o;
+  // tumbling-box and spring-oscillator are swept over their own steps, projectile is not
+  o.scenarios = {"projectile", "tumbling-box", "spring-oscillator"};
+  o.timing_budget = 0.05;
+  return o;
+}
+
+TEST(Plan, JobsAreEveryStepOnEveryEngineVariantNumberedInOrder) {
+  const Plan plan = physbench::plan_run(options(), catalog());
+  // the test-only engine is planned only when named
+  ASSERT_EQ(plan.engines.size(), 3u);
+  ASSERT_GT(plan.steps.size(), 3u) << "tumbling-box's dt sweep gives more than one step";
+  ASSERT_EQ(plan.jobs.size(), plan.steps.size() * plan.engines.size());
+  for (std::size_t i = 0; i < plan.jobs.size(); ++i) {
+    EXPECT_EQ(plan.jobs[i].number, i);
+    EXPECT_EQ(plan.jobs[i].step, i / plan.engines.size());
+    EXPECT_EQ(plan.jobs[i].engine, i % plan.engines.size());
+  }
+  // a swept scene runs its own step first, each step in a file of its own
+  std::map<std::size_t, std::vector<const physbench::SceneStep*>> by_scene;
+  for (const auto& step : plan.steps) by_scene[step.scene].push_back(&step);
+  for (const auto& [scene, steps] : by_scene) {
+    EXPECT_EQ(steps.front()->dt, plan.scenes[scene].scene.dt);
+    EXPECT_TRUE(steps.front()->own_step);
+    for (std::size_t i = 1; i < steps.size(); ++i) EXPECT_FALSE(steps[i]->own_step);
+    if (steps.size() > 1) {
+      for (const auto* step : steps)
+        EXPECT_NE(step->tag.find(".dt-"), std::string::npos) << step->tag;
+    }
+  }
+  RunOptions named = options();
+  named.engines = {"test-fault"};
+  EXPECT_EQ(physbench::plan_run(named, catalog()).engines.size(), 1u);
+}
+
+TEST(Plan, ShardsAreAStrideOverSceneStepsThatTogetherAreThePlan) {
+  const Plan plan = physbench::plan_run(options(), catalog());
+  for (int count = 1; count <= 5; ++count) {
+    std::vector<std::size_t> seen;
+    std::map<std::size_t, int> shard_of_step;
+    for (int index = 1; index <= count; ++index) {
+      const std::vector<PlannedJob> shard = plan.shard(index, count);
+      for (std::size_t i = 0; i < shard.size(); ++i) {
+        const PlannedJob& job = shard[i];
+        if (i) {
+          EXPECT_LT(shard[i - 1].number, job.number) << "a shard keeps the plan's order";
+        }
+        EXPECT_EQ(job.step % std::size_t(count), std::size_t(index - 1));
+        // every engine of a scene step in one shard: their speed ratios never cross machines
+        const auto [it, first] = shard_of_step.emplace(job.step, index);
+        EXPECT_EQ(it->second, index) << "step " << job.step << " split over shards";
+        seen.push_back(job.number);
+      }
+    }
+    // the shards together are the plan, each job once
+    std::sort(seen.begin(), seen.end());
+    ASSERT_EQ(seen.size(), plan.jobs.size()) << count << " shards";
+    for (std::size_t i = 0; i < seen.size(); ++i) EXPECT_EQ(seen[i], i);
+  }
+  EXPECT_THROW(plan.shard(0, 2), physbench::RunError);
+  EXPECT_THROW(plan.shard(3, 2), physbench::RunError);
+}
+
+TEST(Plan, FingerprintCoversWhatRunsAndNotWhereItRuns) {
+  const std::string base = physbench::plan_run(options(), catalog()).fingerprint;
+  EXPECT_EQ(base.size(), 16u);
+  EXPECT_EQ(physbench::plan_run(options(), catalog()).fingerprint, base) << "not deterministic";
+  // the shard, the output folder and the timeout do not change what the jobs run
+  RunOptions elsewhere = options();
+  elsewhere.shard_index = 2;
+  elsewhere.shard_count = 3;
+  elsewhere.out = "/somewhere/else";
+  elsewhere.timeout_seconds = 7;
+  EXPECT_EQ(physbench::plan_run(elsewhere, catalog()).fingerprint, base);
+  // a different budget, engine set, step or duration does
+  RunOptions budget = options();
+  budget.timing_budget = 0.1;
+  RunOptions engines = options();
+  engines.engines = {"rtp"};
+  RunOptions duration = options();
+  duration.duration = 1.0;
+  RunOptions no_sweep = options();
+  no_sweep.no_sweep = true;
+  std::set<std::string> prints = {base};
+  for (const RunOptions& o : {budget, engines, duration, no_sweep})
+    EXPECT_TRUE(prints.insert(physbench::plan_run(o, catalog()).fingerprint).second);
+}
+
+TEST(Plan, BadNamesAreRefusedBeforeAnythingIsPlanned) {
+  RunOptions engine = options();
+  engine.engines = {"havok"};
+  EXPECT_THROW(physbench::plan_run(engine, catalog()), physbench::RunError);
+  RunOptions scenario = options();
+  scenario.scenarios = {"no-such-scene"};
+  EXPECT_THROW(physbench::plan_run(scenario, catalog()), physbench::RunError);
+  RunOptions none = options();
+  none.engines = {"rtp"};
+  none.variants = {"float"};  // a variant that exists, but not on rtp
+  EXPECT_THROW(physbench::plan_run(none, catalog()), physbench::RunError);
+}
+
+}  // namespace
