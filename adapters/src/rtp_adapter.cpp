@@ -4,6 +4,8 @@
 #include <rtp/particles.h>
 #include <rtp/world.h>
 
+#include <array>
+#include <iterator>
 #include <optional>
 #include <sstream>
 
@@ -71,6 +73,14 @@ bool is_contact_variant(const std::string& variant) {
   return contact_settings_for(variant).has_value();
 }
 
+// the stages of rtp's contact step as StepProfile times them (docs/architecture.md, "rtp's step"),
+// in the step's order
+constexpr const char* kContactStages[] = {"integrate", "bounds",  "broad_phase",
+                                          "narrow_phase", "prepare", "warm_start",
+                                          "solve",     "integrate_positions", "relax",
+                                          "restitution"};
+constexpr std::size_t kContactStageCount = std::size(kContactStages);
+
 class RtpEngine final : public Engine {
  public:
   explicit RtpEngine(const std::string& variant)
@@ -84,6 +94,11 @@ class RtpEngine final : public Engine {
     world_ = std::make_unique<rtp::World>(
         make_rtp_world(scene, integrator_, contacts_));
     body_count_ = static_cast<int>(scene.bodies.size());
+    // a world without contacts is one stage (integrate) and a particle system is timed by
+    // nobody: only the contact step's profile says where a step's time goes
+    profiled_ = world_->has_contacts() && !scene.particles;
+    stage_seconds_.fill(0.0);
+    profiled_steps_ = 0;
     if (scene.particles) {
       rtp::ParticleSystemDef def = particle_system_def(scene);
       def.integrator = particle_integrator_;
@@ -95,6 +110,16 @@ class RtpEngine final : public Engine {
   void step() override {
     if (body_count_ > 0) world_->step(dt_);
     if (particles_) particles_->step(dt_);
+    if (profiled_) add_profile(world_->profile());
+  }
+
+  std::optional<StageTimes> stage_times() const override {
+    if (!profiled_) return std::nullopt;
+    StageTimes times;
+    times.names.assign(std::begin(kContactStages), std::end(kContactStages));
+    times.seconds.assign(stage_seconds_.begin(), stage_seconds_.end());
+    times.steps = profiled_steps_;
+    return times;
   }
 
   void apply_impulse(int body, const Vec3& impulse, const Vec3& point) override {
@@ -120,6 +145,19 @@ class RtpEngine final : public Engine {
   std::unique_ptr<rtp::ParticleSystem> particles_;
   double dt_ = 0.0;
   std::unique_ptr<rtp::World> world_;
+  // the contact step's stage times summed since load(), in kContactStages' order (s)
+  bool profiled_ = false;
+  std::array<double, kContactStageCount> stage_seconds_{};
+  long profiled_steps_ = 0;
+
+  void add_profile(const rtp::StepProfile& p) {
+    const double stages[] = {p.integrate, p.bounds,     p.broad_phase,         p.narrow_phase,
+                             p.prepare,   p.warm_start, p.solve, p.integrate_positions,
+                             p.relax,     p.restitution};
+    static_assert(std::size(stages) == kContactStageCount);
+    for (std::size_t i = 0; i < kContactStageCount; ++i) stage_seconds_[i] += stages[i];
+    ++profiled_steps_;
+  }
 };
 
 }  // namespace

@@ -89,6 +89,19 @@ Pass run_once(Engine& engine, const Scene& scene, const std::vector<int>& bodies
   return pass;
 }
 
+// adds the engine's stage times of a timed pass to the run's
+void add_stages(const Engine& engine, StageTimes& sum) {
+  const std::optional<StageTimes> pass = engine.stage_times();
+  if (!pass) return;
+  if (sum.names.empty()) {
+    sum.names = pass->names;
+    sum.seconds.assign(pass->names.size(), 0.0);
+  }
+  for (std::size_t i = 0; i < sum.seconds.size() && i < pass->seconds.size(); ++i)
+    sum.seconds[i] += pass->seconds[i];
+  sum.steps += pass->steps;
+}
+
 }  // namespace
 
 const char* to_string(Status status) {
@@ -173,6 +186,7 @@ RunResult simulate(const EngineInfo& info, const std::string& variant, const Sce
     }
     if (pass.stepping_seconds >= options.timing_budget) {
       result.wall_seconds.push_back(pass.stepping_seconds);
+      add_stages(*engine, result.stages);
       return result;
     }
   }
@@ -187,6 +201,7 @@ RunResult simulate(const EngineInfo& info, const std::string& variant, const Sce
     const Pass pass = run_once(*engine, scene, result.trajectory.bodies, every,
                                options.explosion_distance, options.slowdown, nullptr);
     result.wall_seconds.push_back(pass.stepping_seconds);
+    add_stages(*engine, result.stages);
     measured += pass.stepping_seconds;
   }
   return result;

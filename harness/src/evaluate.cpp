@@ -41,6 +41,13 @@ void put_speed(ResultRow& row, const Scene& scene, const RunResult& r, int dynam
   row.numbers("steps_per_s_repeats", repeats, 4);
   row.number("body_steps_per_s", steps * dynamic_bodies / wall);
   row.number("realtime_factor", scene.duration / wall);
+  // where a step's time went, by the engine's own stages, averaged over the same repeats
+  if (!r.stages.names.empty() && r.stages.steps > 0) {
+    std::vector<double> ms_per_step;
+    for (double seconds : r.stages.seconds)
+      ms_per_step.push_back(1e3 * seconds / static_cast<double>(r.stages.steps));
+    row.numbers("stage_ms", ms_per_step, 4);
+  }
 }
 
 // the error metrics the scene asks for; the job's status becomes diverged when its energy more
@@ -127,6 +134,7 @@ EvaluatedJob evaluate_job(const PlannedScene& p, const Scene& scene, const Engin
   job.status = r.status;
   job.engine_version = r.engine_version;
   job.settings = std::move(r.settings);
+  job.stage_names = r.stages.names;
   job.scene = &scene;
 
   int dynamic_bodies = 0;

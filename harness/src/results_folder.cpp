@@ -354,6 +354,8 @@ void ResultsFolder::add(EvaluatedJob& job, const std::string& stem, bool own_ste
     for (const Setting& s : job.settings)
       settings.push_back({{"name", s.name}, {"value", s.value}, {"why", s.why}});
     engine_meta["variants"][job.row["variant"]] = settings;
+    // the stages the engine times, naming stage_ms's parts
+    if (!job.stage_names.empty()) engine_meta["stages"] = job.stage_names;
   }
 
   if (job.measured) {

@@ -22,6 +22,11 @@ json result_to_json(const RunResult& r) {
     doc["settings"].push_back({{"name", s.name}, {"value", s.value}, {"why", s.why}});
   doc["steps"] = r.steps;
   doc["wall_seconds"] = r.wall_seconds;
+  // optional: the engine's own stage times, summed over the timed repeats
+  if (!r.stages.names.empty())
+    doc["stages"] = {{"names", r.stages.names},
+                     {"seconds", r.stages.seconds},
+                     {"steps", r.stages.steps}};
   doc["bodies"] = r.trajectory.bodies;
   // one row per sample: time, then 13 numbers per body (position, quaternion wxyz, velocity,
   // angular velocity)
@@ -56,6 +61,14 @@ RunResult result_from_json(const json& doc) {
                           s.at("why").get<std::string>()});
   r.steps = doc.at("steps").get<long>();
   r.wall_seconds = doc.at("wall_seconds").get<std::vector<double>>();
+  if (doc.contains("stages")) {
+    const json& stages = doc.at("stages");
+    r.stages.names = stages.at("names").get<std::vector<std::string>>();
+    r.stages.seconds = stages.at("seconds").get<std::vector<double>>();
+    r.stages.steps = stages.at("steps").get<long>();
+    if (r.stages.seconds.size() != r.stages.names.size() || r.stages.steps <= 0)
+      throw std::runtime_error("stages: a time for each name, over a positive number of steps");
+  }
   r.trajectory.bodies = doc.at("bodies").get<std::vector<int>>();
   for (const json& row : doc.at("samples")) {
     Sample s;

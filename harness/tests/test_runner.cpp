@@ -483,6 +483,53 @@ TEST(Runner, EveryEngineGivesTheSameBitsTwiceInSeparateProcesses) {
   }
 }
 
+// the ';'-separated parts of a numbers cell
+std::vector<double> parts_of(const std::string& cell) {
+  std::vector<double> parts;
+  std::stringstream in(cell);
+  for (std::string part; std::getline(in, part, ';');) parts.push_back(std::stod(part));
+  return parts;
+}
+
+#ifdef PHYSBENCH_HAVE_BULLET
+TEST(Runner, RtpContactStepTimesItsStagesWithinItsStepAndAPeerLeavesThemEmpty) {
+  const fs::path dir = fresh_dir("stages");
+  const Invocation inv =
+      physbench({"run", "-s", "tower-10", "-e", "rtp,bullet", "--variant", "soft-step,float",
+                 "--duration", "2", "--budget", "0.05", "--out", (dir / "r").string()},
+                dir);
+  ASSERT_EQ(inv.outcome.exit_code, 0) << inv.output;
+  const auto rows = read_rows(dir / "r" / "results.csv");
+  const auto* rtp = find_row(rows, "rtp", "soft-step");
+  const auto* bullet = find_row(rows, "bullet", "float");
+  ASSERT_TRUE(rtp && bullet);
+  ASSERT_EQ(rtp->at("status"), "ok") << rtp->at("message");
+  std::ifstream meta_file(dir / "r" / "metadata.json");
+  const nlohmann::json meta = nlohmann::json::parse(meta_file);
+  const auto names = meta["engines"]["rtp"]["stages"].get<std::vector<std::string>>();
+  const std::vector<double> stage_ms = parts_of(rtp->at("stage_ms"));
+  ASSERT_EQ(stage_ms.size(), names.size()) << rtp->at("stage_ms");
+  ASSERT_GE(names.size(), 5u);
+  EXPECT_NE(std::find(names.begin(), names.end(), "narrow_phase"), names.end());
+  double sum = 0.0;
+  for (std::size_t i = 0; i < names.size(); ++i) {
+    EXPECT_GE(stage_ms[i], 0.0) << names[i];
+    sum += stage_ms[i];
+  }
+  // the stages come from the same timed repeats as steps/s: together they are most of a step's
+  // wall time and never more (plus the 4-digit rounding of both)
+  double mean_ms = 0.0;
+  const std::vector<double> repeats = parts_of(rtp->at("steps_per_s_repeats"));
+  for (double steps_per_s : repeats) mean_ms += 1e3 / steps_per_s / double(repeats.size());
+  EXPECT_LE(sum, mean_ms * 1.01 + 1e-4) << rtp->at("stage_ms");
+  EXPECT_GE(sum, mean_ms * 0.5) << rtp->at("stage_ms");
+  // a peer that does not time its stages has none: empty, never an estimate
+  EXPECT_EQ(bullet->at("status"), "ok");
+  EXPECT_TRUE(bullet->at("stage_ms").empty()) << bullet->at("stage_ms");
+  EXPECT_FALSE(meta["engines"]["bullet"].contains("stages"));
+}
+#endif
+
 TEST(Runner, UnknownEngineIsAClearErrorAndWritesNothing) {
   const fs::path dir = fresh_dir("unknown_engine");
   const Invocation inv = physbench({"run", "-e", "havok", "--out", (dir / "r").string()}, dir);

@@ -33,6 +33,14 @@ struct Setting {
   std::string why;
 };
 
+// where the steps' time went, by the engine's own named stages (rtp's StepProfile), summed over
+// the steps since load()
+struct StageTimes {
+  std::vector<std::string> names;
+  std::vector<double> seconds;  // per stage, in names' order, summed over `steps` steps (s)
+  long steps = 0;
+};
+
 // Thrown by an adapter's step() when its engine reset or overwrote its state on its own (MuJoCo's
 // reset after a bad-acceleration warning): the trajectory up to the last sample before it is kept,
 // and the row reads `exploded` with this reason. Dropped contacts and clamped motion, which leave
@@ -51,6 +59,9 @@ class Engine {
   virtual SampledState body_state(int body) const = 0;
   // an instantaneous impulse (N s) at a world point on a dynamic body, before the next step
   virtual void apply_impulse(int body, const Vec3& impulse, const Vec3& world_point) = 0;
+  // the engine's own timing of its step's stages since load(), for an engine that times them;
+  // nothing for one that does not (its results column stays empty: never an estimate)
+  virtual std::optional<StageTimes> stage_times() const { return std::nullopt; }
 };
 
 struct EngineInfo {

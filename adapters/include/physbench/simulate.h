@@ -45,6 +45,9 @@ struct RunResult {
   std::vector<Setting> settings;
   long steps = 0;                    // steps per run
   std::vector<double> wall_seconds;  // stepping time of each timed repeat (s)
+  // the engine's stages (Engine::stage_times) summed over the timed repeats; empty names when
+  // the engine does not time them
+  StageTimes stages;
   Trajectory trajectory;             // from the first run
 };
 

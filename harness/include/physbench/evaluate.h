@@ -52,6 +52,7 @@ struct EvaluatedJob {
   Status status = Status::Ok;
   std::string engine_version;
   std::vector<Setting> settings;
+  std::vector<std::string> stage_names;  // the engine's timed stages, in stage_ms's order
   // the metrics were computed: the trajectory (and at the scene's own step the poses) are written
   bool measured = false;
   const Scene* scene = nullptr;  // as it ran (outlives the job)
