@@ -1,7 +1,8 @@
 """Compares two results folders, OLD then NEW (`physbench compare OLD NEW`): per row, faster / slower /
 more accurate / less accurate / broken / fixed / unchanged; exit code 1 when NEW regressed.
 
-Rows are matched by scenario, engine, variant and step. The tests (docs/regression.md):
+Rows are matched by scenario, engine, variant, step and a sweep's iterations and substeps. The tests
+(docs/regression.md):
 - accuracy: each error metric of the row (lower is better) changed by more than --accuracy-tolerance of
   the old value and more than --accuracy-floor in absolute terms. The metrics come from deterministic
   runs (a build gives the same trajectory every time), so any such change is the code's, not noise.
@@ -56,6 +57,19 @@ class CompareError(Exception):
     pass
 
 
+def row_key(row: dict) -> tuple:
+    """A row's identity: scenario, engine, variant, step, and a sweep's solver iterations and substeps
+    ('' for the variant's own settings, as in a run from before those columns)."""
+    return (row["scenario"], row["engine"], row["variant"], float(row["dt"]),
+            row.get("iterations") or "", row.get("substeps") or "")
+
+
+def label(key: tuple) -> str:
+    """ENGINE/VARIANT, with a sweep's knobs: 'rtp/sequential-impulse iterations 8'."""
+    knobs = [f"{name} {value}" for name, value in zip(("iterations", "substeps"), key[4:6]) if value]
+    return " ".join([f"{key[1]}/{key[2]}", *knobs])
+
+
 def read_rows(folder: Path) -> dict[tuple, dict]:
     csv_file = folder / "results.csv"
     if not csv_file.exists():
@@ -67,7 +81,7 @@ def read_rows(folder: Path) -> dict[tuple, dict]:
             raise CompareError(f"{csv_file}: no column(s) {', '.join(sorted(missing))}")
         rows = {}
         for row in reader:
-            rows[(row["scenario"], row["engine"], row["variant"], float(row["dt"]))] = row
+            rows[row_key(row)] = row
     return rows
 
 
@@ -230,15 +244,15 @@ def format_text(result: Comparison, old: Path, new: Path) -> str:
     lines = [f"compare {old} → {new}", f"rows matched: {result.matched}; speed as the ratio to {result.against}, "
              f"compared on {result.speed_compared} rows"]
     if result.only_old:
-        lines.append(f"only in OLD: {len(result.only_old)} rows (e.g. {'/'.join(map(str, result.only_old[0][:3]))})")
+        lines.append(f"only in OLD: {len(result.only_old)} rows (e.g. {result.only_old[0][0]} {label(result.only_old[0])})")
     if result.only_new:
-        lines.append(f"only in NEW: {len(result.only_new)} rows (e.g. {'/'.join(map(str, result.only_new[0][:3]))})")
+        lines.append(f"only in NEW: {len(result.only_new)} rows (e.g. {result.only_new[0][0]} {label(result.only_new[0])})")
     if not result.changes:
         lines.append("no change beyond the noise")
     else:
-        width = max(len(f"{c.key[0]}  {c.key[1]}/{c.key[2]}") for c in result.changes)
+        width = max(len(f"{c.key[0]}  {label(c.key)}") for c in result.changes)
         for c in result.changes:
-            where = f"{c.key[0]}  {c.key[1]}/{c.key[2]}"
+            where = f"{c.key[0]}  {label(c.key)}"
             lines.append(f"{c.verdict:<14} {where:<{width}}  dt {c.key[3]:.6g}  {c.detail}")
     regressions = len(result.regressions)
     lines.append(f"{regressions} regression(s)" if regressions else "no regression")

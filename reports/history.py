@@ -46,7 +46,7 @@ def entries(history: Path) -> list[Path]:
 
 def read_entry_rows(entry: Path) -> dict[tuple, dict]:
     with gzip.open(entry / "results.csv.gz", "rt", newline="") as f:
-        return {(r["scenario"], r["engine"], r["variant"], float(r["dt"])): r for r in csv.DictReader(f)}
+        return {compare.row_key(r): r for r in csv.DictReader(f)}
 
 
 def read_entry_metadata(entry: Path) -> dict:
@@ -126,7 +126,7 @@ def report(history: Path, out: Path) -> int:
             for key, row in rows.items():
                 if key[0] != scenario or row["status"] != "ok":
                     continue
-                name = f"{key[1]}/{key[2]} dt {key[3]:.4g}"
+                name = f"{compare.label(key)} dt {key[3]:.4g}"
                 s = series.setdefault(name, {"speed": [None] * len(table), "error": [None] * len(table), "metric": None})
                 s["speed"][i] = relative_speed(rows, key, groups)
                 found = main_error(row)

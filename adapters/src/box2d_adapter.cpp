@@ -37,6 +37,16 @@ class Box2dEngine final : public Engine {
   Box2dEngine(bool spring_joints, int velocity_iterations)
       : spring_joints_(spring_joints), velocity_iterations_(velocity_iterations) {}
 
+  // iterations: b2World::Step's velocity iterations (position iterations stay 3); no substeps
+  Tuning tune(const SolverKnobs& knobs) override {
+    if (knobs.substeps > 0) return {{}, "Box2D 2.4 steps once per step: it has no substeps"};
+    velocity_iterations_ = knobs.iterations;
+    return {{{"velocity / position iterations",
+              std::to_string(knobs.iterations) + " / " + std::to_string(kPositionIterations),
+              "the sweep's value (--sweep-iterations): b2World::Step's velocity iterations"}},
+            ""};
+  }
+
   void load(const Scene& scene) override {
     scene_ = scene;
     dt_ = scene.dt;

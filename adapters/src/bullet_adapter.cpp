@@ -40,6 +40,20 @@ btScalar pair_restitution_rule(const btCollisionObject* a, const btCollisionObje
 
 class BulletEngine final : public Engine {
  public:
+  // iterations: btContactSolverInfo::m_numIterations. Substeps are not mapped: Bullet's are
+  // stepSimulation's fixed-step accumulator, which interpolates the poses it reports
+  Tuning tune(const SolverKnobs& knobs) override {
+    if (knobs.substeps > 0)
+      return {{}, "Bullet's substeps are stepSimulation's accumulator (its poses interpolated "
+                  "between fixed steps), not a substep of dt: not mapped"};
+    iterations_ = knobs.iterations;
+    return {{{"solver",
+              "btSequentialImpulseConstraintSolver, " + std::to_string(knobs.iterations) +
+                  " iterations",
+              "the sweep's value (--sweep-iterations): btContactSolverInfo::m_numIterations"}},
+            ""};
+  }
+
   ~BulletEngine() override {
     // tear the world down wholesale: removing bodies one by one is O(bodies × pairs)
     world_.reset();
@@ -70,6 +84,8 @@ class BulletEngine final : public Engine {
     if (scene.particles) world_->getSolverInfo().m_splitImpulsePenetrationThreshold = 0;
     // restitution only above the scene's threshold (Bullet's default is 0.2 m/s)
     world_->getSolverInfo().m_restitutionVelocityThreshold = btScalar(kRestitutionThreshold);
+    // a sweep's iterations: the sequential-impulse solver's (btContactSolverInfo::m_numIterations)
+    if (iterations_ > 0) world_->getSolverInfo().m_numIterations = iterations_;
     // each body carries the scene's own material; the pair takes √(μa μb) and max(ea, eb)
     gCalculateCombinedFrictionCallback = &pair_friction_rule;
     gCalculateCombinedRestitutionCallback = &pair_restitution_rule;
@@ -199,6 +215,7 @@ class BulletEngine final : public Engine {
  private:
   Scene scene_;
   double dt_ = 0.0;
+  int iterations_ = 0;  // a sweep's solver iterations; 0: Bullet's default (10)
   std::unique_ptr<btDefaultCollisionConfiguration> configuration_;
   std::unique_ptr<btCollisionDispatcher> dispatcher_;
   std::unique_ptr<btBroadphaseInterface> broadphase_;

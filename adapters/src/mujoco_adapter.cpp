@@ -346,6 +346,20 @@ std::string model_xml(const Scene& scene, const std::string& variant) {
 class MujocoEngine final : public Engine {
  public:
   explicit MujocoEngine(std::string variant) : variant_(std::move(variant)) {}
+
+  // iterations: mjOption::iterations, the solver's iteration cap (its tolerance still ends it
+  // early); MuJoCo has no substeps
+  Tuning tune(const SolverKnobs& knobs) override {
+    if (knobs.substeps > 0) return {{}, "MuJoCo steps once per step: it has no substeps"};
+    iterations_ = knobs.iterations;
+    const bool pgs = variant_ == "pgs-10";
+    return {{{"solver",
+              std::string(pgs ? "PGS" : "Newton") + ", " + std::to_string(knobs.iterations) +
+                  " iterations" + (pgs ? "" : ", tolerance 1e-8, pyramidal cone"),
+              "the sweep's value (--sweep-iterations): mjOption::iterations, a cap the solver's "
+              "tolerance may end early"}},
+            ""};
+  }
   ~MujocoEngine() override {
     if (active_ == this) {
       mjcb_passive = nullptr;
@@ -374,6 +388,8 @@ class MujocoEngine final : public Engine {
     model_ = mj_loadXML("scene.xml", vfs.get(), error, sizeof error);
     mj_deleteVFS(vfs.get());
     if (!model_) throw std::runtime_error(std::string("mujoco: model rejected: ") + error);
+    // a sweep's iterations: the solver's iteration cap (mjOption::iterations; Newton and PGS alike)
+    if (iterations_ > 0) model_->opt.iterations = iterations_;
     data_ = mj_makeData(model_);
     if (!data_)
       throw std::runtime_error("mujoco: mj_makeData failed (nconmax " +
@@ -516,6 +532,7 @@ class MujocoEngine final : public Engine {
   }
 
   std::string variant_;
+  int iterations_ = 0;  // a sweep's mjOption::iterations; 0: the variant's own
   Scene scene_;
   std::unique_ptr<ParticleDriver> driver_;
   static inline const MujocoEngine* active_ = nullptr;  // the engine mjcb_passive serves

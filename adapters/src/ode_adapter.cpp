@@ -53,6 +53,18 @@ class OdeEngine final : public Engine {
  public:
   OdeEngine(bool quick_step, bool spring_joints, int iterations)
       : quick_step_(quick_step), spring_joints_(spring_joints), iterations_(iterations) {}
+
+  // iterations: QuickStep's (dWorldSetQuickStepNumIterations); dWorldStep and substeps have none
+  Tuning tune(const SolverKnobs& knobs) override {
+    if (knobs.substeps > 0) return {{}, "ODE steps once per step: it has no substeps"};
+    if (!quick_step_)
+      return {{}, "dWorldStep solves each step's constraints directly (Dantzig LCP): it has no "
+                  "iteration count"};
+    iterations_ = knobs.iterations;
+    return {{{"stepper", "dWorldQuickStep, " + std::to_string(knobs.iterations) + " iterations",
+              "the sweep's value (--sweep-iterations): dWorldSetQuickStepNumIterations"}},
+            ""};
+  }
   ~OdeEngine() override {
     for (dGeomID plane : planes_) dGeomDestroy(plane);
     if (particle_space_) dSpaceDestroy(particle_space_);  // destroys its sphere geoms too

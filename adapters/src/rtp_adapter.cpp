@@ -84,7 +84,8 @@ constexpr std::size_t kContactStageCount = std::size(kContactStages);
 class RtpEngine final : public Engine {
  public:
   explicit RtpEngine(const std::string& variant)
-      : integrator_(integrator_for(base_variant(variant))),
+      : variant_(variant),
+        integrator_(integrator_for(base_variant(variant))),
         contacts_(contact_settings_for(variant).value_or(rtp::ContactSettings{})),
         particle_integrator_(particle_integrator_for(base_variant(variant))),
         threads_(threads_for(variant)) {}
@@ -113,6 +114,33 @@ class RtpEngine final : public Engine {
     if (profiled_) add_profile(world_->profile());
   }
 
+  // iterations: the sequential-impulse and seed solvers' velocity iterations; substeps: the soft
+  // step's. The other way round each has none, nor has an integrator variant
+  Tuning tune(const SolverKnobs& knobs) override {
+    if (!is_contact_variant(variant_))
+      return {{}, "rtp's " + variant_ +
+                      " is an integrator without a constraint solver: no iterations or substeps"};
+    Tuning tuning;
+    const bool soft = contacts_.solver == rtp::ContactSolver::SoftStep;
+    if (knobs.iterations > 0) {
+      if (soft)
+        return {{}, "rtp's soft step solves once per substep (then its relax passes): it has no "
+                    "iteration count to sweep; sweep its substeps"};
+      contacts_.velocity_iterations = knobs.iterations;
+      tuning.settings.push_back(
+          {"velocity iterations", std::to_string(knobs.iterations),
+           "the sweep's value (--sweep-iterations): ContactSettings::velocity_iterations"});
+    }
+    if (knobs.substeps > 0) {
+      if (!soft)
+        return {{}, "rtp's " + variant_ + " solves once per step: it has no substeps"};
+      contacts_.substeps = knobs.substeps;
+      tuning.settings.push_back({"substeps", std::to_string(knobs.substeps),
+                                 "the sweep's value (--sweep-substeps): ContactSettings::substeps"});
+    }
+    return tuning;
+  }
+
   std::optional<StageTimes> stage_times() const override {
     if (!profiled_) return std::nullopt;
     StageTimes times;
@@ -137,6 +165,7 @@ class RtpEngine final : public Engine {
   }
 
  private:
+  std::string variant_;
   rtp::Integrator integrator_;
   rtp::ContactSettings contacts_;
   rtp::ParticleIntegrator particle_integrator_;

@@ -166,10 +166,33 @@ RunResult simulate(const EngineInfo& info, const std::string& variant, const Sce
     return result;
   }
   const int every = options.every_steps > 0 ? options.every_steps : scene.probe_every_steps();
+  // every world of the run is built with the sweep's knobs, when there are any
+  const auto create = [&] {
+    std::unique_ptr<Engine> engine = info.create(variant);
+    if (options.knobs.any()) engine->tune(options.knobs);
+    return engine;
+  };
+  if (options.knobs.any()) {
+    const Tuning tuning = info.create(variant)->tune(options.knobs);
+    if (!tuning.unsupported.empty()) {
+      result.status = Status::Unsupported;
+      result.message = tuning.unsupported;
+      return result;
+    }
+    // the knobs' rows replace the variant's rows of the same name
+    for (const Setting& knob : tuning.settings) {
+      auto same = std::find_if(result.settings.begin(), result.settings.end(),
+                               [&](const Setting& s) { return s.name == knob.name; });
+      if (same != result.settings.end())
+        *same = knob;
+      else
+        result.settings.push_back(knob);
+    }
+  }
 
   // first run: the trajectory, and a warm-up for the timed repeats
   {
-    auto engine = info.create(variant);
+    auto engine = create();
     engine->load(scene);
     const Pass pass = run_once(*engine, scene, result.trajectory.bodies, every,
                                options.explosion_distance, options.slowdown, &result.trajectory);
@@ -196,7 +219,7 @@ RunResult simulate(const EngineInfo& info, const std::string& variant, const Sce
   while (static_cast<int>(result.wall_seconds.size()) < options.max_timed_repeats &&
          (static_cast<int>(result.wall_seconds.size()) < options.min_timed_repeats ||
           measured < options.timing_budget)) {
-    auto engine = info.create(variant);
+    auto engine = create();
     engine->load(scene);
     const Pass pass = run_once(*engine, scene, result.trajectory.bodies, every,
                                options.explosion_distance, options.slowdown, nullptr);

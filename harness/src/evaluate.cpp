@@ -129,7 +129,7 @@ void put_metrics(EvaluatedJob& job, const Scene& scene, const ReferenceRun& refe
 }  // namespace
 
 EvaluatedJob evaluate_job(const PlannedScene& p, const Scene& scene, const EngineVariant& ev,
-                          RunResult r, const ReferenceRun& reference) {
+                          const SolverKnobs& knobs, RunResult r, const ReferenceRun& reference) {
   EvaluatedJob job;
   job.status = r.status;
   job.engine_version = r.engine_version;
@@ -150,6 +150,10 @@ EvaluatedJob evaluate_job(const PlannedScene& p, const Scene& scene, const Engin
   row.text("family", p.family);
   row.number("parameter", p.parameter);
   row.exact("dt", scene.dt);  // full precision: rows are matched to their scenario's step
+  // a swept knob is part of the row's identity, whatever became of the job
+  job.knobs = knobs;
+  if (knobs.iterations > 0) row.integer("iterations", knobs.iterations);
+  if (knobs.substeps > 0) row.integer("substeps", knobs.substeps);
   row.number("duration", scene.duration);
   row.integer("steps", scene.step_count());
   row.integer("bodies", dynamic_bodies);

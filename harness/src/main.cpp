@@ -131,6 +131,13 @@ int main(int argc, char** argv) {
                   "seconds of measured stepping per job (repeats)")
       ->capture_default_str()
       ->check(CLI::NonNegativeNumber);
+  std::string sweep_iterations, sweep_substeps;
+  run->add_option("--sweep-iterations", sweep_iterations,
+                  "run every engine variant once more per value, with its solver's iterations "
+                  "(its nearest native knob) set to it, e.g. 4,8,16");
+  run->add_option("--sweep-substeps", sweep_substeps,
+                  "run every engine variant once more per value, with its substeps per step set "
+                  "to it, e.g. 1,2,4 (engines without substeps: an unsupported row saying so)");
   std::string shard;
   run->add_option("--shard", shard,
                   "run the K-th of N disjoint slices of the planned jobs, K/N with K from 1 "
@@ -220,6 +227,15 @@ int main(int argc, char** argv) {
 
   if (!shard.empty()) try {
     std::tie(options.shard_index, options.shard_count) = parse_shard(shard);
+  } catch (const RunError& e) {
+    std::cerr << "physbench: " << e.what() << '\n';
+    return 2;
+  }
+  try {
+    if (!sweep_iterations.empty())
+      options.sweep_iterations = parse_counts("--sweep-iterations", sweep_iterations);
+    if (!sweep_substeps.empty())
+      options.sweep_substeps = parse_counts("--sweep-substeps", sweep_substeps);
   } catch (const RunError& e) {
     std::cerr << "physbench: " << e.what() << '\n';
     return 2;

@@ -93,6 +93,12 @@ std::string step_tag(double dt) {
   return number(dt) + "s";
 }
 
+std::string knob_tag(const SolverKnobs& knobs) {
+  if (knobs.iterations > 0) return "iterations-" + std::to_string(knobs.iterations);
+  if (knobs.substeps > 0) return "substeps-" + std::to_string(knobs.substeps);
+  return "";
+}
+
 Scene Plan::scene_at(const SceneStep& step) const {
   Scene scene = scenes.at(step.scene).scene;
   scene.dt = step.dt;
@@ -121,10 +127,22 @@ Plan plan_run(const RunOptions& options, const std::vector<EngineVariant>& catal
   if (plan.engines.empty()) throw RunError("no engine variant matches the filters given");
   plan.timing_budget = options.timing_budget;
 
+  // each engine variant at its own settings, then at each swept value of one knob
+  plan.knob_settings = {SolverKnobs{}};
+  for (int n : options.sweep_iterations) plan.knob_settings.push_back({n, 0});
+  for (int n : options.sweep_substeps) plan.knob_settings.push_back({0, n});
+
   // every scene step (a scene at one of its steps) in order, numbered from 0, each with every
-  // engine variant: job s·E + e is step s on engine variant e. The fingerprint covers each scene
-  // as it will run, the engine variants and the timing budget
+  // engine variant at every knob setting: with K settings, job (s·E + e)·K + k is step s on
+  // engine variant e at setting k (K = 1 without a knob sweep). The fingerprint covers each scene
+  // as it will run, the engine variants, the swept knobs and the timing budget
   std::string plan_text = "budget " + exact(options.timing_budget) + "\n";
+  // (a plan without a knob sweep fingerprints as it did before knobs were swept)
+  if (!options.sweep_iterations.empty() || !options.sweep_substeps.empty()) {
+    plan_text += "knobs";
+    for (const SolverKnobs& k : plan.knob_settings) plan_text.append(" ").append(knob_tag(k));
+    plan_text += "\n";
+  }
   for (std::size_t s = 0; s < plan.scenes.size(); ++s) {
     const PlannedScene& p = plan.scenes[s];
     for (double dt : p.dts) {
@@ -137,7 +155,8 @@ Plan plan_run(const RunOptions& options, const std::vector<EngineVariant>& catal
       for (std::size_t e = 0; e < plan.engines.size(); ++e) {
         const EngineVariant& ev = plan.engines[e];
         plan_text += ev.engine + "/" + ev.variant + "\n";
-        plan.jobs.push_back({plan.jobs.size(), step.number, e});
+        for (const SolverKnobs& knobs : plan.knob_settings)
+          plan.jobs.push_back({plan.jobs.size(), step.number, e, knobs});
       }
       plan.steps.push_back(std::move(step));
     }

@@ -353,7 +353,11 @@ void ResultsFolder::add(EvaluatedJob& job, const std::string& stem, bool own_ste
     json settings = json::array();
     for (const Setting& s : job.settings)
       settings.push_back({{"name", s.name}, {"value", s.value}, {"why", s.why}});
-    engine_meta["variants"][job.row["variant"]] = settings;
+    // a swept knob's table beside the variant's own: engines.<engine>.sweeps.<variant>.<knob>
+    if (job.knobs.any())
+      engine_meta["sweeps"][job.row["variant"]][knob_tag(job.knobs)] = settings;
+    else
+      engine_meta["variants"][job.row["variant"]] = settings;
     // the stages the engine times, naming stage_ms's parts
     if (!job.stage_names.empty()) engine_meta["stages"] = job.stage_names;
   }
@@ -364,7 +368,8 @@ void ResultsFolder::add(EvaluatedJob& job, const std::string& stem, bool own_ste
       write_trajectory_csv(trajectory, job.trajectory, job.series, job.against(),
                            int(job.scene->bodies.size()));
       job.row.text("trajectory", fs::relative(trajectory, out_).string());
-      if (own_step) write_poses(job, stem);
+      // the replay viewer shows each engine variant at its own settings
+      if (own_step && !job.knobs.any()) write_poses(job, stem);
     } catch (const RunError&) {
       throw;
     } catch (const std::exception& e) {

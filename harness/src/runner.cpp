@@ -9,7 +9,9 @@
 #include <cstdlib>
 #include <fstream>
 #include <iostream>
+#include <optional>
 #include <sstream>
+#include <utility>
 
 #include "physbench/evaluate.h"
 #include "physbench/metrics.h"
@@ -120,10 +122,19 @@ std::vector<EngineVariant> engine_catalog(const fs::path& self) {
 
 RunResult run_worker_job(const EngineVariant& ev, const fs::path& scene_file,
                          const fs::path& result_file, const fs::path& log_file, int every_steps,
-                         double timing_budget, double timeout) {
+                         double timing_budget, double timeout, const SolverKnobs& knobs) {
   const struct {
     fs::path scene, result, log;
   } paths{scene_file, result_file, log_file};
+  if (knobs.any() && !ev.command.empty()) {
+    // the protocol passes no knobs to an external worker yet: say so rather than run its defaults
+    RunResult result;
+    result.status = Status::Unsupported;
+    result.engine_version = ev.version;
+    result.message = "external workers are not given solver iterations or substeps yet "
+                     "(docs/worker-protocol.md): " + ev.engine + " ran no sweep";
+    return result;
+  }
   // the protocol's arguments follow the host's `worker` subcommand or the external command
   std::vector<std::string> argv = ev.command;
   if (argv.empty()) argv = {ev.host.string(), "worker"};
@@ -133,6 +144,12 @@ RunResult run_worker_job(const EngineVariant& ev, const fs::path& scene_file,
                                std::string("--budget"), number(timing_budget),
                                std::string("--out"), paths.result.string()})
     argv.push_back(a);
+  if (knobs.iterations > 0)
+    for (const std::string& a : {std::string("--iterations"), std::to_string(knobs.iterations)})
+      argv.push_back(a);
+  if (knobs.substeps > 0)
+    for (const std::string& a : {std::string("--substeps"), std::to_string(knobs.substeps)})
+      argv.push_back(a);
   fs::remove(paths.result);
   const ChildOutcome outcome = run_child(argv, paths.log.string(), timeout);
   if (outcome.kind == ChildOutcome::Kind::Interrupted)
@@ -244,6 +261,29 @@ std::pair<int, int> parse_shard(const std::string& text) {
   return {k, n};
 }
 
+std::vector<int> parse_counts(const std::string& option, const std::string& text) {
+  const auto bad = [&](const std::string& why) {
+    return RunError(option + " " + text + ": " + why +
+                    " (write whole numbers from 1 to 1000 separated by commas, e.g. " + option +
+                    " 4,8,16)");
+  };
+  std::vector<int> counts;
+  std::stringstream parts(text);
+  std::string part;
+  if (text.empty()) throw bad("no value");
+  while (std::getline(parts, part, ',')) {
+    if (part.empty() || part.size() > 4 ||
+        !std::all_of(part.begin(), part.end(), [](char c) { return c >= '0' && c <= '9'; }))
+      throw bad("'" + part + "' is not a whole number");
+    const int n = std::stoi(part);
+    if (n < 1 || n > 1000) throw bad("'" + part + "' is not between 1 and 1000");
+    if (std::find(counts.begin(), counts.end(), n) != counts.end())
+      throw bad("'" + part + "' is given twice");
+    counts.push_back(n);
+  }
+  if (text.back() == ',') throw bad("a value is missing after the last comma");
+  return counts;
+}
 
 int run_suite(const RunOptions& options, const fs::path& self) {
   if (options.shard_count < 1 || options.shard_index < 1 ||
@@ -265,6 +305,7 @@ int run_suite(const RunOptions& options, const fs::path& self) {
   Scene scene;
   fs::path scene_file;
   ReferenceRun reference;
+  std::optional<std::pair<std::size_t, std::size_t>> not_applicable;  // (step, engine)
   try {
     for (const PlannedJob& planned : jobs) {
       const PlannedScene& p = plan.scenes[plan.steps[planned.step].scene];
@@ -282,20 +323,31 @@ int run_suite(const RunOptions& options, const fs::path& self) {
       // ---- run
       const EngineVariant& ev = plan.engines[planned.engine];
       ++done;
-      const std::string stem = step->tag + "__" + safe_name(ev.engine + "__" + ev.variant);
+      // a swept knob's jobs: "tower-10__rtp__soft-step.substeps-2"
+      const std::string knobs = knob_tag(planned.knobs);
+      const std::string stem = step->tag + "__" + safe_name(ev.engine + "__" + ev.variant) +
+                               (knobs.empty() ? "" : "." + knobs);
       std::cerr << "[" << done << "/" << jobs.size() << "] " << step->tag << "  " << ev.engine
-                << "/" << ev.variant << " ... " << std::flush;
+                << "/" << ev.variant << (knobs.empty() ? "" : " " + knobs) << " ... "
+                << std::flush;
+      // a variant that does not apply to the scene applies at no knob setting: its own job, just
+      // before, said so (an external worker says it only when run, and is given no knobs)
+      if (planned.knobs.any() && not_applicable == std::pair(planned.step, planned.engine)) {
+        std::cerr << "not applicable here\n";
+        continue;
+      }
       RunResult result = run_worker_job(ev, scene_file, folder.work() / (stem + ".json"),
                                         folder.work() / (stem + ".log"),
                                         scene.probe_every_steps(), options.timing_budget,
-                                        options.timeout_seconds);
+                                        options.timeout_seconds, planned.knobs);
       if (result.status == Status::NotApplicable) {
+        not_applicable = {planned.step, planned.engine};
         std::cerr << "not applicable here\n";
         continue;
       }
 
       // ---- evaluate, write
-      EvaluatedJob job = evaluate_job(p, scene, ev, std::move(result), reference);
+      EvaluatedJob job = evaluate_job(p, scene, ev, planned.knobs, std::move(result), reference);
       if (job.status == Status::Crashed || job.status == Status::Timeout ||
           job.status == Status::Error)
         ++failures;

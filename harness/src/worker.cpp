@@ -121,6 +121,7 @@ int run_worker(const WorkerJob& job) {
       options.every_steps = job.every_steps;
       options.timing_budget = job.timing_budget;
       options.slowdown = test_slowdown(job.engine, job.variant);
+      options.knobs = job.knobs;
       result = simulate(*engine, job.variant, scene, options);
     }
   } catch (const std::exception& e) {

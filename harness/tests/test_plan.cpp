@@ -113,6 +113,42 @@ TEST(Plan, FingerprintCoversWhatRunsAndNotWhereItRuns) {
     EXPECT_TRUE(prints.insert(physbench::plan_run(o, catalog()).fingerprint).second);
 }
 
+TEST(Plan, AKnobSweepRunsEveryVariantOncePerValueWithinItsSceneStep) {
+  RunOptions swept = options();
+  swept.sweep_iterations = {4, 16};
+  swept.sweep_substeps = {2};
+  const Plan plan = physbench::plan_run(swept, catalog());
+  const Plan plain = physbench::plan_run(options(), catalog());
+  // each variant at its own settings, then each value of one knob at a time
+  ASSERT_EQ(plan.knob_settings.size(), 4u);
+  ASSERT_EQ(plan.steps.size(), plain.steps.size());
+  ASSERT_EQ(plan.jobs.size(), plan.steps.size() * plan.engines.size() * 4);
+  for (std::size_t i = 0; i < plan.jobs.size(); ++i) {
+    const PlannedJob& job = plan.jobs[i];
+    EXPECT_EQ(job.number, i);
+    EXPECT_EQ(job.step, i / (plan.engines.size() * 4));
+    EXPECT_EQ(job.engine, i / 4 % plan.engines.size());
+    const physbench::SolverKnobs& k = plan.knob_settings[i % 4];
+    EXPECT_EQ(job.knobs.iterations, k.iterations);
+    EXPECT_EQ(job.knobs.substeps, k.substeps);
+  }
+  EXPECT_FALSE(plan.jobs[0].knobs.any());
+  EXPECT_EQ(plan.jobs[1].knobs.iterations, 4);
+  EXPECT_EQ(plan.jobs[2].knobs.iterations, 16);
+  EXPECT_EQ(plan.jobs[3].knobs.substeps, 2);
+  EXPECT_EQ(plan.jobs[3].knobs.iterations, 0);
+  EXPECT_EQ(physbench::knob_tag(plan.jobs[2].knobs), "iterations-16");
+  // a shard still takes whole scene steps: every knob of every engine of a step on one machine
+  for (const PlannedJob& job : plan.shard(2, 3)) EXPECT_EQ(job.step % 3, 1u);
+  EXPECT_EQ(plan.shard(1, 3).size() + plan.shard(2, 3).size() + plan.shard(3, 3).size(),
+            plan.jobs.size());
+  // the swept values are part of the fingerprint; no sweep fingerprints as before knobs
+  RunOptions other = swept;
+  other.sweep_iterations = {4, 8};
+  EXPECT_NE(plan.fingerprint, plain.fingerprint);
+  EXPECT_NE(plan.fingerprint, physbench::plan_run(other, catalog()).fingerprint);
+}
+
 TEST(Plan, BadNamesAreRefusedBeforeAnythingIsPlanned) {
   RunOptions engine = options();
   engine.engines = {"havok"};

@@ -530,6 +530,76 @@ TEST(Runner, RtpContactStepTimesItsStagesWithinItsStepAndAPeerLeavesThemEmpty) {
 }
 #endif
 
+std::string file_text(const fs::path& file) {
+  std::ifstream in(file);
+  std::stringstream text;
+  text << in.rdbuf();
+  return text.str();
+}
+
+TEST(Runner, IterationSweepIsARowPerValueWithTheSolverSetAndSaysWhereAVariantHasNone) {
+  const fs::path dir = fresh_dir("sweep_iterations");
+  const Invocation inv = physbench(
+      {"run", "-s", "tower-10", "-e", "rtp", "--variant", "sequential-impulse,soft-step",
+       "--sweep-iterations", "1,16", "--duration", "2", "--budget", "0", "--out",
+       (dir / "r").string()},
+      dir);
+  ASSERT_EQ(inv.outcome.exit_code, 0) << inv.output;
+  const auto rows = read_rows(dir / "r" / "results.csv");
+  ASSERT_EQ(rows.size(), 6u) << "two variants, each at its own settings and at 1 and 16";
+  std::map<std::string, const std::map<std::string, std::string>*> si, soft;
+  for (const auto& r : rows) {
+    EXPECT_TRUE(r.at("substeps").empty());
+    (r.at("variant") == "soft-step" ? soft : si)[r.at("iterations")] = &r;
+  }
+  ASSERT_EQ(si.size(), 3u);
+  ASSERT_TRUE(si.count("") && si.count("1") && si.count("16"));
+  for (const auto& [iterations, r] : si) EXPECT_EQ(r->at("status"), "ok") << iterations;
+  // one iteration against sixteen: a different solve, so a different trajectory, in files of
+  // their own
+  const std::string one = si["1"]->at("trajectory"), sixteen = si["16"]->at("trajectory");
+  EXPECT_NE(one, sixteen);
+  EXPECT_NE(file_text(dir / "r" / one), file_text(dir / "r" / sixteen));
+  EXPECT_GT(std::stod(si["1"]->at("stack_drift_max")), std::stod(si["16"]->at("stack_drift_max")));
+  // the soft step has no iteration count: its swept rows say so, and are not faked
+  ASSERT_EQ(soft.size(), 3u);
+  EXPECT_EQ(soft[""]->at("status"), "ok");
+  for (const char* n : {"1", "16"}) {
+    EXPECT_EQ(soft[n]->at("status"), "unsupported");
+    EXPECT_NE(soft[n]->at("message").find("no iteration count"), std::string::npos);
+    EXPECT_TRUE(soft[n]->at("stack_drift_max").empty());
+  }
+  // the settings table says what the knob maps to, beside the variant's own table
+  std::ifstream meta_file(dir / "r" / "metadata.json");
+  const nlohmann::json rtp = nlohmann::json::parse(meta_file)["engines"]["rtp"];
+  bool stated = false;
+  for (const auto& s : rtp["sweeps"]["sequential-impulse"]["iterations-16"])
+    stated |= s["name"] == "velocity iterations" && s["value"] == "16";
+  EXPECT_TRUE(stated) << rtp.dump(1);
+  for (const auto& s : rtp["variants"]["sequential-impulse"])
+    if (s["name"] == "velocity iterations") {
+      EXPECT_EQ(s["value"], "10");
+    }
+}
+
+TEST(Runner, BadSweepValueIsRefusedNamingTheOptionAndWritesNothing) {
+  const fs::path dir = fresh_dir("bad_sweep");
+  for (const auto& [option, value] : std::vector<std::pair<std::string, std::string>>{
+           {"--sweep-iterations", "0"},
+           {"--sweep-iterations", "-4"},
+           {"--sweep-iterations", "many"},
+           {"--sweep-iterations", "4,,8"},
+           {"--sweep-substeps", "2.5"},
+           {"--sweep-substeps", "0"}}) {
+    const Invocation inv = physbench({"run", "-s", "tower-10", "-e", "rtp", option, value,
+                                      "--out", (dir / "r").string()},
+                                     dir);
+    EXPECT_EQ(inv.outcome.exit_code, 2) << option << " " << value << ": " << inv.output;
+    EXPECT_NE(inv.output.find(option + " " + value + ":"), std::string::npos) << inv.output;
+    EXPECT_FALSE(fs::exists(dir / "r")) << option << " " << value;
+  }
+}
+
 TEST(Runner, UnknownEngineIsAClearErrorAndWritesNothing) {
   const fs::path dir = fresh_dir("unknown_engine");
   const Invocation inv = physbench({"run", "-e", "havok", "--out", (dir / "r").string()}, dir);

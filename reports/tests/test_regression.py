@@ -127,6 +127,38 @@ def test_compare_tells_each_kind_of_change():
     assert not compare.compare(table(peer, row(speeds=noise)), everything_slower, against="bullet").changes
 
 
+def test_a_row_is_one_scene_step_engine_variant_and_swept_knob(tmp_path):
+    """compare and history tell a sweep's rows apart by iterations and substeps; a run from before
+    those columns matches the rows at each variant's own settings."""
+    def write(folder: Path, rows: list[dict]) -> Path:
+        folder.mkdir()
+        columns = ["scenario", "engine", "variant", "dt", "iterations", "substeps", "status", "message",
+                   "stack_drift_max"]
+        with open(folder / "results.csv", "w", newline="") as f:
+            writer = csv.DictWriter(f, columns, extrasaction="ignore")
+            writer.writeheader()
+            writer.writerows(rows)
+        return folder
+    base = {"scenario": "tower-10", "engine": "rtp", "variant": "sequential-impulse", "dt": "0.016666666666666666",
+            "status": "ok", "message": ""}
+    swept = [{**base, "stack_drift_max": "0.05"}, {**base, "iterations": "1", "stack_drift_max": "0.7"},
+             {**base, "iterations": "16", "stack_drift_max": "0.02"}, {**base, "substeps": "2", "status": "unsupported"}]
+    new = compare.read_rows(write(tmp_path / "new", swept))
+    assert len(new) == 4, "a sweep's rows are rows of their own, not one row overwritten"
+    # the same run with one iteration's drift doubled: only that row is less accurate
+    worse = compare.read_rows(write(tmp_path / "worse", [swept[0], {**swept[1], "stack_drift_max": "1.4"}, *swept[2:]]))
+    changes = compare.compare(new, worse).changes
+    assert [(c.key[4], c.verdict) for c in changes] == [("1", "less accurate")]
+    assert "rtp/sequential-impulse iterations 1" in compare.format_text(compare.compare(new, worse), tmp_path, tmp_path)
+    # a run from before the columns: its row is the variant's own
+    old = tmp_path / "old"
+    old.mkdir()
+    (old / "results.csv").write_text("scenario,engine,variant,dt,status,message,stack_drift_max\n"
+                                     "tower-10,rtp,sequential-impulse,0.016666666666666666,ok,,0.05\n")
+    result = compare.compare(compare.read_rows(old), new)
+    assert result.matched == 1 and len(result.only_new) == 3 and not result.changes
+
+
 def test_compare_flags_an_injected_slowdown_and_not_the_same_build(tmp_path):
     if not PHYSBENCH:
         pytest.skip("PHYSBENCH_EXE is not set (CTest sets it)")
@@ -189,7 +221,8 @@ def test_the_history_keeps_runs_small_compares_each_with_the_last_and_draws_tren
     entry_bytes = sum(p.stat().st_size for p in entry.iterdir())
     assert entry_bytes < 0.05 * run_bytes, (entry_bytes, run_bytes)
     assert history.read_entry_rows(entry).keys() == {
-        (r["scenario"], r["engine"], r["variant"], float(r["dt"])) for r in rows_of(first)}
+        (r["scenario"], r["engine"], r["variant"], float(r["dt"]), r["iterations"], r["substeps"])
+        for r in rows_of(first)}
     with pytest.raises(history.HistoryError, match="in the history already"):
         history.add(first, store)
     assert history.report(store, store / "index.html") == 2

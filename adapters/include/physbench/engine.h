@@ -41,6 +41,21 @@ struct StageTimes {
   long steps = 0;
 };
 
+// a sweep's solver knobs (docs/regression.md, "Sweeps over iterations and substeps"); 0 leaves the
+// variant's own
+struct SolverKnobs {
+  int iterations = 0;  // the constraint solver's iterations per step, as the engine counts them
+  int substeps = 0;    // substeps per step
+  bool any() const { return iterations > 0 || substeps > 0; }
+};
+
+// what an engine made of the knobs: the settings rows that say what each maps to (each replaces
+// the variant's row of the same name), or why the variant has no such knob
+struct Tuning {
+  std::vector<Setting> settings;
+  std::string unsupported;  // not empty: nothing is set, and the row says this
+};
+
 // Thrown by an adapter's step() when its engine reset or overwrote its state on its own (MuJoCo's
 // reset after a bad-acceleration warning): the trajectory up to the last sample before it is kept,
 // and the row reads `exploded` with this reason. Dropped contacts and clamped motion, which leave
@@ -62,6 +77,11 @@ class Engine {
   // the engine's own timing of its step's stages since load(), for an engine that times them;
   // nothing for one that does not (its results column stays empty: never an estimate)
   virtual std::optional<StageTimes> stage_times() const { return std::nullopt; }
+  // a sweep's knobs, set before load() on the engine's nearest native ones; an adapter without
+  // them says so
+  virtual Tuning tune(const SolverKnobs&) {
+    return {{}, "this adapter maps no solver iterations or substeps"};
+  }
 };
 
 struct EngineInfo {

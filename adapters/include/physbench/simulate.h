@@ -36,6 +36,8 @@ struct SimulateOptions {
   // of its time (busy waiting), so that `physbench compare` can be shown to flag a slower build
   // (PHYSBENCH_TEST_SLOWDOWN, harness/src/worker.cpp)
   double slowdown = 0.0;
+  // a sweep's solver iterations or substeps (Engine::tune); none: the variant's own
+  SolverKnobs knobs;
 };
 
 struct RunResult {

@@ -53,6 +53,7 @@ struct EvaluatedJob {
   std::string engine_version;
   std::vector<Setting> settings;
   std::vector<std::string> stage_names;  // the engine's timed stages, in stage_ms's order
+  SolverKnobs knobs;                      // a sweep's; none: the variant's own settings
   // the metrics were computed: the trajectory (and at the scene's own step the poses) are written
   bool measured = false;
   const Scene* scene = nullptr;  // as it ran (outlives the job)
@@ -72,6 +73,7 @@ struct EvaluatedJob {
 // becomes `diverged`. Metrics that fail to compute leave their columns empty and say why in the
 // message. Writes no file.
 EvaluatedJob evaluate_job(const PlannedScene& planned, const Scene& scene, const EngineVariant& ev,
-                          RunResult result, const ReferenceRun& reference);
+                          const SolverKnobs& knobs, RunResult result,
+                          const ReferenceRun& reference);
 
 }  // namespace physbench

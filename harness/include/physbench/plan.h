@@ -33,21 +33,25 @@ struct SceneStep {
   bool own_step = true;  // the scene's own step (the replay viewer's poses are written there)
 };
 
-// one (scene step, engine variant) job
+// one (scene step, engine variant, solver knobs) job
 struct PlannedJob {
-  std::size_t number = 0;  // in the whole plan: step · engines + engine
+  std::size_t number = 0;  // in the whole plan: (step · engines + engine) · knob settings + knob
   std::size_t step = 0;    // index into Plan::steps
   std::size_t engine = 0;  // index into Plan::engines
+  SolverKnobs knobs;       // a sweep's iterations or substeps; none: the variant's own
 };
 
 struct Plan {
   std::vector<PlannedScene> scenes;
   std::vector<SceneStep> steps;        // every scene step in order
   std::vector<EngineVariant> engines;  // the engine variants every step runs, in order
+  // what each engine variant runs with at every step: its own settings first, then each value
+  // of --sweep-iterations, then of --sweep-substeps (one knob at a time)
+  std::vector<SolverKnobs> knob_settings;
   std::vector<PlannedJob> jobs;        // the whole plan in order; jobs[i].number == i
   double timing_budget = 0.0;
   // 64-bit FNV-1a, in hex, of each scene as it will run (its JSON at each step), the engine
-  // variants and the timing budget: `merge` refuses shards whose plans differ
+  // variants, the swept knobs and the timing budget: `merge` refuses shards whose plans differ
   std::string fingerprint;
 
   // the scene as it runs at a step
@@ -63,5 +67,8 @@ Plan plan_run(const RunOptions& options, const std::vector<EngineVariant>& catal
 
 // "120hz" for a step that is a whole rate, else the step in seconds
 std::string step_tag(double dt);
+
+// "iterations-8", "substeps-2": a job's knobs in its file names; empty for none
+std::string knob_tag(const SolverKnobs& knobs);
 
 }  // namespace physbench

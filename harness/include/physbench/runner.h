@@ -52,7 +52,8 @@ std::vector<EngineVariant> engine_catalog(const std::filesystem::path& self);
 RunResult run_worker_job(const EngineVariant& ev, const std::filesystem::path& scene_file,
                          const std::filesystem::path& result_file,
                          const std::filesystem::path& log_file, int every_steps,
-                         double timing_budget, double timeout_seconds);
+                         double timing_budget, double timeout_seconds,
+                         const SolverKnobs& knobs = {});
 
 struct RunOptions {
   std::vector<std::string>
@@ -70,6 +71,10 @@ struct RunOptions {
   // plan's scene steps (steps K−1, K−1+N, …, each with all its engine variants), so a scene's
   // engines are timed on one machine; `physbench merge` joins the N folders (docs/regression.md)
   int shard_index = 1, shard_count = 1;
+  // --sweep-iterations, --sweep-substeps: every engine variant runs once more per value, with its
+  // nearest native knob set (each knob on its own, the other at the variant's own);
+  // docs/regression.md
+  std::vector<int> sweep_iterations, sweep_substeps;
   std::string command_line;
 };
 
@@ -79,6 +84,10 @@ void check_row(const std::map<std::string, std::string>& row);
 
 // "K/N" → {K, N}; RunError names the value and what is wrong with it
 std::pair<int, int> parse_shard(const std::string& text);
+
+// "4,8,16" → {4, 8, 16}: whole numbers from 1 to 1000, each once; RunError names the option and
+// the value otherwise
+std::vector<int> parse_counts(const std::string& option, const std::string& text);
 
 struct RunError : std::runtime_error {
   using std::runtime_error::runtime_error;

@@ -18,6 +18,7 @@ struct WorkerJob {
   int every_steps = 0;
   double timing_budget = 0.3;
   std::string out_path;
+  SolverKnobs knobs;  // a sweep's iterations or substeps; none: the variant's own
 };
 
 // Runs the job with the engines linked into this executable and writes out_path.

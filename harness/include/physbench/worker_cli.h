@@ -15,6 +15,9 @@ inline CLI::App* add_worker_subcommand(CLI::App& app, WorkerJob& job) {
   worker->add_option("--every", job.every_steps, "steps between samples");
   worker->add_option("--budget", job.timing_budget, "seconds of timed stepping");
   worker->add_option("--out", job.out_path, "result file (JSON)")->required();
+  // a sweep's solver knobs (docs/regression.md): given only when set
+  worker->add_option("--iterations", job.knobs.iterations, "solver iterations (0: the variant's)");
+  worker->add_option("--substeps", job.knobs.substeps, "substeps per step (0: the variant's)");
   return worker;
 }
 
