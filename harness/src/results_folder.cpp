@@ -175,7 +175,6 @@ void ResultRow::numbers(std::string_view column, const std::vector<double>& valu
   }
   set(column, "numbers", std::move(text));
 }
-void ResultRow::clear(std::string_view column) { cells_.erase(std::string(column)); }
 
 const std::string& ResultRow::operator[](std::string_view column) const {
   static const std::string empty;

@@ -3,7 +3,9 @@
 #include <gtest/gtest.h>
 
 #include <algorithm>
+#include <cmath>
 #include <filesystem>
+#include <functional>
 #include <fstream>
 #include <iomanip>
 #include <map>
@@ -668,9 +670,37 @@ TEST(Runner, DtSweepGivesARowPerStepAndRk4ConvergesAtFourthOrder) {
 
 }  // namespace
 
+#include "physbench/evaluate.h"
 #include "physbench/runner.h"
 
 namespace {
+
+TEST(ResultsSchema, ARowSetterWritesItsColumnsTypeOrNamesTheColumn) {
+  physbench::ResultRow row;
+  row.exact("dt", 1.0 / 60.0);
+  row.number("steps_per_s", std::nan(""));  // NaN: could not be computed, so empty
+  row.integer("steps", 120);
+  row.numbers("apex_rel_err", {0.5, std::nan(""), 1e-3}, 4);
+  row.text("status", "ok");
+  EXPECT_EQ(row["dt"], "0.016666666666666666");
+  EXPECT_EQ(row["steps_per_s"], "");
+  EXPECT_EQ(row["steps"], "120");
+  EXPECT_EQ(row["apex_rel_err"], "0.5;;0.001");
+  const std::vector<std::pair<std::function<void()>, std::string>> wrong = {
+      {[&] { row.number("position_err_mx", 0.1); }, "position_err_mx is not in the schema"},
+      {[&] { row.number("steps", 12.5); }, "steps is of type integer"},
+      {[&] { row.text("dt", "fast"); }, "dt is of type number"},
+      {[&] { row.integer("message", 1); }, "message is of type string"},
+  };
+  for (const auto& [set, why] : wrong) {
+    try {
+      set();
+      ADD_FAILURE() << why << ": passed";
+    } catch (const physbench::RunError& e) {
+      EXPECT_NE(std::string(e.what()).find(why), std::string::npos) << e.what();
+    }
+  }
+}
 
 // a row as the runner fills it for a finished job
 std::map<std::string, std::string> fitting_row() {

@@ -25,7 +25,6 @@ class ResultRow {
   void integer(std::string_view column, long long value);
   // ';'-separated, each to `digits` significant digits; a NaN part is empty
   void numbers(std::string_view column, const std::vector<double>& values, int digits = 9);
-  void clear(std::string_view column);
 
   // the cell as written, empty when unset
   const std::string& operator[](std::string_view column) const;
