@@ -78,7 +78,7 @@ bool is_contact_variant(const std::string& variant) {
 constexpr const char* kContactStages[] = {"integrate", "bounds",  "broad_phase",
                                           "narrow_phase", "prepare", "warm_start",
                                           "solve",     "integrate_positions", "relax",
-                                          "restitution"};
+                                          "restitution", "continuous"};
 constexpr std::size_t kContactStageCount = std::size(kContactStages);
 
 class RtpEngine final : public Engine {
@@ -182,7 +182,7 @@ class RtpEngine final : public Engine {
   void add_profile(const rtp::StepProfile& p) {
     const double stages[] = {p.integrate, p.bounds,     p.broad_phase,         p.narrow_phase,
                              p.prepare,   p.warm_start, p.solve, p.integrate_positions,
-                             p.relax,     p.restitution};
+                             p.relax,     p.restitution, p.continuous};
     static_assert(std::size(stages) == kContactStageCount);
     for (std::size_t i = 0; i < kContactStageCount; ++i) stage_seconds_[i] += stages[i];
     ++profiled_steps_;
