@@ -75,8 +75,21 @@ def load_results(folder: Path) -> tuple[pd.DataFrame, dict]:
         metadata = json.loads(meta.read_text())
     except json.JSONDecodeError as exc:
         raise ReportError(f"{meta}: not valid JSON: {exc}") from exc
-    results["label"] = results["engine"] + "/" + results["variant"]
+    results["label"] = results["engine"] + "/" + results["variant"] + [knob_suffix(r) for _, r in results.iterrows()]
     return results, metadata
+
+
+def knob_suffix(row) -> str:
+    """A knob sweep's row (--sweep-iterations, --sweep-substeps) is one more configuration of its
+    engine variant, labelled as such wherever rows are drawn or listed: " iterations=8"."""
+    parts = [f"{knob}={int(row[knob])}" for knob in ("iterations", "substeps")
+             if knob in row and pd.notna(row[knob])]
+    return " " + " ".join(parts) if parts else ""
+
+
+def is_swept(row) -> bool:
+    """Whether a row ran at a swept solver knob rather than its variant's own settings."""
+    return knob_suffix(row) != ""
 
 
 def is_nominal(meta: dict, row) -> bool:

@@ -7,7 +7,7 @@ from __future__ import annotations
 import pandas as pd
 import plotly.graph_objects as go
 
-from .load import is_nominal
+from .load import is_nominal, is_swept
 from .style import figure_html, fmt
 
 # one colour a stage, the same on every chart (plotly's qualitative "Safe" and "Vivid" sets)
@@ -42,7 +42,7 @@ def stage_profiles(results: pd.DataFrame, meta: dict) -> list[dict]:
         if not stages:
             continue
         rows = results[(results["engine"] == engine) & (results["status"] == "ok")]
-        rows = rows[[is_nominal(meta, r) and parse_stages(r["stage_ms"]) is not None for _, r in rows.iterrows()]]
+        rows = rows[[is_nominal(meta, r) and not is_swept(r) and parse_stages(r["stage_ms"]) is not None for _, r in rows.iterrows()]]
         if rows.empty:
             continue
         parsed = {i: parse_stages(r["stage_ms"]) for i, r in rows.iterrows()}

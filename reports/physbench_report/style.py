@@ -20,11 +20,11 @@ _variant_index: dict[str, int] = {}
 
 
 def learn_styles(results: pd.DataFrame) -> None:
-    """Each engine's variants numbered in the order the results first name them, for the page."""
+    """Each engine's variants (and knob-swept configurations) numbered in the order the results first
+    name them, for the page."""
     _variant_index.clear()
     counts: dict[str, int] = {}
-    for engine, variant in zip(results["engine"], results["variant"]):
-        label = f"{engine}/{variant}"
+    for engine, label in zip(results["engine"], results["label"]):
         if label not in _variant_index:
             _variant_index[label] = counts.get(engine, 0)
             counts[engine] = _variant_index[label] + 1

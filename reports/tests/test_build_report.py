@@ -13,7 +13,7 @@ import pytest
 
 from support import PHYSBENCH, physbench_run
 import build_report  # noqa: E402  (found through support's path)
-from physbench_report import benchmarks, contacts, load, speed, table  # noqa: E402
+from physbench_report import benchmarks, contacts, load, profile, speed, table  # noqa: E402
 
 
 @pytest.fixture(scope="module")
@@ -308,6 +308,38 @@ def test_contact_scenes_have_their_tables(contact_results):
     # rtp has no contact solver yet: its rows say why, and the report shows it
     for message in table[table["status"] == "unsupported"]["message"]:
         assert html.escape(message) in page
+
+
+def test_rtp_stage_profile_is_drawn_from_stage_ms_and_peers_have_none(contact_results):
+    table = pd.read_csv(contact_results / "results.csv")
+    meta = json.loads((contact_results / "metadata.json").read_text())
+    stages = meta["engines"]["rtp"]["stages"]
+    assert "solve" in stages and "narrow_phase" in stages
+    results, _ = load.load_results(contact_results)
+    sections = {p["engine"]: p for p in profile.stage_profiles(results, meta)}
+    assert set(sections) == {"rtp"}  # Box2D and ODE do not time their stages: nothing drawn for them
+    assert table[table["engine"] != "rtp"]["stage_ms"].isna().all()
+    rtp = sections["rtp"]
+    ok = table[(table["engine"] == "rtp") & (table["status"] == "ok")]
+    assert len(rtp["table"]) == len(ok)
+    for row in rtp["table"]:
+        shares = [float(v) for v in row["shares"] if v]
+        assert len(row["shares"]) == len(stages)
+        assert abs(sum(shares) - 100) <= len(shares)  # whole percents of the stages' own sum
+    # the soft step's velocity passes are most of a tower step; the seed has no relax at all
+    soft = next(r for r in rtp["table"] if r["scenario"] == "tower-10" and r["variant"] == "soft-step")
+    share = dict(zip(stages, soft["shares"]))
+    assert float(share["solve"]) + float(share["relax"]) > 30
+    page = build_report.build_report(contact_results).read_text()
+    assert "Where rtp's step goes" in page and 'id="profile-rtp"' in page
+
+
+def test_knob_swept_rows_are_configurations_of_their_own():
+    rows = pd.DataFrame([dict(engine="bullet", variant="float", iterations=float("nan"), substeps=float("nan")),
+                         dict(engine="bullet", variant="float", iterations=8.0, substeps=float("nan")),
+                         dict(engine="rtp", variant="soft-step", iterations=float("nan"), substeps=2.0)])
+    assert [load.knob_suffix(r) for _, r in rows.iterrows()] == ["", " iterations=8", " substeps=2"]
+    assert [load.is_swept(r) for _, r in rows.iterrows()] == [False, True, True]
 
 
 def contact_row(engine, variant, steps_per_s, drift, status="ok", verdict="stands"):
