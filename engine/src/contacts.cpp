@@ -452,8 +452,7 @@ std::size_t ContactPipeline::sweep_fast_bodies(std::span<BodyState> states) {
       }
     }
     if (!touched) continue;
-    const Pose stop = pose_at(first_touch);
-    end.position = stop.position;
+    end.position = fast.position + first_touch * travel;
     end.orientation = fast.orientation.slerp(first_touch, end.orientation).normalized();
     ++stopped;
   }
