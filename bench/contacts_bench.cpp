@@ -7,9 +7,12 @@
 //   build/bench/bench/contacts_bench --benchmark_filter='Pyramid/base:100/'
 #include <benchmark/benchmark.h>
 
+#include <algorithm>
+#include <array>
 #include <map>
 #include <memory>
 #include <string>
+#include <string_view>
 
 #include "physbench/rtp_world.h"
 #include "physbench/scenarios.h"
@@ -43,21 +46,15 @@ void Pyramid(benchmark::State& state) {
   const int base = int(state.range(0)), threads = int(state.range(1));
   rtp::World& world = settled_world(base, threads);
   const double dt = 1.0 / 60.0;
-  rtp::StepProfile sum;
+  std::array<double, rtp::StepProfile::kStageNames.size()> sum{};
+  double total = 0.0;
   std::size_t steps = 0;
   for (auto _ : state) {
     world.step(dt);
     const rtp::StepProfile& p = world.profile();
-    sum.bounds += p.bounds;
-    sum.broad_phase += p.broad_phase;
-    sum.narrow_phase += p.narrow_phase;
-    sum.prepare += p.prepare;
-    sum.warm_start += p.warm_start;
-    sum.solve += p.solve;
-    sum.relax += p.relax;
-    sum.integrate += p.integrate + p.integrate_positions;
-    sum.restitution += p.restitution;
-    sum.total += p.total;
+    const auto stages = p.stage_seconds();
+    for (std::size_t i = 0; i < sum.size(); ++i) sum[i] += stages[i];
+    total += p.total;
     ++steps;
   }
   const rtp::StepProfile& last = world.profile();
@@ -68,24 +65,19 @@ void Pyramid(benchmark::State& state) {
   state.counters["contact_pairs"] = double(last.contact_pairs);
   state.counters["contact_points"] = double(last.contact_points);
   state.counters["reused_pairs"] = double(last.reused_pairs);
-  state.counters["ms_per_step"] = 1e3 * sum.total / double(steps);
+  state.counters["ms_per_step"] = 1e3 * total / double(steps);
   // the solve's passes over every point in a step: per substep one biased and the relax passes
   const double passes = double(c.substeps * (1 + c.relax_iterations));
-  state.counters["solver_ns_per_point_pass"] =
-      1e9 * (sum.solve + sum.relax) / (double(steps) * passes * double(last.contact_points));
-  state.counters["ns_per_contact_pair"] = 1e9 * sum.total / (double(steps) * last.contact_pairs);
-  auto share = [&](const char* name, double seconds) {
-    state.counters[std::string("share_") + name] = seconds / sum.total;
+  const auto& names = rtp::StepProfile::kStageNames;
+  auto seconds_of = [&](std::string_view name) {
+    return sum[std::size_t(std::find(names.begin(), names.end(), name) - names.begin())];
   };
-  share("bounds", sum.bounds);
-  share("broad_phase", sum.broad_phase);
-  share("narrow_phase", sum.narrow_phase);
-  share("prepare", sum.prepare);
-  share("warm_start", sum.warm_start);
-  share("solve", sum.solve);
-  share("relax", sum.relax);
-  share("integrate", sum.integrate);
-  share("restitution", sum.restitution);
+  state.counters["solver_ns_per_point_pass"] =
+      1e9 * (seconds_of("solve") + seconds_of("relax")) /
+      (double(steps) * passes * double(last.contact_points));
+  state.counters["ns_per_contact_pair"] = 1e9 * total / (double(steps) * last.contact_pairs);
+  for (std::size_t i = 0; i < names.size(); ++i)
+    state.counters[std::string("share_") + names[i]] = sum[i] / total;
 }
 
 }  // namespace

@@ -75,11 +75,8 @@ bool is_contact_variant(const std::string& variant) {
 
 // the stages of rtp's contact step as StepProfile times them (docs/architecture.md, "rtp's step"),
 // in the step's order
-constexpr const char* kContactStages[] = {"integrate", "bounds",  "broad_phase",
-                                          "narrow_phase", "prepare", "warm_start",
-                                          "solve",     "integrate_positions", "relax",
-                                          "restitution", "continuous"};
-constexpr std::size_t kContactStageCount = std::size(kContactStages);
+constexpr const auto& kContactStages = rtp::StepProfile::kStageNames;
+constexpr std::size_t kContactStageCount = kContactStages.size();
 
 class RtpEngine final : public Engine {
  public:
@@ -180,10 +177,7 @@ class RtpEngine final : public Engine {
   long profiled_steps_ = 0;
 
   void add_profile(const rtp::StepProfile& p) {
-    const double stages[] = {p.integrate, p.bounds,     p.broad_phase,         p.narrow_phase,
-                             p.prepare,   p.warm_start, p.solve, p.integrate_positions,
-                             p.relax,     p.restitution, p.continuous};
-    static_assert(std::size(stages) == kContactStageCount);
+    const std::array<double, kContactStageCount> stages = p.stage_seconds();
     for (std::size_t i = 0; i < kContactStageCount; ++i) stage_seconds_[i] += stages[i];
     ++profiled_steps_;
   }

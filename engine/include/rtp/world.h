@@ -8,6 +8,8 @@
 // Based Modeling", SIGGRAPH 2001 course notes, §2; Fiedler, "Physics in 3D").
 #pragma once
 
+#include <array>
+
 #include <cstdint>
 #include <memory>
 #include <vector>
@@ -167,6 +169,15 @@ struct StepProfile {
   std::size_t matched_points = 0;  // points that carried last step's impulses
   std::size_t reused_pairs = 0;    // candidate pairs the pair cache found still apart
   std::size_t swept_stops = 0;     // fast bodies the continuous stage stopped short
+
+  // the stages above by name, in the step's order (whoever reports them reads this one list)
+  static constexpr std::array<const char*, 11> kStageNames = {
+      "integrate", "bounds", "broad_phase", "narrow_phase", "prepare", "warm_start",
+      "solve", "integrate_positions", "relax", "restitution", "continuous"};
+  std::array<double, 11> stage_seconds() const {
+    return {integrate, bounds, broad_phase, narrow_phase, prepare, warm_start,
+            solve, integrate_positions, relax, restitution, continuous};
+  }
 };
 
 class ContactPipeline;
