@@ -219,6 +219,7 @@ void ContactPipeline::collide_pairs(std::span<const BodyState> states) {
   }
   // each body's pose (its rotation matrix) once a step, not once for each of its pairs
   poses_.resize(states.size());
+#pragma omp parallel for num_threads(settings_.threads) schedule(static) if (states.size() >= 2048)
   for (std::size_t i = 0; i < states.size(); ++i)
     if (shapes_[i].kind != BodyShape::None) poses_[i] = pose_of(states[i]);
   // each candidate's entry in last step's pair cache (both lists sorted by key)
@@ -259,17 +260,25 @@ void ContactPipeline::collide_pairs(std::span<const BodyState> states) {
   reused_ = reused;
   std::swap(pair_cache_, next_pair_cache_);
 
+  // the touching candidates in pair order, each to its place in contacts_, then every contact
+  // built and matched with last step's on the threads (each writes its own; last step's is
+  // found by key in its sorted list): the same contacts on any number of threads
   std::swap(contacts_, previous_);
-  contacts_.clear();
-  std::size_t previous_index = 0;
-  deepest_ = 0.0;
-  matched_ = 0;
-  for (std::size_t k = 0; k < n; ++k) {
+  touching_.clear();
+  for (std::size_t k = 0; k < n; ++k)
+    if (manifolds_[k].count != 0) touching_.push_back(std::uint32_t(k));
+  const std::size_t m = touching_.size();
+  contacts_.resize(m);
+  double deepest = 0.0;
+  std::size_t matched = 0;
+#pragma omp parallel for num_threads(settings_.threads) schedule(static) if (m >= 1024) \
+    reduction(max : deepest) reduction(+ : matched)
+  for (std::size_t i = 0; i < m; ++i) {
+    const std::size_t k = touching_[i];
     const Manifold& manifold = manifolds_[k];
-    if (manifold.count == 0) continue;
     const BodyId a = BodyId(candidates_[k] >> 32), b = BodyId(candidates_[k] & 0xffffffffu);
-    ContactConstraint& c = contacts_.emplace_back();
-    c.points.fill(ContactPointConstraint{});
+    ContactConstraint& c = contacts_[i];
+    c = ContactConstraint{};
     c.body_a = a;
     c.body_b = b;
     c.normal = manifold.normal;
@@ -278,26 +287,29 @@ void ContactPipeline::collide_pairs(std::span<const BodyState> states) {
     c.friction = std::sqrt(shapes_[a].friction * shapes_[b].friction);
     c.restitution = std::max(shapes_[a].restitution, shapes_[b].restitution);
     c.count = manifold.count;
-    for (std::uint8_t i = 0; i < manifold.count; ++i) {
-      ContactPointConstraint& p = c.points[i];
-      p.anchor_a = manifold.points[i].point - states[a].position;
-      p.anchor_b = manifold.points[i].point - states[b].position;
+    for (std::uint8_t j = 0; j < manifold.count; ++j) {
+      ContactPointConstraint& p = c.points[j];
+      p.anchor_a = manifold.points[j].point - states[a].position;
+      p.anchor_b = manifold.points[j].point - states[b].position;
       // depth of the grown shapes less the growth: the real separation (< 0: penetrating)
-      p.base_separation = pair_growth_[k] - manifold.points[i].depth;
-      p.feature = manifold.points[i].feature;
-      deepest_ = std::max(deepest_, -p.base_separation);
+      p.base_separation = pair_growth_[k] - manifold.points[j].depth;
+      p.feature = manifold.points[j].feature;
+      deepest = std::max(deepest, -p.base_separation);
     }
     // the same pair last step: carry each point's impulses by feature id (warm starting)
-    while (previous_index < previous_.size() && previous_[previous_index].key() < c.key())
-      ++previous_index;
-    if (!settings_.warm_start || previous_index == previous_.size() ||
-        previous_[previous_index].key() != c.key())
-      continue;
-    carry_impulses(previous_[previous_index], c);
+    if (!settings_.warm_start) continue;
+    const auto old = std::lower_bound(
+        previous_.begin(), previous_.end(), c.key(),
+        [](const ContactConstraint& p, std::uint64_t key) { return p.key() < key; });
+    if (old == previous_.end() || old->key() != c.key()) continue;
+    matched += carry_impulses(*old, c);
   }
+  deepest_ = deepest;
+  matched_ = matched;
 }
 
-void ContactPipeline::carry_impulses(const ContactConstraint& old, ContactConstraint& c) {
+std::size_t ContactPipeline::carry_impulses(const ContactConstraint& old,
+                                            ContactConstraint& c) const {
   // each point takes the impulses of last step's point with the same features; failing that, of
   // the nearest unclaimed one within the match distance. Two equal boxes stacked face to face
   // have incident corners on the reference face's corners, and which candidate of the clip
@@ -324,9 +336,10 @@ void ContactPipeline::carry_impulses(const ContactConstraint& old, ContactConstr
     }
     if (source[i] >= 0) claimed[source[i]] = true;
   }
+  std::size_t matched = 0;
   for (std::uint8_t i = 0; i < c.count; ++i) {
     if (source[i] < 0) continue;
-    ++matched_;
+    ++matched;
     const ContactPointConstraint& from = old.points[source[i]];
     ContactPointConstraint& to = c.points[i];
     to.normal_impulse = from.normal_impulse;
@@ -337,6 +350,7 @@ void ContactPipeline::carry_impulses(const ContactConstraint& old, ContactConstr
     to.tangent_impulse[0] = friction.dot(c.tangent[0]);
     to.tangent_impulse[1] = friction.dot(c.tangent[1]);
   }
+  return matched;
 }
 
 ContactPipeline::CachedPair ContactPipeline::cache_apart(BodyId a, BodyId b,

@@ -112,7 +112,8 @@ class ContactPipeline {
 
  private:
   struct BodyShapeData;
-  void carry_impulses(const ContactConstraint& old, ContactConstraint& c);
+  // the number of c's points that took an old point's impulses
+  std::size_t carry_impulses(const ContactConstraint& old, ContactConstraint& c) const;
   // the two shapes of a pair grown by the bodies' growth this step; returns the total (m)
   double grow_pair(const BodyShapeData& a, const BodyShapeData& b, Shape& grown_a,
                    Shape& grown_b) const;
@@ -163,6 +164,7 @@ class ContactPipeline {
   bool still_apart(const CachedPair& cached, BodyId a, BodyId b, double growth) const;
   CachedPair cache_apart(BodyId a, BodyId b, double growth) const;
   std::vector<CachedPair> pair_cache_, next_pair_cache_;  // by candidate, sorted by key
+  std::vector<std::uint32_t> touching_;     // the candidates whose manifold has points
   std::vector<std::uint32_t> cache_index_;  // per candidate: its entry in pair_cache_, or ~0
   std::size_t reused_ = 0;
   std::vector<Pose> poses_;  // per body, this step
