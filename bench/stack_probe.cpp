@@ -1,12 +1,14 @@
 // stack_probe: one contact scenario on rtp with chosen solver settings, and what the stack did —
 // the tool behind docs/solver.md's "what was tried" figures. Prints the drift and the top box's
-// height change every simulated second (stderr) and one summary line (stdout): drift as the
-// harness defines it (the largest horizontal displacement of any box), the top's height change,
+// height change every simulated second, or every `every` seconds (stderr), and one summary line (stdout): drift as the
+// harness defines it (the largest horizontal displacement of any box, over the run so far), the
+// top box's sideways and height change,
 // the deepest penetration the narrow phase saw, the energy change and ms per step. Not a
 // benchmark: time it only against itself, in turn, on one machine (docs/metrics.md).
 //
 //   build/bench/bench/stack_probe pyramid-100 10
 //   build/bench/bench/stack_probe pyramid-50 3 substeps 16 hertz 240
+//   build/bench/bench/stack_probe pyramid-100 2 every 0.1     (a line every 0.1 s, not every second)
 #include <cmath>
 #include <cstdio>
 #include <cstdlib>
@@ -37,7 +39,7 @@ std::map<std::string, std::function<void(rtp::ContactSettings&, double)>> settin
 }
 
 int usage(const char* why) {
-  std::fprintf(stderr, "stack_probe: %s\nusage: stack_probe SCENARIO SECONDS [SETTING VALUE]...\nsettings:", why);
+  std::fprintf(stderr, "stack_probe: %s\nusage: stack_probe SCENARIO SECONDS [SETTING VALUE]...\nsettings: every (seconds between progress lines)", why);
   for (const auto& [name, _] : settings_by_name()) std::fprintf(stderr, " %s", name.c_str());
   std::fprintf(stderr, "\n");
   return 2;
@@ -54,7 +56,13 @@ int main(int argc, char** argv) {
   if (*end || !(seconds > 0.0 && seconds <= 3600.0)) return usage("SECONDS must be in (0, 3600]");
   rtp::ContactSettings settings;
   const auto known = settings_by_name();
+  double every = 1.0;  // seconds between the progress lines
   for (int i = 3; i + 1 < argc; i += 2) {
+    if (std::string(argv[i]) == "every") {
+      every = std::strtod(argv[i + 1], &end);
+      if (*end || !(every > 0.0 && every <= seconds)) return usage("every must be in (0, SECONDS]");
+      continue;
+    }
     const auto setting = known.find(argv[i]);
     if (setting == known.end()) return usage((std::string("unknown setting ") + argv[i]).c_str());
     const double value = std::strtod(argv[i + 1], &end);
@@ -74,7 +82,7 @@ int main(int argc, char** argv) {
   if (top < 0) return usage("the scenario has no dynamic body");
   const double energy = world.mechanical_energy();
   const int steps = int(std::lround(seconds / scene.dt));
-  const int per_second = std::max(1, int(std::lround(1.0 / scene.dt)));
+  const int per_line = std::max(1, int(std::lround(every / scene.dt)));
   double drift = 0.0, seconds_stepping = 0.0, deepest = 0.0;
   for (int k = 0; k < steps; ++k) {
     world.step(scene.dt);
@@ -85,8 +93,9 @@ int main(int argc, char** argv) {
       const rtp::Vec3 d = world.state(i).position - start[i];
       drift = std::max(drift, std::hypot(d.x(), d.z()));
     }
-    if ((k + 1) % per_second == 0)
-      std::fprintf(stderr, "t = %.0f s  drift %.4f m  top %+.4f m\n", (k + 1) * scene.dt, drift,
+    if ((k + 1) % per_line == 0)
+      std::fprintf(stderr, "t = %.2f s  drift %.4f m  top x %+.4f m, height %+.4f m\n",
+                   (k + 1) * scene.dt, drift, world.state(top).position.x() - start[top].x(),
                    world.state(top).position.y() - start[top].y());
   }
   std::printf("%s %.3g s: drift %.4f m, top %+.4f m, deepest penetration %.4f m, energy %+.3f J, %.2f ms a step\n",
