@@ -1,10 +1,10 @@
 // stack_probe: one contact scenario on rtp with chosen solver settings, and what the stack did —
-// the tool behind docs/solver.md's "what was tried" figures. Prints the drift and the top box's
-// height change every simulated second, or every `every` seconds (stderr), and one summary line (stdout): drift as the
-// harness defines it (the largest horizontal displacement of any box, over the run so far), the
-// top box's sideways and height change,
-// the deepest penetration the narrow phase saw, the energy change and ms per step. Not a
-// benchmark: time it only against itself, in turn, on one machine (docs/metrics.md).
+// the tool behind docs/solver.md's "what was tried" figures. Prints, every simulated second (or
+// every `every` seconds), the drift and the top box's sideways and height change (stderr), and one
+// summary line (stdout): drift as the harness defines it (the largest horizontal displacement of
+// any box, over the run so far), the top's height change, the deepest penetration the narrow
+// phase saw, the energy change and ms per step. Not a benchmark: time it only against itself, in
+// turn, on one machine (docs/metrics.md).
 //
 //   build/bench/bench/stack_probe pyramid-100 10
 //   build/bench/bench/stack_probe pyramid-50 3 substeps 16 hertz 240
