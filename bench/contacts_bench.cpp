@@ -47,7 +47,7 @@ void Pyramid(benchmark::State& state) {
   rtp::World& world = settled_world(base, threads);
   const double dt = 1.0 / 60.0;
   std::array<double, rtp::StepProfile::kStageNames.size()> sum{};
-  double total = 0.0;
+  double total = 0.0, relax_passes = 0.0;
   std::size_t steps = 0;
   for (auto _ : state) {
     world.step(dt);
@@ -55,6 +55,7 @@ void Pyramid(benchmark::State& state) {
     const auto stages = p.stage_seconds();
     for (std::size_t i = 0; i < sum.size(); ++i) sum[i] += stages[i];
     total += p.total;
+    relax_passes += double(p.relax_passes);
     ++steps;
   }
   const rtp::StepProfile& last = world.profile();
@@ -66,8 +67,10 @@ void Pyramid(benchmark::State& state) {
   state.counters["contact_points"] = double(last.contact_points);
   state.counters["reused_pairs"] = double(last.reused_pairs);
   state.counters["ms_per_step"] = 1e3 * total / double(steps);
-  // the solve's passes over every point in a step: per substep one biased and the relax passes
-  const double passes = double(c.substeps * (1 + c.relax_iterations));
+  // the solve's passes over every point in a step: per substep one biased, and the relax passes
+  // (as many as the step took: more while a pass still changes a velocity past the tolerance)
+  const double passes = double(c.substeps) + relax_passes / double(steps);
+  state.counters["relax_passes_per_step"] = relax_passes / double(steps);
   const auto& names = rtp::StepProfile::kStageNames;
   auto seconds_of = [&](std::string_view name) {
     return sum[std::size_t(std::find(names.begin(), names.end(), name) - names.begin())];
@@ -86,7 +89,9 @@ int main(int argc, char** argv) {
   const rtp::ContactSettings c;
   benchmark::AddCustomContext(
       "solver", "soft step, " + std::to_string(c.substeps) + " substeps, " +
-                    std::to_string(c.relax_iterations) + " relax passes, " +
+                    std::to_string(c.relax_iterations) + " to " +
+                    std::to_string(c.max_relax_iterations) + " relax passes (until " +
+                    std::to_string(c.relax_tolerance * 1e3).substr(0, 4) + " mm/s), " +
                     std::to_string(int(c.contact_hertz)) + " Hz; sleeping off; dt 1/60");
   benchmark::AddCustomContext("scene", "pyramid-N of the contact scenarios, settled " +
                                            std::to_string(kSettleSteps) + " steps before timing");

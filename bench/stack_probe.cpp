@@ -27,6 +27,8 @@ std::map<std::string, std::function<void(rtp::ContactSettings&, double)>> settin
   return {
       {"substeps", [](rtp::ContactSettings& s, double v) { s.substeps = int(v); }},
       {"relax", [](rtp::ContactSettings& s, double v) { s.relax_iterations = int(v); }},
+      {"max_relax", [](rtp::ContactSettings& s, double v) { s.max_relax_iterations = int(v); }},
+      {"relax_tolerance", [](rtp::ContactSettings& s, double v) { s.relax_tolerance = v; }},
       {"hertz", [](rtp::ContactSettings& s, double v) { s.contact_hertz = v; }},
       {"zeta", [](rtp::ContactSettings& s, double v) { s.damping_ratio = v; }},
       {"push", [](rtp::ContactSettings& s, double v) { s.max_push_speed = v; }},
@@ -84,9 +86,11 @@ int main(int argc, char** argv) {
   const int steps = int(std::lround(seconds / scene.dt));
   const int per_line = std::max(1, int(std::lround(every / scene.dt)));
   double drift = 0.0, seconds_stepping = 0.0, deepest = 0.0;
+  std::size_t relax_passes = 0;
   for (int k = 0; k < steps; ++k) {
     world.step(scene.dt);
     seconds_stepping += world.profile().total;
+    relax_passes += world.profile().relax_passes;
     deepest = std::max(deepest, world.deepest_penetration());
     for (int i = 0; i < n; ++i) {
       if (world.mass(i) == 0.0) continue;
@@ -94,12 +98,13 @@ int main(int argc, char** argv) {
       drift = std::max(drift, std::hypot(d.x(), d.z()));
     }
     if ((k + 1) % per_line == 0)
-      std::fprintf(stderr, "t = %.2f s  drift %.4f m  top x %+.4f m, height %+.4f m\n",
+      std::fprintf(stderr, "t = %.2f s  drift %.4f m  top x %+.4f m, height %+.4f m  deepest %.4f m\n",
                    (k + 1) * scene.dt, drift, world.state(top).position.x() - start[top].x(),
-                   world.state(top).position.y() - start[top].y());
+                   world.state(top).position.y() - start[top].y(), world.deepest_penetration());
   }
-  std::printf("%s %.3g s: drift %.4f m, top %+.4f m, deepest penetration %.4f m, energy %+.3f J, %.2f ms a step\n",
+  std::printf("%s %.3g s: drift %.4f m, top %+.4f m, deepest penetration %.4f m, energy %+.3f J, %.2f ms a step, %.2f relax passes a step\n",
               argv[1], seconds, drift, world.state(top).position.y() - start[top].y(), deepest,
-              world.mechanical_energy() - energy, 1e3 * seconds_stepping / steps);
+              world.mechanical_energy() - energy, 1e3 * seconds_stepping / steps,
+              double(relax_passes) / steps);
   return 0;
 }

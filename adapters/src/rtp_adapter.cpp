@@ -55,6 +55,7 @@ std::optional<rtp::ContactSettings> contact_settings_for(const std::string& vari
     settings.contact_hertz = 30.0;
     settings.damping_ratio = 10.0;
     settings.relax_iterations = 1;
+    settings.max_relax_iterations = 1;  // Box2D's one pass, never more
     settings.max_push_speed = 3.0;
   } else if (base == "sequential-impulse") {
     settings.solver = rtp::ContactSolver::SequentialImpulse;
@@ -250,7 +251,14 @@ EngineInfo rtp_engine_info() {
         table.push_back({"substeps", std::to_string(c.substeps),
                          base == "soft-step-4" ? "Box2D v3's default"
                                                : "the stiffness a 20-box tower needs"});
-        table.push_back({"relax iterations", std::to_string(c.relax_iterations), "per substep"});
+        if (c.max_relax_iterations > c.relax_iterations && c.relax_tolerance > 0.0)
+          table.push_back({"relax iterations",
+                           std::to_string(c.relax_iterations) + " to " +
+                               std::to_string(c.max_relax_iterations),
+                           "per substep: more while the last pass changed a contact's normal "
+                           "velocity by over " + number(c.relax_tolerance * 1e3) + " mm/s"});
+        else
+          table.push_back({"relax iterations", std::to_string(c.relax_iterations), "per substep"});
         table.push_back({"push-out speed", number(c.max_push_speed) + " m/s",
                          "the fastest a contact pushes penetrating bodies apart"});
         table.push_back({"contact stiffness",

@@ -19,6 +19,7 @@
 // Over 500 lines because the lane helpers (V3, NormalRow, LanePair, NormalMotion) are private to
 // the kernels that use them; moved to a header they would be the solver's internals in two places.
 #include <algorithm>
+#include <atomic>
 #include <array>
 #include <bit>
 #include <cmath>
@@ -484,7 +485,7 @@ void ContactPipeline::warm_start() {
   });
 }
 
-void ContactPipeline::solve(double h, bool bias, bool backwards) {
+bool ContactPipeline::solve(double h, bool bias, bool backwards, double tolerance) {
   const float inverse_h = float(1.0 / h);
   const bool soft = settings_.solver == ContactSolver::SoftStep;
   // sequential impulse: the Baumgarte bias removes this fraction of the penetration past the
@@ -493,7 +494,12 @@ void ContactPipeline::solve(double h, bool bias, bool backwards) {
   const Lane slop = splat(float(settings_.linear_slop));
   const Lane max_push = splat(float(settings_.max_push_speed));
   const Lane zero = splat(0.0f), one = splat(1.0f);
+  // a point's normal velocity changes by applied / normal_mass: past the tolerance where
+  // |applied| > tolerance · normal_mass (an empty point's mass is 0, and it applies nothing)
+  const Lane tolerance_lane = splat(float(tolerance));
+  std::atomic<bool> moved{false};
   for_each_block([&](ContactBlock& c, Prefetch& ahead) {
+    LaneMask changed = zero != zero;
     LanePair pair(bodies_, c);
     const V3 n = load3(c.normal), t0 = load3(c.tangent[0]), t1 = load3(c.tangent[1]);
     ahead.ahead(16);
@@ -541,6 +547,7 @@ void ContactPipeline::solve(double h, bool bias, bool backwards) {
         const Lane applied = accumulated - p.normal_impulse;
         p.normal_impulse = accumulated;
         p.max_normal_impulse = simd::max(p.max_normal_impulse, applied);
+        changed |= simd::max(applied, zero - applied) > tolerance_lane * p.normal_mass;
         pair.apply_normal(c, row, n, applied);
       }
     }
@@ -567,7 +574,9 @@ void ContactPipeline::solve(double h, bool bias, bool backwards) {
       pair.apply(c, p, (f0 - old0) * t0 + (f1 - old1) * t1);
     }
     pair.store(bodies_, c);
+    if (simd::any_of(changed)) moved.store(true, std::memory_order_relaxed);
   }, backwards);
+  return !moved.load(std::memory_order_relaxed);
 }
 
 void ContactPipeline::restitution() {

@@ -91,7 +91,8 @@ class ContactPipeline {
   void warm_start();
   // one pass of the velocity solve; bias: push out penetration (soft step, sequential impulse);
   // backwards: the colours in reverse order
-  void solve(double h, bool bias, bool backwards = false);
+  // returns whether every point's normal velocity changed by under `tolerance` (m/s) in the pass
+  bool solve(double h, bool bias, bool backwards = false, double tolerance = 0.0);
   void solve_seed(double dt);
   void restitution();
   // continuous collision: each body that moved further this step than its speculative contacts

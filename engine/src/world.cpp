@@ -1,6 +1,7 @@
 #include "rtp/world.h"
 
 #include <cassert>
+#include <cmath>
 #include <chrono>
 #include <stdexcept>
 
@@ -49,11 +50,13 @@ Vec3 spring_force_on_a(const SpringDef& spring, const Vec3& point_a, const Vec3&
 World::World(Vec3 gravity, Integrator integrator, ContactSettings contacts)
     : gravity_(gravity), integrator_(integrator), contact_settings_(contacts) {
   if (contacts.substeps < 1 || contacts.velocity_iterations < 0 || contacts.relax_iterations < 0 ||
-      contacts.restitution_iterations < 0 || contacts.local_iterations < 1 || contacts.threads < 1)
+      contacts.max_relax_iterations < 0 || contacts.restitution_iterations < 0 ||
+      contacts.local_iterations < 1 || contacts.threads < 1)
     throw std::invalid_argument("rtp: contact substeps must be >= 1 and iterations >= 0");
   if (!(contacts.speculative_distance >= 0.0) || !(contacts.linear_slop >= 0.0) ||
       !(contacts.contact_hertz >= 0.0) || !(contacts.damping_ratio >= 0.0) ||
-      !(contacts.max_push_speed > 0.0))
+      !(contacts.max_push_speed > 0.0) || !(contacts.relax_tolerance >= 0.0) ||
+      !std::isfinite(contacts.relax_tolerance))
     throw std::invalid_argument("rtp: contact distances, stiffness and speeds must be >= 0");
 }
 
@@ -412,7 +415,15 @@ void World::step_with_contacts(double dt) {
         timed(profile_.solve, [&] { contacts.solve(h, true, backwards); });
         timed(profile_.integrate_positions, [&] { integrate_positions(h); });
         timed(profile_.relax, [&] {
-          for (int i = 0; i < settings.relax_iterations; ++i) contacts.solve(h, false, backwards);
+          // relax_iterations passes, then more while the last one still moved a point's normal
+          // velocity by over the tolerance, up to max_relax_iterations
+          const double tolerance = settings.relax_tolerance;
+          const int most = std::max(settings.relax_iterations, settings.max_relax_iterations);
+          for (int i = 0; i < most; ++i) {
+            const bool settled = contacts.solve(h, false, backwards, tolerance);
+            ++profile_.relax_passes;
+            if (i + 1 >= settings.relax_iterations && (settled || tolerance <= 0.0)) break;
+          }
         });
       }
       timed(profile_.restitution, [&] { contacts.restitution(); });

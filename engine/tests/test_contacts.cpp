@@ -249,6 +249,35 @@ TEST(Contacts, SettledStackKeepsItsContactsAndAllocatesNothing) {
   EXPECT_EQ(world.profile().contact_points, 16u);
 }
 
+// the soft step's relax passes: more while a stack takes its load (a pass still changes some
+// contact's normal velocity by over the tolerance), the minimum once it rests; and exactly the
+// minimum with the tolerance off
+TEST(Contacts, RelaxPassesGrowWhileAStackSettlesAndFallToTheMinimumAtRest) {
+  for (const double tolerance : {0.01, 0.0}) {
+    ContactSettings settings;
+    settings.relax_tolerance = tolerance;
+    World world(kGravity, Integrator::SemiImplicitEuler, settings);
+    add_ground(world, 0.6);
+    // ten boxes dropped 1 cm onto each other: every contact new, every impact to converge
+    for (int i = 0; i < 10; ++i) add_box(world, {0.0, 0.51 + 1.01 * i, 0.0}, 1.0, 0.6);
+    const std::size_t least = std::size_t(settings.substeps * settings.relax_iterations);
+    const std::size_t most = std::size_t(settings.substeps * settings.max_relax_iterations);
+    std::size_t largest = 0;
+    for (int i = 0; i < 60; ++i) {
+      world.step(kDt);
+      largest = std::max(largest, world.profile().relax_passes);
+      EXPECT_GE(world.profile().relax_passes, least);
+      EXPECT_LE(world.profile().relax_passes, tolerance > 0.0 ? most : least);
+    }
+    if (tolerance > 0.0) EXPECT_GT(largest, least) << "the landings must take more passes";
+    for (int i = 0; i < 240; ++i) world.step(kDt);
+    for (int i = 0; i < 60; ++i) {
+      world.step(kDt);
+      EXPECT_EQ(world.profile().relax_passes, least) << "at rest, step " << i;
+    }
+  }
+}
+
 // the same scene run twice gives bit-identical states
 TEST(Contacts, SameSceneTwiceIsBitIdentical) {
   auto run = [] {
@@ -328,6 +357,14 @@ TEST(Contacts, BadShapesAndMaterialsAreRefused) {
   ContactSettings settings;
   settings.substeps = 0;
   EXPECT_THROW(World(kGravity, Integrator::SemiImplicitEuler, settings), std::invalid_argument);
+  for (const double tolerance : {-0.01, std::nan("")}) {
+    ContactSettings bad;
+    bad.relax_tolerance = tolerance;
+    EXPECT_THROW(World(kGravity, Integrator::SemiImplicitEuler, bad), std::invalid_argument);
+  }
+  ContactSettings bad;
+  bad.max_relax_iterations = -1;
+  EXPECT_THROW(World(kGravity, Integrator::SemiImplicitEuler, bad), std::invalid_argument);
 }
 
 }  // namespace
