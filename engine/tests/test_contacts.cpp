@@ -269,7 +269,9 @@ TEST(Contacts, RelaxPassesGrowWhileAStackSettlesAndFallToTheMinimumAtRest) {
       EXPECT_GE(world.profile().relax_passes, least);
       EXPECT_LE(world.profile().relax_passes, tolerance > 0.0 ? most : least);
     }
-    if (tolerance > 0.0) EXPECT_GT(largest, least) << "the landings must take more passes";
+    if (tolerance > 0.0) {
+      EXPECT_GT(largest, least) << "the landings must take more passes";
+    }
     for (int i = 0; i < 240; ++i) world.step(kDt);
     for (int i = 0; i < 60; ++i) {
       world.step(kDt);
