@@ -49,6 +49,8 @@ class Box2dEngine final : public Engine {
 
   void load(const Scene& scene) override {
     scene_ = scene;
+    contact_points_ = 0.0;
+    contact_steps_ = 0;
     dt_ = scene.dt;
     world_ = std::make_unique<b2World>(b2Vec2(float(scene.gravity.x()), float(scene.gravity.y())));
     world_->SetAllowSleeping(false);
@@ -214,6 +216,12 @@ class Box2dEngine final : public Engine {
     if (driver_) step_particles_before();
     world_->Step(float(dt_), velocity_iterations_, kPositionIterations);
     ++steps_;
+    if (counts_contacts()) {
+      // the touching contacts' manifold points this step
+      for (const b2Contact* c = world_->GetContactList(); c; c = c->GetNext())
+        if (c->IsTouching()) contact_points_ += c->GetManifold()->pointCount;
+      ++contact_steps_;
+    }
     if (driver_) step_particles_after();
     // Box2D scales down any velocity that would carry a body more than b2_maxTranslation (2 m)
     // or turn it more than b2_maxRotation (π/2) in one step, silently: the motion is then not the
@@ -237,6 +245,11 @@ class Box2dEngine final : public Engine {
     }
   }
 
+  std::optional<ContactCount> contact_count() const override {
+    if (!counts_contacts()) return std::nullopt;
+    return ContactCount{contact_points_, contact_steps_};
+  }
+
   SampledState body_state(int index) const override {
     const b2Body* body = bodies_[index];
     const b2Vec2 p = body->GetPosition();
@@ -253,6 +266,9 @@ class Box2dEngine final : public Engine {
   double dt_ = 0.0;
   std::unique_ptr<b2World> world_;
   long steps_ = 0;
+  double contact_points_ = 0.0;  // summed since load()
+  long contact_steps_ = 0;
+  bool counts_contacts() const { return scene_.has_contacts() && !scene_.particles; }
   std::vector<b2Body*> bodies_;  // owned by world_; the particles follow the scene's bodies
   std::unique_ptr<ParticleDriver> driver_;
   std::size_t first_particle_ = 0;

@@ -79,6 +79,8 @@ class OdeEngine final : public Engine {
     dRandSetSeed(0);
     scene_ = scene;
     dt_ = scene.dt;
+    contact_points_ = 0.0;
+    contact_steps_ = 0;
     world_ = dWorldCreate();
     dWorldSetGravity(world_, scene.gravity.x(), scene.gravity.y(), scene.gravity.z());
     dWorldSetAutoDisableFlag(world_, 0);
@@ -166,6 +168,7 @@ class OdeEngine final : public Engine {
       dJointID joint = dJointCreateContact(self->world_, self->contacts_, &contact[i]);
       dJointAttach(joint, body_a, body_b);
     }
+    self->contact_points_ += count;
   }
 
   // particles: a dBody sphere each (the scene's radius and mass) in a simple space, and the planes
@@ -246,7 +249,10 @@ class OdeEngine final : public Engine {
             dBodyAddForceAtPos(bodies_[b], f.x(), f.y(), f.z(), p.x(), p.y(), p.z());
           });
     if (driver_) step_particles_before();
-    if (space_) dSpaceCollide(space_, this, &body_contact);
+    if (space_) {
+      dSpaceCollide(space_, this, &body_contact);
+      ++contact_steps_;
+    }
     ode_messages = 0;
     if (quick_step_)
       dWorldQuickStep(world_, dt_);
@@ -258,6 +264,12 @@ class OdeEngine final : public Engine {
                                "): ODE's solver failed, so the run is not a result");
     if (driver_) step_particles_after();
     if (space_) dJointGroupEmpty(contacts_);
+  }
+
+  // the contact joints made for the bodies' geoms (a joint a point), summed since load()
+  std::optional<ContactCount> contact_count() const override {
+    if (!space_ || !scene_.has_contacts()) return std::nullopt;
+    return ContactCount{contact_points_, contact_steps_};
   }
 
   SampledState body_state(int index) const override {
@@ -303,6 +315,8 @@ class OdeEngine final : public Engine {
   bool spring_joints_;
   int iterations_;  // QuickStep iterations; 0: ODE's default
   long steps_ = 0;
+  double contact_points_ = 0.0;  // contact joints for the bodies' geoms, summed since load()
+  long contact_steps_ = 0;
   dSpaceID space_ = nullptr;
   std::unique_ptr<ParticleDriver> driver_;
   std::size_t first_particle_ = 0;

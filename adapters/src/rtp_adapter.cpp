@@ -98,6 +98,7 @@ class RtpEngine final : public Engine {
     profiled_ = world_->has_contacts() && !scene.particles;
     stage_seconds_.fill(0.0);
     profiled_steps_ = 0;
+    contact_points_ = 0.0;
     if (scene.particles) {
       rtp::ParticleSystemDef def = particle_system_def(scene);
       def.integrator = particle_integrator_;
@@ -139,6 +140,11 @@ class RtpEngine final : public Engine {
     return tuning;
   }
 
+  std::optional<ContactCount> contact_count() const override {
+    if (!profiled_) return std::nullopt;
+    return ContactCount{contact_points_, profiled_steps_};
+  }
+
   std::optional<StageTimes> stage_times() const override {
     if (!profiled_) return std::nullopt;
     StageTimes times;
@@ -176,8 +182,10 @@ class RtpEngine final : public Engine {
   bool profiled_ = false;
   std::array<double, kContactStageCount> stage_seconds_{};
   long profiled_steps_ = 0;
+  double contact_points_ = 0.0;  // the manifolds' points, summed since load()
 
   void add_profile(const rtp::StepProfile& p) {
+    contact_points_ += static_cast<double>(p.contact_points);
     const std::array<double, kContactStageCount> stages = p.stage_seconds();
     for (std::size_t i = 0; i < kContactStageCount; ++i) stage_seconds_[i] += stages[i];
     ++profiled_steps_;

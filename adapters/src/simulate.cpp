@@ -196,6 +196,8 @@ RunResult simulate(const EngineInfo& info, const std::string& variant, const Sce
     engine->load(scene);
     const Pass pass = run_once(*engine, scene, result.trajectory.bodies, every,
                                options.explosion_distance, options.slowdown, &result.trajectory);
+    if (const std::optional<ContactCount> contacts = engine->contact_count())
+      result.contacts = *contacts;
     if (pass.exploded) {
       std::ostringstream why;
       if (!pass.reason.empty())

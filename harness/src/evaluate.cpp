@@ -48,6 +48,9 @@ void put_speed(ResultRow& row, const Scene& scene, const RunResult& r, int dynam
       ms_per_step.push_back(1e3 * seconds / static_cast<double>(r.stages.steps));
     row.numbers("stage_ms", ms_per_step, 4);
   }
+  // the engine's own count of the contact points it solved, per step of the first run
+  if (r.contacts.steps > 0)
+    row.number("contact_points", r.contacts.points / static_cast<double>(r.contacts.steps));
 }
 
 // the error metrics the scene asks for; the job's status becomes diverged when its energy more

@@ -27,6 +27,9 @@ json result_to_json(const RunResult& r) {
     doc["stages"] = {{"names", r.stages.names},
                      {"seconds", r.stages.seconds},
                      {"steps", r.stages.steps}};
+  // optional: the engine's contact points, summed over the first run's steps
+  if (r.contacts.steps > 0)
+    doc["contacts"] = {{"points", r.contacts.points}, {"steps", r.contacts.steps}};
   doc["bodies"] = r.trajectory.bodies;
   // one row per sample: time, then 13 numbers per body (position, quaternion wxyz, velocity,
   // angular velocity)
@@ -68,6 +71,13 @@ RunResult result_from_json(const json& doc) {
     r.stages.steps = stages.at("steps").get<long>();
     if (r.stages.seconds.size() != r.stages.names.size() || r.stages.steps <= 0)
       throw std::runtime_error("stages: a time for each name, over a positive number of steps");
+  }
+  if (doc.contains("contacts")) {
+    const json& contacts = doc.at("contacts");
+    r.contacts.points = contacts.at("points").get<double>();
+    r.contacts.steps = contacts.at("steps").get<long>();
+    if (!(r.contacts.points >= 0.0) || r.contacts.steps <= 0)
+      throw std::runtime_error("contacts: a count of points >= 0 over a positive number of steps");
   }
   r.trajectory.bodies = doc.at("bodies").get<std::vector<int>>();
   for (const json& row : doc.at("samples")) {

@@ -377,6 +377,36 @@ TEST(ContactPeers, MujocoRefusesMaterialsItCannotCombine) {
 #endif
 
 // the equal-iteration variants only run where there are contacts to solve
+// every C++ engine counts the contact points its solver held, a step at a time: a box at rest on a
+// slope has at least one and at most a face's four (a Box2D polygon's edge: two) on every step;
+// rtp's manifold keeps the face's four; a scene without contacts has no count at all
+TEST(ContactPeers, EachEngineCountsTheContactPointsOfABoxAtRest) {
+  Scene slope = incline_scene(25);
+  slope.duration = 1.0;
+  const long steps = slope.step_count();
+  for (const auto& [engine, variant] : std::vector<std::pair<std::string, std::string>>{
+           {"rtp", "soft-step"}, {"bullet", "float"}, {"ode", "quickstep"}, {"box2d", "default"}
+#ifdef PHYSBENCH_HAVE_MUJOCO
+           , {kMujoco, "euler"}
+#endif
+       }) {
+    const EngineInfo* info = find_linked_engine(engine);
+    if (!info) continue;
+    const RunResult run = simulate(*info, variant, slope, untimed());
+    ASSERT_EQ(run.status, Status::Ok) << engine << ": " << run.message;
+    EXPECT_EQ(run.contacts.steps, steps) << engine << ": a count for every step";
+    const double per_step = run.contacts.points / double(run.contacts.steps);
+    const double most = engine == "box2d" ? 2.0 : 4.0;
+    EXPECT_GE(per_step, 1.0) << engine;
+    EXPECT_LE(per_step, most) << engine;
+    if (engine == "rtp") {
+      EXPECT_EQ(per_step, 4.0);
+    }
+    const RunResult free = simulate(*info, info->variants.front(), projectile_scene(), untimed());
+    EXPECT_EQ(free.contacts.steps, 0) << engine << ": no contacts, no count";
+  }
+}
+
 TEST(ContactPeers, IterationVariantsApplyOnlyToContacts) {
   for (const auto& [engine, variant] : std::vector<std::pair<std::string, std::string>>{
            {"ode", "quickstep-10"}, {"box2d", "iterations-10"}, {kMujoco, "pgs-10"}}) {

@@ -41,6 +41,14 @@ struct StageTimes {
   long steps = 0;
 };
 
+// the contact points the engine solved, summed over the steps since load() (each engine's own
+// count of the points its contact solver held that step: a manifold's points, ODE's contact joints,
+// MuJoCo's contacts)
+struct ContactCount {
+  double points = 0.0;
+  long steps = 0;
+};
+
 // a sweep's solver knobs (docs/regression.md, "Sweeps over iterations and substeps"); 0 leaves the
 // variant's own
 struct SolverKnobs {
@@ -77,6 +85,9 @@ class Engine {
   // the engine's own timing of its step's stages since load(), for an engine that times them;
   // nothing for one that does not (its results column stays empty: never an estimate)
   virtual std::optional<StageTimes> stage_times() const { return std::nullopt; }
+  // the contact points of the steps since load(), for an engine that reports them; nothing for
+  // one that does not (its results column stays empty)
+  virtual std::optional<ContactCount> contact_count() const { return std::nullopt; }
   // a sweep's knobs, set before load() on the engine's nearest native ones; an adapter without
   // them says so
   virtual Tuning tune(const SolverKnobs&) {

@@ -50,6 +50,9 @@ struct RunResult {
   // the engine's stages (Engine::stage_times) summed over the timed repeats; empty names when
   // the engine does not time them
   StageTimes stages;
+  // the contact points of the first run's steps (Engine::contact_count); steps 0 when the engine
+  // does not report them
+  ContactCount contacts;
   Trajectory trajectory;             // from the first run
 };
 
