@@ -74,6 +74,18 @@ TEST(WorkerResult, JsonRoundTripKeepsStatesAndNan) {
   EXPECT_EQ(bb.orientation.coeffs(), b.orientation.coeffs());
   EXPECT_TRUE(std::isnan(bb.linear_velocity.x()));
   EXPECT_EQ(bb.angular_velocity.z(), 7.0);
+  // no contact count: none comes back; a count comes back as it went, and a malformed one is
+  // refused
+  EXPECT_EQ(back.contacts.steps, 0);
+  r.contacts = {46.0, 12};
+  nlohmann::json doc = result_to_json(r);
+  const RunResult counted = result_from_json(nlohmann::json::parse(doc.dump()));
+  EXPECT_EQ(counted.contacts.points, 46.0);
+  EXPECT_EQ(counted.contacts.steps, 12);
+  doc["contacts"]["steps"] = 0;
+  EXPECT_THROW(result_from_json(doc), std::runtime_error);
+  doc["contacts"] = {{"points", -1.0}, {"steps", 12}};
+  EXPECT_THROW(result_from_json(doc), std::runtime_error);
 }
 
 }  // namespace

@@ -530,6 +530,13 @@ TEST(Runner, RtpContactStepTimesItsStagesWithinItsStepAndAPeerLeavesThemEmpty) {
   EXPECT_EQ(bullet->at("status"), "ok");
   EXPECT_TRUE(bullet->at("stage_ms").empty()) << bullet->at("stage_ms");
   EXPECT_FALSE(meta["engines"]["bullet"].contains("stages"));
+  // contact points per step, by each engine's own count, through the worker: rtp keeps each of
+  // the ten resting faces' four corners; Bullet at least a point a face, at most four
+  ASSERT_FALSE(rtp->at("contact_points").empty());
+  EXPECT_EQ(std::stod(rtp->at("contact_points")), 40.0);
+  ASSERT_FALSE(bullet->at("contact_points").empty());
+  EXPECT_GE(std::stod(bullet->at("contact_points")), 10.0);
+  EXPECT_LE(std::stod(bullet->at("contact_points")), 40.0);
 }
 #endif
 
