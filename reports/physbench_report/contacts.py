@@ -18,6 +18,7 @@ CONTACT_COLUMNS = [
     ("rest_speed_rms", "RMS speed, last second (m/s)"), ("apex_rel_err", "apex errors (relative)"),
     ("slide_distance", "slide (m)"), ("slide_accel", "slide a (m/s²)"), ("slide_accel_expected", "closed form a"),
     ("exchange_err", "exchange error"), ("tunnelled", "tunnelled"), ("escaped", "escaped bodies"),
+    ("contact_points", "contact points a step (the engine's count)"),
 ]
 # verdicts that answer a contact scene's question badly (reports colour them)
 FAILED_VERDICTS = {"collapsed", "sinks", "drifts", "settles", "tumbled", "no bounce", "tunnelled", "stuck",

@@ -302,6 +302,10 @@ def test_contact_scenes_have_their_tables(contact_results):
     page = build_report.build_report(contact_results).read_text()
     assert "Contact verdicts" in page
     assert "drift max (m)" in page and "penetration max (m)" in page
+    # each engine's own contact count, where it reports one (tower-10: rtp holds 40 points a step)
+    assert "contact points a step (the engine&#39;s count)" in page or "contact points a step (the engine's count)" in page
+    rtp_tower = ran[(ran["scenario"] == "tower-10") & (ran["engine"] == "rtp") & (ran["variant"] == "soft-step")]
+    assert len(rtp_tower) == 1 and rtp_tower["contact_points"].iloc[0] == 40
     assert "Stack drift: largest horizontal displacement" in page  # drift over time
     for _, row in ran[ran["scenario"] == "tower-10"].iterrows():
         assert isinstance(row["contact_verdict"], str) and row["contact_verdict"] in page
