@@ -132,7 +132,8 @@ impl Engine for Box2dV3 {
                 bodies.push(body);
             }
             let substeps = if scene.springs_without_contacts() { 1 } else { substeps(variant) };
-            Ok(Box::new(Box2dWorld { world, bodies, dt: scene.dt as f32, substeps }))
+            Ok(Box::new(Box2dWorld { world, bodies, dt: scene.dt as f32, substeps,
+                                     counts_contacts: scene.has_contacts() }))
         }
     }
 }
@@ -142,6 +143,7 @@ struct Box2dWorld {
     bodies: Vec<b2BodyId>,
     dt: f32,
     substeps: i32,
+    counts_contacts: bool,
 }
 
 impl Drop for Box2dWorld {
@@ -154,6 +156,36 @@ impl World for Box2dWorld {
     fn step(&mut self) {
         // Box2D v3 clears the applied forces at the end of each step
         unsafe { b2World_Step(self.world, self.dt, self.substeps) };
+    }
+    /// the touching contacts' manifold points, each contact once: from its dynamic body, or
+    /// from the lower-indexed of two dynamic bodies
+    fn contact_points(&self) -> Option<usize> {
+        if !self.counts_contacts {
+            return None;
+        }
+        let mut points = 0usize;
+        let mut data: Vec<b2ContactData> = Vec::new();
+        unsafe {
+            for &body in &self.bodies {
+                if b2Body_GetType(body) != b2BodyType_b2_dynamicBody {
+                    continue;
+                }
+                let capacity = b2Body_GetContactCapacity(body);
+                data.clear();
+                data.reserve(capacity.max(0) as usize);
+                let filled = b2Body_GetContactData(body, data.as_mut_ptr(), capacity);
+                data.set_len(filled.clamp(0, capacity.max(0)) as usize);
+                for c in &data {
+                    let a = b2Shape_GetBody(c.shapeIdA);
+                    let b = b2Shape_GetBody(c.shapeIdB);
+                    let other = if a.index1 == body.index1 { b } else { a };
+                    if b2Body_GetType(other) != b2BodyType_b2_dynamicBody || body.index1 < other.index1 {
+                        points += c.manifold.pointCount.max(0) as usize;
+                    }
+                }
+            }
+        }
+        Some(points)
     }
     fn state(&self, body: usize) -> State {
         unsafe {

@@ -249,6 +249,11 @@ pub trait World {
     fn error(&self) -> Option<String> {
         None
     }
+    /// the contact points the engine's solver held in the last step, by its own count; None for
+    /// an engine or scene that does not count them (the result then carries no `contacts`)
+    fn contact_points(&self) -> Option<usize> {
+        None
+    }
 }
 
 pub struct Setting {
@@ -353,6 +358,8 @@ struct Pass {
     stepping_seconds: f64,
     exploded: Option<String>,
     error: Option<String>,
+    contact_points: f64, // summed over the steps that counted them
+    contact_steps: i64,
 }
 
 /// one run of the whole scene; only the steps (forces, impulses and the engine's step) are timed,
@@ -360,7 +367,8 @@ struct Pass {
 fn run_once(scene: &Scene, world: &mut dyn World, every: i64, keep: Option<&mut Vec<Value>>)
     -> Pass {
     let mut keep = keep;
-    let mut pass = Pass { stepping_seconds: 0.0, exploded: None, error: None };
+    let mut pass = Pass { stepping_seconds: 0.0, exploded: None, error: None, contact_points: 0.0,
+                          contact_steps: 0 };
     let sample = |world: &dyn World, time: f64| -> (Value, bool) {
         let mut row = vec![json!(time)];
         let mut ok = true;
@@ -391,6 +399,11 @@ fn run_once(scene: &Scene, world: &mut dyn World, every: i64, keep: Option<&mut 
             }
             add_spring_forces(scene, world);
             world.step();
+            // every step's count, as the C++ adapters take theirs (a walk over the manifolds)
+            if let Some(points) = world.contact_points() {
+                pass.contact_points += points as f64;
+                pass.contact_steps += 1;
+            }
         }
         pass.stepping_seconds += start.elapsed().as_secs_f64();
         done += chunk;
@@ -496,6 +509,9 @@ fn simulate(engine: &dyn Engine, job: &Job) -> Value {
         };
         let pass = run_once(&scene, world.as_mut(), every, Some(&mut samples));
         wall.push(pass.stepping_seconds);
+        if pass.contact_steps > 0 {
+            doc["contacts"] = json!({"points": pass.contact_points, "steps": pass.contact_steps});
+        }
         doc["samples"] = Value::Array(std::mem::take(&mut samples));
         if let Some(why) = pass.error {
             doc["wall_seconds"] = json!(wall);

@@ -103,13 +103,14 @@ impl Engine for Rapier {
             world.colliders.insert_with_parent(collider, handle, &mut world.bodies);
             handles.push(handle);
         }
-        Ok(Box::new(RapierWorld { world, handles }))
+        Ok(Box::new(RapierWorld { world, handles, counts_contacts: scene.has_contacts() }))
     }
 }
 
 struct RapierWorld {
     world: PhysicsWorld,
     handles: Vec<RigidBodyHandle>,
+    counts_contacts: bool,
 }
 
 fn v32(a: [f64; 3]) -> Vector {
@@ -123,6 +124,15 @@ impl World for RapierWorld {
         for &h in &self.handles {
             self.world.bodies[h].reset_forces(false);
         }
+    }
+    /// the solver contacts of every manifold the narrow phase kept (the points Rapier's solver
+    /// takes from its manifolds, not every manifold point)
+    fn contact_points(&self) -> Option<usize> {
+        if !self.counts_contacts {
+            return None;
+        }
+        Some(self.world.contact_pairs().flat_map(|p| p.manifolds().iter())
+            .map(|m| m.data.solver_contacts.len()).sum())
     }
     fn state(&self, body: usize) -> State {
         let b = &self.world.bodies[self.handles[body]];
