@@ -133,7 +133,8 @@ impl Engine for Box2dV3 {
             }
             let substeps = if scene.springs_without_contacts() { 1 } else { substeps(variant) };
             Ok(Box::new(Box2dWorld { world, bodies, dt: scene.dt as f32, substeps,
-                                     counts_contacts: scene.has_contacts() }))
+                                     counts_contacts: scene.has_contacts(),
+                                     contact_data: std::cell::RefCell::new(Vec::new()) }))
         }
     }
 }
@@ -144,6 +145,7 @@ struct Box2dWorld {
     dt: f32,
     substeps: i32,
     counts_contacts: bool,
+    contact_data: std::cell::RefCell<Vec<b2ContactData>>, // reused by contact_points
 }
 
 impl Drop for Box2dWorld {
@@ -164,7 +166,7 @@ impl World for Box2dWorld {
             return None;
         }
         let mut points = 0usize;
-        let mut data: Vec<b2ContactData> = Vec::new();
+        let mut data = self.contact_data.borrow_mut();
         unsafe {
             for &body in &self.bodies {
                 if b2Body_GetType(body) != b2BodyType_b2_dynamicBody {
@@ -175,7 +177,7 @@ impl World for Box2dWorld {
                 data.reserve(capacity.max(0) as usize);
                 let filled = b2Body_GetContactData(body, data.as_mut_ptr(), capacity);
                 data.set_len(filled.clamp(0, capacity.max(0)) as usize);
-                for c in &data {
+                for c in data.iter() {
                     let a = b2Shape_GetBody(c.shapeIdA);
                     let b = b2Shape_GetBody(c.shapeIdB);
                     let other = if a.index1 == body.index1 { b } else { a };
