@@ -574,7 +574,10 @@ bool ContactPipeline::solve(double h, bool bias, bool backwards, double toleranc
       pair.apply(c, p, (f0 - old0) * t0 + (f1 - old1) * t1);
     }
     pair.store(bodies_, c);
-    if (simd::any_of(changed)) moved.store(true, std::memory_order_relaxed);
+    // written once a pass at most: the biased passes (no tolerance) and a settling pass would
+    // otherwise have both threads write the flag's cache line after every block
+    if (tolerance > 0.0 && simd::any_of(changed) && !moved.load(std::memory_order_relaxed))
+      moved.store(true, std::memory_order_relaxed);
   }, backwards);
   return !moved.load(std::memory_order_relaxed);
 }
