@@ -49,8 +49,7 @@ class Box2dEngine final : public Engine {
 
   void load(const Scene& scene) override {
     scene_ = scene;
-    contact_points_ = 0.0;
-    contact_steps_ = 0;
+    contacts_.start(scene);
     dt_ = scene.dt;
     world_ = std::make_unique<b2World>(b2Vec2(float(scene.gravity.x()), float(scene.gravity.y())));
     world_->SetAllowSleeping(false);
@@ -216,11 +215,11 @@ class Box2dEngine final : public Engine {
     if (driver_) step_particles_before();
     world_->Step(float(dt_), velocity_iterations_, kPositionIterations);
     ++steps_;
-    if (counts_contacts()) {
+    if (contacts_.counting()) {
       // the touching contacts' manifold points this step
       for (const b2Contact* c = world_->GetContactList(); c; c = c->GetNext())
-        if (c->IsTouching()) contact_points_ += c->GetManifold()->pointCount;
-      ++contact_steps_;
+        if (c->IsTouching()) contacts_.add(c->GetManifold()->pointCount);
+      contacts_.end_step();
     }
     if (driver_) step_particles_after();
     // Box2D scales down any velocity that would carry a body more than b2_maxTranslation (2 m)
@@ -245,10 +244,7 @@ class Box2dEngine final : public Engine {
     }
   }
 
-  std::optional<ContactCount> contact_count() const override {
-    if (!counts_contacts()) return std::nullopt;
-    return ContactCount{contact_points_, contact_steps_};
-  }
+  std::optional<ContactCount> contact_count() const override { return contacts_.count(); }
 
   SampledState body_state(int index) const override {
     const b2Body* body = bodies_[index];
@@ -266,9 +262,7 @@ class Box2dEngine final : public Engine {
   double dt_ = 0.0;
   std::unique_ptr<b2World> world_;
   long steps_ = 0;
-  double contact_points_ = 0.0;  // summed since load()
-  long contact_steps_ = 0;
-  bool counts_contacts() const { return scene_.has_contacts() && !scene_.particles; }
+  ContactTally contacts_;
   std::vector<b2Body*> bodies_;  // owned by world_; the particles follow the scene's bodies
   std::unique_ptr<ParticleDriver> driver_;
   std::size_t first_particle_ = 0;

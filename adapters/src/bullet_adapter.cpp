@@ -63,8 +63,7 @@ class BulletEngine final : public Engine {
   void load(const Scene& scene) override {
     scene_ = scene;
     dt_ = scene.dt;
-    contact_points_ = 0.0;
-    contact_steps_ = 0;
+    contacts_.start(scene);
     configuration_ = std::make_unique<btDefaultCollisionConfiguration>();
     // a box meeting a plane gets its whole manifold at once (perturbed queries), not one point
     // the first step and more later: with one point, a box dropped flat on the ground took an
@@ -196,11 +195,11 @@ class BulletEngine final : public Engine {
       }
     // maxSubSteps = 0: exactly one internal step of dt, no accumulator or interpolation
     world_->stepSimulation(btScalar(dt_), 0);
-    if (counts_contacts()) {
+    if (contacts_.counting()) {
       // the persistent manifolds' points the solver held this step
       for (int m = 0; m < dispatcher_->getNumManifolds(); ++m)
-        contact_points_ += dispatcher_->getManifoldByIndexInternal(m)->getNumContacts();
-      ++contact_steps_;
+        contacts_.add(dispatcher_->getManifoldByIndexInternal(m)->getNumContacts());
+      contacts_.end_step();
     }
     if (driver_)
       driver_->age(dt_, [this](long i, const rtp::ParticleSpawn& spawn) {
@@ -212,10 +211,7 @@ class BulletEngine final : public Engine {
       });
   }
 
-  std::optional<ContactCount> contact_count() const override {
-    if (!counts_contacts()) return std::nullopt;
-    return ContactCount{contact_points_, contact_steps_};
-  }
+  std::optional<ContactCount> contact_count() const override { return contacts_.count(); }
 
   SampledState body_state(int index) const override {
     const btRigidBody& body = *bodies_[index];
@@ -228,9 +224,7 @@ class BulletEngine final : public Engine {
  private:
   Scene scene_;
   double dt_ = 0.0;
-  double contact_points_ = 0.0;  // summed since load()
-  long contact_steps_ = 0;
-  bool counts_contacts() const { return scene_.has_contacts() && !scene_.particles; }
+  ContactTally contacts_;
   int iterations_ = 0;  // a sweep's solver iterations; 0: Bullet's default (10)
   std::unique_ptr<btDefaultCollisionConfiguration> configuration_;
   std::unique_ptr<btCollisionDispatcher> dispatcher_;

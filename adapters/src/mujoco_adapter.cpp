@@ -371,8 +371,7 @@ class MujocoEngine final : public Engine {
 
   void load(const Scene& scene) override {
     scene_ = scene;
-    contact_points_ = 0.0;
-    contact_steps_ = 0;
+    contacts_.start(scene);
     const std::string xml = model_xml(scene, variant_);
     // mjVFS is about 2 MB: on the heap
     auto vfs = std::make_unique<mjVFS>();
@@ -430,18 +429,15 @@ class MujocoEngine final : public Engine {
     mj_forward(model_, data_);
   }
 
-  std::optional<ContactCount> contact_count() const override {
-    if (!counts_contacts()) return std::nullopt;
-    return ContactCount{contact_points_, contact_steps_};
-  }
+  std::optional<ContactCount> contact_count() const override { return contacts_.count(); }
 
   void step() override {
     mj_step(model_, data_);
     ++steps_;
     // the contacts mj_step's forward pass found and solved (each a point with its own frame)
-    if (counts_contacts()) {
-      contact_points_ += data_->ncon;
-      ++contact_steps_;
+    if (contacts_.counting()) {
+      contacts_.add(data_->ncon);
+      contacts_.end_step();
     }
     // MuJoCo checks qpos, qvel and qacc each step and, on a non-finite or huge value, warns and
     // resets the state to the model's initial one (mj_resetData) and carries on: the samples then
@@ -552,9 +548,7 @@ class MujocoEngine final : public Engine {
   mjData* data_ = nullptr;
   std::vector<int> body_of_;  // scene body → MuJoCo body id, -1 for static
   long steps_ = 0;
-  double contact_points_ = 0.0;  // summed since load()
-  long contact_steps_ = 0;
-  bool counts_contacts() const { return scene_.has_contacts() && !scene_.particles; }
+  ContactTally contacts_;
 };
 
 }  // namespace

@@ -79,8 +79,7 @@ class OdeEngine final : public Engine {
     dRandSetSeed(0);
     scene_ = scene;
     dt_ = scene.dt;
-    contact_points_ = 0.0;
-    contact_steps_ = 0;
+    contact_tally_.start(scene);
     world_ = dWorldCreate();
     dWorldSetGravity(world_, scene.gravity.x(), scene.gravity.y(), scene.gravity.z());
     dWorldSetAutoDisableFlag(world_, 0);
@@ -168,7 +167,7 @@ class OdeEngine final : public Engine {
       dJointID joint = dJointCreateContact(self->world_, self->contacts_, &contact[i]);
       dJointAttach(joint, body_a, body_b);
     }
-    self->contact_points_ += count;
+    self->contact_tally_.add(count);
   }
 
   // particles: a dBody sphere each (the scene's radius and mass) in a simple space, and the planes
@@ -251,7 +250,7 @@ class OdeEngine final : public Engine {
     if (driver_) step_particles_before();
     if (space_) {
       dSpaceCollide(space_, this, &body_contact);
-      ++contact_steps_;
+      contact_tally_.end_step();
     }
     ode_messages = 0;
     if (quick_step_)
@@ -268,8 +267,8 @@ class OdeEngine final : public Engine {
 
   // the contact joints made for the bodies' geoms (a joint a point), summed since load()
   std::optional<ContactCount> contact_count() const override {
-    if (!space_ || !scene_.has_contacts()) return std::nullopt;
-    return ContactCount{contact_points_, contact_steps_};
+    if (!space_) return std::nullopt;
+    return contact_tally_.count();
   }
 
   SampledState body_state(int index) const override {
@@ -315,8 +314,7 @@ class OdeEngine final : public Engine {
   bool spring_joints_;
   int iterations_;  // QuickStep iterations; 0: ODE's default
   long steps_ = 0;
-  double contact_points_ = 0.0;  // contact joints for the bodies' geoms, summed since load()
-  long contact_steps_ = 0;
+  ContactTally contact_tally_;  // contact joints for the bodies' geoms (contacts_ is their group)
   dSpaceID space_ = nullptr;
   std::unique_ptr<ParticleDriver> driver_;
   std::size_t first_particle_ = 0;

@@ -49,6 +49,28 @@ struct ContactCount {
   long steps = 0;
 };
 
+// an adapter's running sum for Engine::contact_count: started at load() (it counts only a scene
+// with contacts and no particles, decided once), points added as the step finds them, a step
+// closed after each
+class ContactTally {
+ public:
+  void start(const Scene& scene) {
+    counting_ = scene.has_contacts() && !scene.particles;
+    sum_ = ContactCount{};
+  }
+  bool counting() const { return counting_; }
+  void add(double points) { sum_.points += points; }
+  void end_step() { ++sum_.steps; }
+  std::optional<ContactCount> count() const {
+    if (!counting_) return std::nullopt;
+    return sum_;
+  }
+
+ private:
+  bool counting_ = false;
+  ContactCount sum_;
+};
+
 // a sweep's solver knobs (docs/regression.md, "Sweeps over iterations and substeps"); 0 leaves the
 // variant's own
 struct SolverKnobs {
