@@ -31,6 +31,8 @@ struct ContactBlock {
   struct Point {
     Lane anchor_a[3], anchor_b[3];  // the rows are computed from these as read
     Lane base_separation;  // at the step's start, less n·(anchor_b − anchor_a) (m)
+    Lane separation;       // as the bodies last moved: the base, plus their motion along n since
+                           // the step's start (m); computed again once the positions change
     Lane normal_mass, tangent_mass[2];  // 1 / the velocity change per unit impulse (kg); 0 for
                                         // an empty point
     Lane normal_impulse, tangent_impulse[2];
@@ -39,9 +41,9 @@ struct ContactBlock {
     LaneMask starts_apart;    // a speculative point at the step's start
   } points[4];
 };
-// 96 floats a lane: 29 for the manifold, 16 for each of four points, 3 for the indices (384 bytes
-// a manifold, 96 a point)
-static_assert(sizeof(ContactBlock) == 96 * sizeof(float) * kBlockLanes);
+// 100 floats a lane: 29 for the manifold, 17 for each of four points, 3 for the indices (400
+// bytes a manifold, 100 a point)
+static_assert(sizeof(ContactBlock) == 100 * sizeof(float) * kBlockLanes);
 inline constexpr std::uint32_t kNoContact = ~std::uint32_t{0};
 
 struct ContactLanes {

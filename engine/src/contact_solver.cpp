@@ -216,7 +216,7 @@ std::size_t contact_block_lanes() { return W; }
 namespace {
 // The next block's cache lines, asked for a few at a time while this one is solved: a pass
 // streams the blocks in order, and at a large pyramid they come from L3, whose latency the kernel
-// otherwise waits on (docs/solver.md, "Cost"). Asked for all at once, the 96 lines a block fill
+// otherwise waits on (docs/solver.md, "Cost"). Asked for all at once, the 100 lines a block fill
 // the core's line-fill buffers and the prefetches stall the kernel behind them.
 class Prefetch {
  public:
@@ -246,6 +246,9 @@ void ContactPipeline::colour_contacts() {
   // greedy, in pair order: each contact takes the first colour neither dynamic body holds
   body_colours_.assign(bodies_.size(), 0);
   std::array<std::uint32_t, kColours + 1> counts{};
+  // each contact's colour, and whether it is cold (the top bit)
+  constexpr std::uint8_t kCold = 0x80;
+  static_assert(kColours <= kCold);
   std::vector<std::uint8_t>& colour_of = colour_scratch_;
   colour_of.resize(contacts_.size());
   for (std::size_t i = 0; i < contacts_.size(); ++i) {
@@ -260,16 +263,23 @@ void ContactPipeline::colour_contacts() {
       if (dynamic_a) body_colours_[c.body_a] |= std::uint64_t{1} << colour;
       if (dynamic_b) body_colours_[c.body_b] |= std::uint64_t{1} << colour;
     }
-    colour_of[i] = std::uint8_t(colour);
+    colour_of[i] = std::uint8_t(colour | (c.cold ? kCold : 0));
     ++counts[colour + 1];
   }
   colour_start_.assign(counts.begin(), counts.end());
   for (int k = 0; k < kColours; ++k) colour_start_[k + 1] += colour_start_[k];
+  // within a colour, the cold contacts (a point with no warm start) first: a block holding one
+  // solves its points several times in a row (solve()), and a settled stack's side contacts,
+  // which touch without pushing, would otherwise put one in most blocks (three in four at a
+  // 5,050-box pyramid). A colour's contacts share no dynamic body, so their order in it, and
+  // which block each lands in, changes no result
   colour_order_.resize(contacts_.size());
   std::array<std::uint32_t, kColours> next{};
   for (int k = 0; k < kColours; ++k) next[k] = colour_start_[k];
-  for (std::size_t i = 0; i < contacts_.size(); ++i)
-    colour_order_[next[colour_of[i]]++] = std::uint32_t(i);
+  for (const std::uint8_t pass : {kCold, std::uint8_t(0)})
+    for (std::size_t i = 0; i < contacts_.size(); ++i)
+      if ((colour_of[i] & kCold) == pass)
+        colour_order_[next[colour_of[i] & ~kCold]++] = std::uint32_t(i);
 
   // the blocks: each colour's contacts W at a time, the overflow one at a time
   if (!lanes_) lanes_ = std::make_unique<ContactLanes>();
@@ -368,6 +378,7 @@ void ContactPipeline::prepare(double dt, const Vec3& gravity) {
   const Softness static_soft =
       make_soft(std::min(2.0 * settings_.contact_hertz, cap), settings_.damping_ratio, h);
   colour_contacts();
+  separations_stale_ = true;
   if (settings_.solver == ContactSolver::Seed) return;  // the seed reads the contacts themselves
   const std::uint32_t at_rest = std::uint32_t(bodies_.size() - 1);
   const std::vector<std::uint32_t>& block_start = lanes_->colour_start;
@@ -498,21 +509,32 @@ bool ContactPipeline::solve(double h, bool bias, bool backwards, double toleranc
   // |applied| > tolerance · normal_mass (an empty point's mass is 0, and it applies nothing)
   const Lane tolerance_lane = splat(float(tolerance));
   std::atomic<bool> moved{false};
+  // each point's separation from the bodies' motion, once after they moved (a substep's biased
+  // solve and its relax passes read the same positions), stored in the block for the passes
+  // after: the motion's 14 gathers a block and two rotations are then once a substep, not once
+  // a pass
+  const bool refresh = separations_stale_;
+  separations_stale_ = false;
   for_each_block([&](ContactBlock& c, Prefetch& ahead) {
     LaneMask changed = zero != zero;
     LanePair pair(bodies_, c);
     const V3 n = load3(c.normal), t0 = load3(c.tangent[0]), t1 = load3(c.tangent[1]);
     ahead.ahead(16);
+    if (refresh) {
+      const NormalMotion motion(bodies_, c);
+      for (ContactBlock::Point& p : c.points) p.separation = motion.separation(p);
+    }
+
     // the approach speed restitution reverses, for points that started the step touching: each
     // one's last before it first pushed, all read before this manifold pushes at all (read one
     // by one, the points after the first would see the first's push, and bounce unequally)
     for (ContactBlock::Point& p : c.points) {
-      const LaneMask unread = (p.max_normal_impulse == zero) & ~p.starts_apart;
+      const LaneMask unread =
+          (p.max_normal_impulse == zero) & ~p.starts_apart & (c.restitution > zero);
       if (simd::any_of(unread))
         p.approach_velocity =
             simd::select(unread, pair.normal_velocity(n, NormalRow(c, p, n)), p.approach_velocity);
     }
-    const NormalMotion motion(bodies_, c);
     // non-penetration: the normal impulse accumulates and stays ≥ 0 (Catto GDC 2006). A
     // manifold with no warm start (a new contact, an impact) runs its points several times in a
     // row: one pass over a face's four points lands the whole impulse on the first and spins the
@@ -522,7 +544,7 @@ bool ContactPipeline::solve(double h, bool bias, bool backwards, double toleranc
       const LaneMask active = round == 0 ? LaneMask(zero == zero) : c.fresh;
       for (ContactBlock::Point& p : c.points) {
         ahead.ahead(10);
-        const Lane s = motion.separation(p);
+        const Lane s = p.separation;
         const NormalRow row(c, p, n);
         const Lane vn = pair.normal_velocity(n, row);
         const LaneMask apart = s > zero;

@@ -264,11 +264,13 @@ void ContactPipeline::collide_pairs(std::span<const BodyState> states) {
   // built and matched with last step's on the threads (each writes its own; last step's is
   // found by key in its sorted list): the same contacts on any number of threads
   std::swap(contacts_, previous_);
+  std::swap(contact_keys_, previous_keys_);
   touching_.clear();
   for (std::size_t k = 0; k < n; ++k)
     if (manifolds_[k].count != 0) touching_.push_back(std::uint32_t(k));
   const std::size_t m = touching_.size();
   contacts_.resize(m);
+  contact_keys_.resize(m);
   double deepest = 0.0;
   std::size_t matched = 0;
 #pragma omp parallel for num_threads(settings_.threads) schedule(static) if (m >= 1024) \
@@ -281,6 +283,7 @@ void ContactPipeline::collide_pairs(std::span<const BodyState> states) {
     c = ContactConstraint{};
     c.body_a = a;
     c.body_b = b;
+    contact_keys_[i] = c.key();
     c.normal = manifold.normal;
     tangent_basis(c.normal, c.tangent);
     // the pair's coefficients (docs/scene-format.md): √(μa μb), max(ea, eb)
@@ -296,13 +299,15 @@ void ContactPipeline::collide_pairs(std::span<const BodyState> states) {
       p.feature = manifold.points[j].feature;
       deepest = std::max(deepest, -p.base_separation);
     }
-    // the same pair last step: carry each point's impulses by feature id (warm starting)
+    // the same pair last step, found by its key among last step's (a search in the keys alone
+    // stays in cache, where one in the contacts reads a line of a far contact at every probe):
+    // carry each point's impulses by feature id (warm starting)
     if (!settings_.warm_start) continue;
-    const auto old = std::lower_bound(
-        previous_.begin(), previous_.end(), c.key(),
-        [](const ContactConstraint& p, std::uint64_t key) { return p.key() < key; });
-    if (old == previous_.end() || old->key() != c.key()) continue;
-    matched += carry_impulses(*old, c);
+    const auto old = std::lower_bound(previous_keys_.begin(), previous_keys_.end(), c.key());
+    if (old == previous_keys_.end() || *old != c.key()) continue;
+    matched += carry_impulses(previous_[std::size_t(old - previous_keys_.begin())], c);
+    c.cold = false;
+    for (std::uint8_t j = 0; j < c.count; ++j) c.cold |= c.points[j].normal_impulse == 0.0;
   }
   deepest_ = deepest;
   matched_ = matched;

@@ -68,6 +68,8 @@ struct ContactConstraint {
   double friction = 0.0;
   double restitution = 0.0;
   std::uint8_t count = 0;
+  bool cold = true;  // a point has no accumulated normal impulse to start from (the narrow phase
+                     // sets it once impulses are carried; the colouring groups such contacts)
   std::array<ContactPointConstraint, 4> points;
   std::uint64_t key() const { return std::uint64_t(body_a) << 32 | body_b; }
 };
@@ -95,6 +97,9 @@ class ContactPipeline {
   // (true without a tolerance: nothing is tracked then)
   bool solve(double h, bool bias, bool backwards = false, double tolerance = 0.0);
   void solve_seed(double dt);
+  // the bodies' positions changed (the world integrated them): the next solve computes each
+  // point's separation from their motion again, rather than read the one it stored
+  void positions_moved() { separations_stale_ = true; }
   void restitution();
   // continuous collision: each body that moved further this step than its speculative contacts
   // reach is swept from its start pose to its end against the static shapes, and stopped where it
@@ -135,6 +140,7 @@ class ContactPipeline {
   std::vector<FastBody> fast_;  // this step's bodies that move beyond their bounds' growth
   std::vector<std::uint64_t> candidates_;  // pair keys, sorted
   std::vector<ContactConstraint> contacts_, previous_;
+  std::vector<std::uint64_t> contact_keys_, previous_keys_;  // each contact's key(), in order
   // contacts by colour (graph colouring, as Box2D v3's constraint graph): no two contacts of a
   // colour share a dynamic body, so a colour's contacts are solved at once, on any number of
   // threads, with the same result as on one; every solve visits contacts in this order
@@ -177,6 +183,7 @@ class ContactPipeline {
   std::vector<bool> seed_converged_;  // seed: per contact, its impulses stopped changing
   double deepest_ = 0.0;
   std::size_t matched_ = 0;
+  bool separations_stale_ = true;  // the blocks' separations predate the positions
 };
 
 }  // namespace rtp

@@ -374,6 +374,7 @@ void World::integrate_positions(double h) {
       body.delta_rotation = (turn.cast<float>() * body.delta_rotation).normalized();
     }
   }
+  pipeline_->positions_moved();
 }
 
 void World::store_momenta() {
