@@ -263,16 +263,15 @@ void ContactPipeline::colour_contacts() {
       if (dynamic_a) body_colours_[c.body_a] |= std::uint64_t{1} << colour;
       if (dynamic_b) body_colours_[c.body_b] |= std::uint64_t{1} << colour;
     }
-    colour_of[i] = std::uint8_t(colour | (c.cold ? kCold : 0));
+    colour_of[i] = std::uint8_t(colour | (c.cold != 0 ? kCold : 0));
     ++counts[colour + 1];
   }
   colour_start_.assign(counts.begin(), counts.end());
   for (int k = 0; k < kColours; ++k) colour_start_[k + 1] += colour_start_[k];
-  // within a colour, the cold contacts (a point with no warm start) first: a block holding one
-  // solves its points several times in a row (solve()), and a settled stack's side contacts,
-  // which touch without pushing, would otherwise put one in most blocks (three in four at a
-  // 5,050-box pyramid). A colour's contacts share no dynamic body, so their order in it, and
-  // which block each lands in, changes no result
+  // within a colour, the cold contacts (a point that may push with no warm start) first: a block
+  // holding one solves its points several times in a row (solve()), and spread by pair order
+  // they put one in most blocks. A colour's contacts share no dynamic body, so their order in
+  // it, and which block each lands in, changes no result
   colour_order_.resize(contacts_.size());
   std::array<std::uint32_t, kColours> next{};
   for (int k = 0; k < kColours; ++k) next[k] = colour_start_[k];
@@ -401,6 +400,7 @@ void ContactPipeline::prepare(double dt, const Vec3& gravity) {
       block.contact[i] = kNoContact;
     }
     std::array<LaneMask, 4> exists{};  // the lanes where each point is
+    std::array<LaneMask, 4> cold{};    // and where it is cold (ContactConstraint::cold)
     Lane acceleration{};
     for (std::size_t i = 0; first + i < last; ++i) {
       const std::uint32_t index = colour_order_[first + i];
@@ -432,6 +432,7 @@ void ContactPipeline::prepare(double dt, const Vec3& gravity) {
         const ContactPointConstraint& from = c.points[j];
         ContactBlock::Point& p = block.points[j];
         exists[j][i] = -1;
+        cold[j][i] = (c.cold >> j & 1u) ? -1 : 0;
         set3(p.anchor_a, i, from.anchor_a);
         set3(p.anchor_b, i, from.anchor_b);
         p.base_separation[i] = float(from.base_separation);
@@ -440,11 +441,12 @@ void ContactPipeline::prepare(double dt, const Vec3& gravity) {
         p.tangent_impulse[1][i] = float(from.tangent_impulse[1]);
       }
     }
-    prepare_lanes(block, exists, acceleration);
+    prepare_lanes(block, exists, cold, acceleration);
   }
 }
 
 void ContactPipeline::prepare_lanes(ContactBlock& c, const std::array<LaneMask, 4>& exists,
+                                    const std::array<LaneMask, 4>& cold,
                                     Lane acceleration) const {
   // the rows, effective masses and approach speeds of a block's points, lane by lane
   const Lane zero = splat(0.0f);
@@ -477,8 +479,9 @@ void ContactPipeline::prepare_lanes(ContactBlock& c, const std::array<LaneMask, 
     const Lane squared = approach * approach - splat(2.0f) * acceleration * separation;
     p.approach_velocity = simd::select(p.starts_apart, zero - simd::sqrt(simd::max(squared, zero)),
                                        approach);
-    // no warm start, or an approach fast enough to bounce: the manifold is solved locally
-    fresh |= exists[j] & ((p.normal_impulse == zero) | (p.approach_velocity < threshold));
+    // no warm start where it may push, or an approach fast enough to bounce: the manifold is
+    // solved locally
+    fresh |= cold[j] | (exists[j] & (p.approach_velocity < threshold));
   }
   c.fresh = fresh;
 }

@@ -68,8 +68,10 @@ struct ContactConstraint {
   double friction = 0.0;
   double restitution = 0.0;
   std::uint8_t count = 0;
-  bool cold = true;  // a point has no accumulated normal impulse to start from (the narrow phase
-                     // sets it once impulses are carried; the colouring groups such contacts)
+  // bit j: point j starts without an accumulated normal impulse and may push this step (it
+  // touches, or free flight closes its gap within two steps). The solve runs such a manifold's
+  // points several times in a row, and the colouring packs such contacts together
+  std::uint8_t cold = 0;
   std::array<ContactPointConstraint, 4> points;
   std::uint64_t key() const { return std::uint64_t(body_a) << 32 | body_b; }
 };
@@ -86,7 +88,8 @@ class ContactPipeline {
   // ---- the stages, in order ----
   void update_bounds(std::span<const BodyState> states, double dt);
   void find_pairs();
-  void collide_pairs(std::span<const BodyState> states);
+  // dt and gravity tell which points without a warm start may push this step (ContactConstraint::cold)
+  void collide_pairs(std::span<const BodyState> states, double dt, const Vec3& gravity);
   // masses and velocities at the step's start
   void load_bodies(std::span<const BodyState> states, std::span<const BodyMass> masses);
   void prepare(double dt, const Vec3& gravity);
@@ -119,6 +122,8 @@ class ContactPipeline {
 
  private:
   struct BodyShapeData;
+  // ContactConstraint::cold for c, its impulses carried; velocities from load_bodies
+  std::uint8_t cold_points(const ContactConstraint& c, double dt, const Vec3& gravity) const;
   // the number of c's points that took an old point's impulses
   std::size_t carry_impulses(const ContactConstraint& old, ContactConstraint& c) const;
   // the two shapes of a pair grown by the bodies' growth this step; returns the total (m)
@@ -151,7 +156,7 @@ class ContactPipeline {
   void for_each_block(Kernel&& kernel, bool backwards = false);
   // a block's rows, effective masses, approach speeds and fresh lanes from its raw points
   void prepare_lanes(ContactBlock& block, const std::array<LaneMask, 4>& exists,
-                     Lane acceleration) const;
+                     const std::array<LaneMask, 4>& cold, Lane acceleration) const;
   std::vector<std::uint32_t> colour_order_;  // contact indices, colour by colour
   std::vector<std::uint32_t> colour_start_;  // colour k: colour_order_[start[k], start[k + 1])
   std::vector<std::uint64_t> body_colours_;  // per body, the colours holding it this step
