@@ -85,11 +85,6 @@ V3 gather3(const float* base, LaneIndex index) {
   return {simd::gather<Lane>(base, index), simd::gather<Lane>(base + 1, index),
           simd::gather<Lane>(base + 2, index)};
 }
-void scatter3(float* base, LaneIndex index, const V3& v, LaneMask where) {
-  simd::scatter(base, index, v.x, where);
-  simd::scatter(base + 1, index, v.y, where);
-  simd::scatter(base + 2, index, v.z, where);
-}
 
 // a point's normal row: the angular parts r × n on each body and their response I⁻¹ (r × n).
 // Computed where read rather than kept in the block: the solve at a large pyramid is bound by the
@@ -109,21 +104,27 @@ struct LanePair {
   V3 va, wa, vb, wb;
   LaneIndex a, b;  // each lane's bodies as offsets into the body array's floats
 
+  // each body's velocities are its first six floats: read as records (its first eight) and
+  // transposed, rather than gathered a float at a time (simd::gather_records)
   LanePair(const std::vector<SolverBody>& bodies, const ContactBlock& block)
       : a(body_offsets(block.body_a)), b(body_offsets(block.body_b)) {
+    static_assert(kLinearVelocity == 0 && kAngularVelocity == 3);
     const float* base = reinterpret_cast<const float*>(bodies.data());
-    va = gather3(base + kLinearVelocity, a), wa = gather3(base + kAngularVelocity, a);
-    vb = gather3(base + kLinearVelocity, b), wb = gather3(base + kAngularVelocity, b);
+    Lane rows[8];
+    simd::gather_records(base, a, rows);
+    va = {rows[0], rows[1], rows[2]}, wa = {rows[3], rows[4], rows[5]};
+    simd::gather_records(base, b, rows);
+    vb = {rows[0], rows[1], rows[2]}, wb = {rows[3], rows[4], rows[5]};
   }
   // static bodies and the body at rest are never written: colours share them, and their
   // threads may not write the same memory (a colour's dynamic bodies are each in one lane)
   void store(std::vector<SolverBody>& bodies, const ContactBlock& block) const {
     float* base = reinterpret_cast<float*>(bodies.data());
     const Lane zero = splat(0.0f);
-    scatter3(base + kLinearVelocity, a, va, block.inverse_mass_a > zero);
-    scatter3(base + kAngularVelocity, a, wa, block.inverse_mass_a > zero);
-    scatter3(base + kLinearVelocity, b, vb, block.inverse_mass_b > zero);
-    scatter3(base + kAngularVelocity, b, wb, block.inverse_mass_b > zero);
+    const Lane rows_a[6] = {va.x, va.y, va.z, wa.x, wa.y, wa.z};
+    const Lane rows_b[6] = {vb.x, vb.y, vb.z, wb.x, wb.y, wb.z};
+    simd::scatter_records(base, a, rows_a, block.inverse_mass_a > zero);
+    simd::scatter_records(base, b, rows_b, block.inverse_mass_b > zero);
   }
   // the relative velocity at a point: (v_b + ω_b × r_b) − (v_a + ω_a × r_a)
   V3 relative_velocity(const ContactBlock::Point& p) const {

@@ -375,6 +375,126 @@ bool all_of(M m) {
   return lane_bits(m) == (1u << kLanesOf<M>)-1u;
 }
 
+// Records of floats, one a lane: the first 8 floats of the record at base + offset[i] as lane i of
+// rows[0..7] (rows[k][i] = base[offset[i] + k]), and the first 6 written back where a lane is set.
+// Where the build has the instructions, each record's 32 bytes are loaded whole and transposed
+// (16 lanes on AVX-512, 8 on AVX2), and written back by masked 32-byte stores: a gather or
+// scatter instruction costs one load or store a lane, and a pass over a block's bodies would take
+// six of each a body. Elsewhere a gather or scatter a row. The same floats move either way.
+#if defined(RTP_SIMD_VECTORS) && defined(__AVX512F__)
+// rows[i] holding records i (low half) and i + 8 (high half) becomes rows[k] holding float k of
+// every record, lane i; the same applied again gives the records back
+inline void transpose_records16(__m512 (&rows)[8]) {
+  __m512 t[8], u[8];
+  for (int i = 0; i < 8; i += 2) {
+    t[i] = _mm512_unpacklo_ps(rows[i], rows[i + 1]);
+    t[i + 1] = _mm512_unpackhi_ps(rows[i], rows[i + 1]);
+  }
+  for (int i = 0; i < 8; i += 4) {
+    u[i] = _mm512_shuffle_ps(t[i], t[i + 2], 0x44);
+    u[i + 1] = _mm512_shuffle_ps(t[i], t[i + 2], 0xEE);
+    u[i + 2] = _mm512_shuffle_ps(t[i + 1], t[i + 3], 0x44);
+    u[i + 3] = _mm512_shuffle_ps(t[i + 1], t[i + 3], 0xEE);
+  }
+  const __m512i low = _mm512_setr_epi32(0, 1, 2, 3, 16, 17, 18, 19, 8, 9, 10, 11, 24, 25, 26, 27);
+  const __m512i high =
+      _mm512_setr_epi32(4, 5, 6, 7, 20, 21, 22, 23, 12, 13, 14, 15, 28, 29, 30, 31);
+  for (int k = 0; k < 4; ++k) {
+    rows[k] = _mm512_permutex2var_ps(u[k], low, u[k + 4]);
+    rows[k + 4] = _mm512_permutex2var_ps(u[k], high, u[k + 4]);
+  }
+}
+#endif
+#if defined(RTP_SIMD_VECTORS) && defined(__AVX2__)
+// the 8 × 8 transpose: rows[i] = record i becomes rows[k] = float k of every record
+inline void transpose_records8(__m256 (&rows)[8]) {
+  __m256 t[8], u[8];
+  for (int i = 0; i < 8; i += 2) {
+    t[i] = _mm256_unpacklo_ps(rows[i], rows[i + 1]);
+    t[i + 1] = _mm256_unpackhi_ps(rows[i], rows[i + 1]);
+  }
+  for (int i = 0; i < 8; i += 4) {
+    u[i] = _mm256_shuffle_ps(t[i], t[i + 2], 0x44);
+    u[i + 1] = _mm256_shuffle_ps(t[i], t[i + 2], 0xEE);
+    u[i + 2] = _mm256_shuffle_ps(t[i + 1], t[i + 3], 0x44);
+    u[i + 3] = _mm256_shuffle_ps(t[i + 1], t[i + 3], 0xEE);
+  }
+  for (int k = 0; k < 4; ++k) {
+    rows[k] = _mm256_permute2f128_ps(u[k], u[k + 4], 0x20);
+    rows[k + 4] = _mm256_permute2f128_ps(u[k], u[k + 4], 0x31);
+  }
+}
+#endif
+
+template <typename V>
+void gather_records(const LaneOf<V>* base, MaskOf<V> offset, V (&rows)[8]) {
+  static_assert(std::is_same_v<LaneOf<V>, float>);
+#if defined(RTP_SIMD_VECTORS) && defined(__AVX512F__)
+  if constexpr (std::is_same_v<V, Pack<float, 16>>) {
+    alignas(64) std::int32_t at[16];
+    std::memcpy(at, &offset, sizeof at);
+    __m512 r[8];
+    for (int i = 0; i < 8; ++i)
+      r[i] = _mm512_insertf32x8(_mm512_castps256_ps512(_mm256_loadu_ps(base + at[i])),
+                                _mm256_loadu_ps(base + at[i + 8]), 1);
+    transpose_records16(r);
+    for (int k = 0; k < 8; ++k) rows[k] = r[k];
+    return;
+  }
+#endif
+#if defined(RTP_SIMD_VECTORS) && defined(__AVX2__)
+  if constexpr (std::is_same_v<V, Pack<float, 8>>) {
+    alignas(32) std::int32_t at[8];
+    std::memcpy(at, &offset, sizeof at);
+    __m256 r[8];
+    for (int i = 0; i < 8; ++i) r[i] = _mm256_loadu_ps(base + at[i]);
+    transpose_records8(r);
+    for (int k = 0; k < 8; ++k) rows[k] = r[k];
+    return;
+  }
+#endif
+  for (int k = 0; k < 8; ++k) rows[k] = gather<V>(base + k, offset);
+}
+
+template <typename V>
+void scatter_records(LaneOf<V>* base, MaskOf<V> offset, const V (&rows)[6], MaskOf<V> where) {
+  static_assert(std::is_same_v<LaneOf<V>, float>);
+#if defined(RTP_SIMD_VECTORS) && defined(__AVX512F__) && defined(__AVX512VL__)
+  if constexpr (std::is_same_v<V, Pack<float, 16>>) {
+    alignas(64) std::int32_t at[16];
+    std::memcpy(at, &offset, sizeof at);
+    const unsigned set = lane_bits(where);
+    __m512 r[8];
+    for (int k = 0; k < 6; ++k) r[k] = rows[k];
+    r[6] = r[7] = _mm512_setzero_ps();
+    transpose_records16(r);
+    for (int i = 0; i < 8; ++i) {
+      // the record's first six floats, and only where the lane is set
+      if (set >> i & 1u) _mm256_mask_storeu_ps(base + at[i], 0x3F, _mm512_castps512_ps256(r[i]));
+      if (set >> (i + 8) & 1u)
+        _mm256_mask_storeu_ps(base + at[i + 8], 0x3F, _mm512_extractf32x8_ps(r[i], 1));
+    }
+    return;
+  }
+#endif
+#if defined(RTP_SIMD_VECTORS) && defined(__AVX2__)
+  if constexpr (std::is_same_v<V, Pack<float, 8>>) {
+    alignas(32) std::int32_t at[8];
+    std::memcpy(at, &offset, sizeof at);
+    const unsigned set = lane_bits(where);
+    __m256 r[8];
+    for (int k = 0; k < 6; ++k) r[k] = rows[k];
+    r[6] = r[7] = _mm256_setzero_ps();
+    transpose_records8(r);
+    const __m256i first_six = _mm256_setr_epi32(-1, -1, -1, -1, -1, -1, 0, 0);
+    for (int i = 0; i < 8; ++i)
+      if (set >> i & 1u) _mm256_maskstore_ps(base + at[i], first_six, r[i]);
+    return;
+  }
+#endif
+  for (int k = 0; k < 6; ++k) scatter(base + k, offset, rows[k], where);
+}
+
 // ---- the broad phase's floats ----
 
 // FloatN and MaskN: kNativeFloats floats and a mask of them, compared by name (at_most, at_least,
