@@ -53,7 +53,32 @@ fn init_jolt() {
     static ONCE: std::sync::Once = std::sync::Once::new();
     ONCE.call_once(|| unsafe {
         assert!(JPH_Init(), "JPH_Init failed");
+        // one set of callbacks for every listener (joltc keeps them globally); each listener's
+        // user data is its world's counter
+        static PROCS: JPH_ContactListener_Procs = JPH_ContactListener_Procs {
+            OnContactValidate: None,
+            OnContactAdded: Some(count_manifold_points),
+            OnContactPersisted: Some(count_manifold_points),
+            OnContactRemoved: None,
+        };
+        JPH_ContactListener_SetProcs(&PROCS);
     });
+}
+
+/// Jolt's contact points: its C API has no walk over the step's contacts, so a contact listener
+/// counts them. Jolt calls it once for each manifold it turns into a contact constraint in a step
+/// (new or kept, cached pairs included), with the manifold's points, which are the constraint's
+/// (a body with continuous motion may repeat a call; every body here moves discretely). The
+/// callbacks run inside Jolt's step, so the count's cost is in its timing, unlike the other
+/// workers' counts (docs/metrics.md)
+unsafe extern "C" fn count_manifold_points(user: *mut std::os::raw::c_void, _body1: *const JPH_Body,
+                                           _body2: *const JPH_Body,
+                                           manifold: *const JPH_ContactManifold,
+                                           _settings: *mut JPH_ContactSettings) {
+    // the single-threaded job system calls it on the stepping thread; atomic all the same
+    let points = unsafe { &*(user as *const std::sync::atomic::AtomicUsize) };
+    let count = unsafe { JPH_ContactManifold_GetPointCount(manifold) } as usize;
+    points.fetch_add(count, std::sync::atomic::Ordering::Relaxed);
 }
 
 impl Engine for Jolt {
@@ -109,6 +134,9 @@ impl Engine for Jolt {
                      drops contacts and the run is an error"),
             setting("springs", "external force at the attachment points, from the state at the \
                      start of each step", "the same method as the other peers' springs"),
+            setting("contact listener", "on scenes with collisions: counts each step's contact \
+                     points (OnContactAdded / OnContactPersisted)", "the only way the C API gives \
+                     them; its callbacks run inside the timed step, once a manifold"),
         ]
     }
     fn unsupported(&self, scene: &Scene, _variant: &str) -> Option<String> {
@@ -217,6 +245,20 @@ impl Engine for Jolt {
                 bodies.push(id);
             }
             JPH_PhysicsSystem_OptimizeBroadPhase(system);
+            // a scene with collisions counts its contact points (no listener otherwise: nothing
+            // to count, and no callback cost)
+            let points = Box::new(std::sync::atomic::AtomicUsize::new(0));
+            let listener = if scene.collisions {
+                let listener = JPH_ContactListener_Create(
+                    &*points as *const std::sync::atomic::AtomicUsize as *mut std::os::raw::c_void);
+                if listener.is_null() {
+                    return Err("JPH_ContactListener_Create failed".into());
+                }
+                JPH_PhysicsSystem_SetContactListener(system, listener);
+                listener
+            } else {
+                ptr::null_mut()
+            };
             Ok(Box::new(JoltWorld {
                 system,
                 interface,
@@ -225,6 +267,8 @@ impl Engine for Jolt {
                 bodies,
                 dt: scene.dt as f32,
                 overflow: None,
+                listener,
+                points,
             }))
         }
     }
@@ -238,6 +282,8 @@ struct JoltWorld {
     bodies: Vec<JPH_BodyID>,
     dt: f32,
     overflow: Option<String>,
+    listener: *mut JPH_ContactListener, // null on a scene without collisions
+    points: Box<std::sync::atomic::AtomicUsize>, // the listener's count since the last read
 }
 
 impl Drop for JoltWorld {
@@ -247,6 +293,9 @@ impl Drop for JoltWorld {
                 JPH_BodyInterface_RemoveAndDestroyBody(self.interface, id);
             }
             JPH_PhysicsSystem_Destroy(self.system);
+            if !self.listener.is_null() {
+                JPH_ContactListener_Destroy(self.listener);
+            }
             JPH_JobSystem_Destroy(self.jobs);
             JPH_TempAllocator_Destroy(self.scratch);
         }
@@ -306,6 +355,14 @@ impl World for JoltWorld {
     }
     fn error(&self) -> Option<String> {
         self.overflow.clone()
+    }
+    /// the points of every manifold Jolt made a contact constraint of in the last step, as its
+    /// contact listener counted them during the step
+    fn contact_points(&self) -> Option<usize> {
+        if self.listener.is_null() {
+            return None;
+        }
+        Some(self.points.swap(0, std::sync::atomic::Ordering::Relaxed))
     }
 }
 
