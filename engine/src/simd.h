@@ -351,6 +351,13 @@ unsigned lane_bits(M m) {
 #if defined(RTP_SIMD_VECTORS) && defined(__SSE__)
   if constexpr (width == 4 && N == 4) return unsigned(_mm_movemask_ps(bits_as<Pack<float, 4>>(m)));
 #endif
+#if defined(RTP_SIMD_VECTORS) && defined(__AVX512F__)
+  // the sign bits, by one compare into a mask register (a loop over the lanes extracts each)
+  if constexpr (width == 4 && N == 16)
+    return unsigned(_mm512_cmplt_epi32_mask((__m512i)m, _mm512_setzero_si512()));
+  if constexpr (width == 8 && N == 8)
+    return unsigned(_mm512_cmplt_epi64_mask((__m512i)m, _mm512_setzero_si512()));
+#endif
   if constexpr (width == 8 && N == 8) {
     // two halves of four
     Mask4 half[2];
