@@ -10,8 +10,8 @@
 // The soft step and sequential impulse run on lanes: the contacts of one colour (no two share a
 // dynamic body) are packed W to a block, one manifold a lane, in single precision, and each
 // operation of the solve runs on the W manifolds of a block at once (Box2D v3's wide solver,
-// b2FloatW, does the same with its graph colours). A block's bodies are gathered from the body
-// array and scattered back once per block and pass. Since a colour's contacts are independent,
+// b2FloatW, does the same with its graph colours). A block's bodies are read from the body
+// array (as records, transposed) and written back once per block and pass. Since a colour's contacts are independent,
 // the lane count, the thread count and which block a contact lands in change no result. The
 // colour past the last (contacts that found no free colour) holds one contact a block and is
 // solved in order. The seed's solver is lab 5 as written, one contact at a time, in double.
@@ -99,7 +99,7 @@ struct NormalRow {
         response_b(times(c.inverse_inertia_b, angular_b)) {}
 };
 
-// the two bodies of each lane, gathered from the body array, and scattered back
+// the two bodies of each lane, read from the body array, and written back
 struct LanePair {
   V3 va, wa, vb, wb;
   LaneIndex a, b;  // each lane's bodies as offsets into the body array's floats
