@@ -11,10 +11,10 @@
 // dynamic body) are packed W to a block, one manifold a lane, in single precision, and each
 // operation of the solve runs on the W manifolds of a block at once (Box2D v3's wide solver,
 // b2FloatW, does the same with its graph colours). A block's bodies are read from the body
-// array (as records, transposed) and written back once per block and pass. Since a colour's contacts are independent,
-// the lane count, the thread count and which block a contact lands in change no result. The
-// colour past the last (contacts that found no free colour) holds one contact a block and is
-// solved in order. The seed's solver is lab 5 as written, one contact at a time, in double.
+// array (as records, transposed) and written back once per block and pass. Since a colour's
+// contacts are independent, the lane count, the thread count and which block a contact lands in
+// change no result. The colour past the last (contacts that found no free colour) holds one
+// contact a block and is solved in order. The seed's solver is lab 5 as written, one contact at a time, in double.
 //
 // Over 500 lines because the lane helpers (V3, NormalRow, LanePair, NormalMotion) are private to
 // the kernels that use them; moved to a header they would be the solver's internals in two places.

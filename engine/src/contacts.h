@@ -88,7 +88,8 @@ class ContactPipeline {
   // ---- the stages, in order ----
   void update_bounds(std::span<const BodyState> states, double dt);
   void find_pairs();
-  // dt and gravity tell which points without a warm start may push this step (ContactConstraint::cold)
+  // dt and gravity tell which points without a warm start may push this step
+  // (ContactConstraint::cold)
   void collide_pairs(std::span<const BodyState> states, double dt, const Vec3& gravity);
   // masses and velocities at the step's start
   void load_bodies(std::span<const BodyState> states, std::span<const BodyMass> masses);
