@@ -14,7 +14,8 @@
 // array (as records, transposed) and written back once per block and pass. Since a colour's
 // contacts are independent, the lane count, the thread count and which block a contact lands in
 // change no result. The colour past the last (contacts that found no free colour) holds one
-// contact a block and is solved in order. The seed's solver is lab 5 as written, one contact at a time, in double.
+// contact a block and is solved in order. The seed's solver is lab 5 as written, one contact at
+// a time, in double.
 //
 // Over 500 lines because the lane helpers (V3, NormalRow, LanePair, NormalMotion) are private to
 // the kernels that use them; moved to a header they would be the solver's internals in two places.
