@@ -444,9 +444,11 @@ template <typename V>
     alignas(64) std::int32_t at[16];
     std::memcpy(at, &offset, sizeof at);
     __m512 r[8];
+    // (the 64-bit insert and extract are AVX-512F's own; the 32-bit ones need DQ)
     for (int i = 0; i < 8; ++i)
-      r[i] = _mm512_insertf32x8(_mm512_castps256_ps512(_mm256_loadu_ps(base + at[i])),
-                                _mm256_loadu_ps(base + at[i + 8]), 1);
+      r[i] = _mm512_castpd_ps(_mm512_insertf64x4(
+          _mm512_castpd256_pd512(_mm256_castps_pd(_mm256_loadu_ps(base + at[i]))),
+          _mm256_castps_pd(_mm256_loadu_ps(base + at[i + 8])), 1));
     transpose_records16(r);
     for (int k = 0; k < 8; ++k) rows[k] = r[k];
     return;
@@ -483,7 +485,8 @@ template <typename V>
       // the record's first six floats, and only where the lane is set
       if (set >> i & 1u) _mm256_mask_storeu_ps(base + at[i], 0x3F, _mm512_castps512_ps256(r[i]));
       if (set >> (i + 8) & 1u)
-        _mm256_mask_storeu_ps(base + at[i + 8], 0x3F, _mm512_extractf32x8_ps(r[i], 1));
+        _mm256_mask_storeu_ps(base + at[i + 8], 0x3F,
+                              _mm256_castpd_ps(_mm512_extractf64x4_pd(_mm512_castps_pd(r[i]), 1)));
     }
     return;
   }
