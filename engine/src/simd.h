@@ -384,10 +384,11 @@ bool all_of(M m) {
 
 // Records of floats, one a lane: the first 8 floats of the record at base + offset[i] as lane i of
 // rows[0..7] (rows[k][i] = base[offset[i] + k]), and the first 6 written back where a lane is set.
-// Where the build has the instructions, each record's 32 bytes are loaded whole and transposed
-// (16 lanes on AVX-512, 8 on AVX2), and written back by masked 32-byte stores: a gather or
-// scatter instruction costs one load or store a lane, and a pass over a block's bodies would take
-// six of each a body. Elsewhere a gather or scatter a row. The same floats move either way.
+// With AVX-512 (16 lanes), each record's 32 bytes are loaded whole and transposed, and written
+// back by masked 32-byte stores: a gather or scatter instruction costs one load or store a lane,
+// and a pass over a block's bodies would take six of each a body. Elsewhere a gather or scatter a
+// row (an 8 × 8 transpose for AVX2 is not written: it could not be timed on these machines). The
+// same floats move either way.
 // Always inlined: called, the kernels pass their lanes through memory (measured: the solve's ns
 // per point and pass 7.80 against 7.28 at base 20, minima of ten alternating runs).
 #if defined(RTP_SIMD_VECTORS) && defined(__AVX512F__)
@@ -414,26 +415,6 @@ bool all_of(M m) {
   }
 }
 #endif
-#if defined(RTP_SIMD_VECTORS) && defined(__AVX2__)
-// the 8 × 8 transpose: rows[i] = record i becomes rows[k] = float k of every record
-[[gnu::always_inline]] inline void transpose_records8(__m256 (&rows)[8]) {
-  __m256 t[8], u[8];
-  for (int i = 0; i < 8; i += 2) {
-    t[i] = _mm256_unpacklo_ps(rows[i], rows[i + 1]);
-    t[i + 1] = _mm256_unpackhi_ps(rows[i], rows[i + 1]);
-  }
-  for (int i = 0; i < 8; i += 4) {
-    u[i] = _mm256_shuffle_ps(t[i], t[i + 2], 0x44);
-    u[i + 1] = _mm256_shuffle_ps(t[i], t[i + 2], 0xEE);
-    u[i + 2] = _mm256_shuffle_ps(t[i + 1], t[i + 3], 0x44);
-    u[i + 3] = _mm256_shuffle_ps(t[i + 1], t[i + 3], 0xEE);
-  }
-  for (int k = 0; k < 4; ++k) {
-    rows[k] = _mm256_permute2f128_ps(u[k], u[k + 4], 0x20);
-    rows[k + 4] = _mm256_permute2f128_ps(u[k], u[k + 4], 0x31);
-  }
-}
-#endif
 
 template <typename V>
 [[gnu::always_inline]] inline void gather_records(const LaneOf<V>* base, MaskOf<V> offset,
@@ -450,17 +431,6 @@ template <typename V>
           _mm512_castpd256_pd512(_mm256_castps_pd(_mm256_loadu_ps(base + at[i]))),
           _mm256_castps_pd(_mm256_loadu_ps(base + at[i + 8])), 1));
     transpose_records16(r);
-    for (int k = 0; k < 8; ++k) rows[k] = r[k];
-    return;
-  }
-#endif
-#if defined(RTP_SIMD_VECTORS) && defined(__AVX2__)
-  if constexpr (std::is_same_v<V, Pack<float, 8>>) {
-    alignas(32) std::int32_t at[8];
-    std::memcpy(at, &offset, sizeof at);
-    __m256 r[8];
-    for (int i = 0; i < 8; ++i) r[i] = _mm256_loadu_ps(base + at[i]);
-    transpose_records8(r);
     for (int k = 0; k < 8; ++k) rows[k] = r[k];
     return;
   }
@@ -488,21 +458,6 @@ template <typename V>
         _mm256_mask_storeu_ps(base + at[i + 8], 0x3F,
                               _mm256_castpd_ps(_mm512_extractf64x4_pd(_mm512_castps_pd(r[i]), 1)));
     }
-    return;
-  }
-#endif
-#if defined(RTP_SIMD_VECTORS) && defined(__AVX2__)
-  if constexpr (std::is_same_v<V, Pack<float, 8>>) {
-    alignas(32) std::int32_t at[8];
-    std::memcpy(at, &offset, sizeof at);
-    const unsigned set = lane_bits(where);
-    __m256 r[8];
-    for (int k = 0; k < 6; ++k) r[k] = rows[k];
-    r[6] = r[7] = _mm256_setzero_ps();
-    transpose_records8(r);
-    const __m256i first_six = _mm256_setr_epi32(-1, -1, -1, -1, -1, -1, 0, 0);
-    for (int i = 0; i < 8; ++i)
-      if (set >> i & 1u) _mm256_maskstore_ps(base + at[i], first_six, r[i]);
     return;
   }
 #endif
