@@ -3,14 +3,18 @@
 // every `every` seconds), the drift and the top box's sideways and height change (stderr), and one
 // summary line (stdout): drift as the harness defines it (the largest horizontal displacement of
 // any box, over the run so far), the top's height change, the deepest penetration the narrow
-// phase saw, the energy change and ms per step. Not a benchmark: time it only against itself, in
+// phase saw, the energy change, ms per step, and a fingerprint of the final state (FNV-1a over
+// every body's position, orientation and momenta, bit for bit: two builds that print the same
+// fingerprint computed the same run). Not a benchmark: time it only against itself, in
 // turn, on one machine (docs/metrics.md).
 //
 //   build/bench/bench/stack_probe pyramid-100 10
 //   build/bench/bench/stack_probe pyramid-50 3 substeps 16 hertz 240
 //   build/bench/bench/stack_probe pyramid-100 2 every 0.1     (a line every 0.1 s, not every second)
 #include <cmath>
+#include <cstdint>
 #include <cstdio>
+#include <cstring>
 #include <cstdlib>
 #include <functional>
 #include <map>
@@ -102,9 +106,21 @@ int main(int argc, char** argv) {
                    (k + 1) * scene.dt, drift, world.state(top).position.x() - start[top].x(),
                    world.state(top).position.y() - start[top].y(), world.deepest_penetration());
   }
-  std::printf("%s %.3g s: drift %.4f m, top %+.4f m, deepest penetration %.4f m, energy %+.3f J, %.2f ms a step, %.2f relax passes a step\n",
+  std::uint64_t fingerprint = 0xcbf29ce484222325u;  // FNV-1a, 64 bits
+  auto hash = [&](double x) {
+    unsigned char bytes[sizeof x];
+    std::memcpy(bytes, &x, sizeof x);
+    for (unsigned char b : bytes) fingerprint = (fingerprint ^ b) * 0x100000001b3u;
+  };
+  for (int i = 0; i < n; ++i) {
+    const rtp::BodyState& s = world.state(i);
+    for (int k = 0; k < 3; ++k) hash(s.position[k]), hash(s.linear_momentum[k]);
+    for (int k = 0; k < 3; ++k) hash(s.angular_momentum[k]);
+    hash(s.orientation.w()), hash(s.orientation.x()), hash(s.orientation.y()), hash(s.orientation.z());
+  }
+  std::printf("%s %.3g s: drift %.4f m, top %+.4f m, deepest penetration %.4f m, energy %+.3f J, %.2f ms a step, %.2f relax passes a step, state %016llx\n",
               argv[1], seconds, drift, world.state(top).position.y() - start[top].y(), deepest,
               world.mechanical_energy() - energy, 1e3 * seconds_stepping / steps,
-              double(relax_passes) / steps);
+              double(relax_passes) / steps, static_cast<unsigned long long>(fingerprint));
   return 0;
 }
