@@ -351,25 +351,53 @@ void World::integrate_velocities(double h) {
   }
 }
 
+namespace {
+
+// the turn by ω over h, exp(h ω / 2) as a unit quaternion: (cos x, sin x ω/|ω|) with x = h|ω|/2.
+// A body-substep's half angle is small (a box spinning at 10 rad/s turns 0.01 rad in a 480 Hz
+// substep), and there sin x / x and cos x are their Taylor series, exact to double's round-off
+// below 0.1 (the first term left out is under 3e-18 of the sum), with no square root, division
+// or sine; past it the library's sine and cosine
+Quat turn_by(const Vec3& angular_velocity, double h) {
+  const double half = 0.5 * h;
+  const double x2 = half * half * angular_velocity.squaredNorm();
+  double c, sinc;  // cos x and sin x / x
+  if (x2 < 0.01) {
+    c = 1.0 + x2 * (-1.0 / 2 + x2 * (1.0 / 24 + x2 * (-1.0 / 720 + x2 * (1.0 / 40320 +
+                                                                        x2 * (-1.0 / 3628800)))));
+    sinc = 1.0 + x2 * (-1.0 / 6 + x2 * (1.0 / 120 + x2 * (-1.0 / 5040 + x2 * (1.0 / 362880))));
+  } else {
+    const double x = std::sqrt(x2);
+    c = std::cos(x);
+    sinc = std::sin(x) / x;
+  }
+  const Vec3 v = (sinc * half) * angular_velocity;
+  return Quat(c, v.x(), v.y(), v.z());
+}
+
+}  // namespace
+
 void World::integrate_positions(double h) {
   // positions by the new velocities, orientations by the exponential map; the motion since the
   // step's start is kept too, for the contacts' separations
   std::vector<SolverBody>& bodies = pipeline_->bodies();
-  const std::vector<SolverMass>& masses = pipeline_->masses();
-  // each body by itself: the same result on any number of threads
+  // each body by itself: the same result on any number of threads. A body at rest does not move
+  // (a static body is always at rest in the solver: nothing writes its velocities), so only the
+  // solver's line of a body is read to know
   const std::ptrdiff_t n = std::ptrdiff_t(states_.size());
 #pragma omp parallel for num_threads(contact_settings_.threads) schedule(static) if (n >= 2048)
   for (std::ptrdiff_t i = 0; i < n; ++i) {
-    if (masses[i].inverse_mass == 0.0) continue;
     SolverBody& body = bodies[i];
+    if (body.linear_velocity == Eigen::Vector3f::Zero() &&
+        body.angular_velocity == Eigen::Vector3f::Zero())
+      continue;
     BodyState& s = states_[i];
     const Vec3 moved = h * body.linear_velocity.cast<double>();
     s.position += moved;
     body.delta_position += moved.cast<float>();
     const Vec3 angular_velocity = body.angular_velocity.cast<double>();
-    const double angle = angular_velocity.norm() * h;
-    if (angle > 0.0) {
-      const Quat turn(Eigen::AngleAxisd(angle, angular_velocity.normalized()));
+    if (angular_velocity != Vec3::Zero()) {
+      const Quat turn = turn_by(angular_velocity, h);
       s.orientation = (turn * s.orientation).normalized();
       body.delta_rotation = (turn.cast<float>() * body.delta_rotation).normalized();
     }
