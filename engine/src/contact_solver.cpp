@@ -201,8 +201,8 @@ double effective_mass(const Vec3& ra, const Vec3& rb, const Vec3& d, const Solve
   return k > 0.0 ? 1.0 / k : 0.0;
 }
 
-void set3(Lane (&lanes)[3], std::size_t i, const Vec3& v) {
-  for (int k = 0; k < 3; ++k) lanes[k][i] = float(v[k]);
+void set3(Lane (&lanes)[3], std::size_t i, const Eigen::Vector3f& v) {
+  for (int k = 0; k < 3; ++k) lanes[k][i] = v[k];
 }
 void set_symmetric(Lane (&lanes)[6], std::size_t i, const Mat3& m) {
   lanes[0][i] = float(m(0, 0)), lanes[1][i] = float(m(1, 1)), lanes[2][i] = float(m(2, 2));
@@ -278,8 +278,8 @@ void ContactPipeline::colour_contacts() {
     }
     bool quiet = c.cold == 0;
     for (std::uint8_t j = 0; j < c.count && quiet; ++j)
-      quiet = c.points[j].normal_impulse == 0.0 && c.points[j].tangent_impulse[0] == 0.0 &&
-              c.points[j].tangent_impulse[1] == 0.0;
+      quiet = c.points[j].normal_impulse == 0.0f && c.points[j].tangent_impulse[0] == 0.0f &&
+              c.points[j].tangent_impulse[1] == 0.0f;
     colour_of[i] = std::uint8_t(colour | (c.cold != 0 ? kCold : quiet ? kQuiet : 0));
     ++counts[colour + 1];
   }
@@ -442,8 +442,8 @@ void ContactPipeline::prepare(double dt, const Vec3& gravity) {
       block.inverse_mass_b[i] = float(mass_b.inverse_mass);
       set_symmetric(block.inverse_inertia_a, i, mass_a.inverse_inertia);
       set_symmetric(block.inverse_inertia_b, i, mass_b.inverse_inertia);
-      block.friction[i] = float(c.friction);
-      block.restitution[i] = float(c.restitution);
+      block.friction[i] = c.friction;
+      block.restitution[i] = c.restitution;
       const bool against_static = mass_a.inverse_mass == 0.0 || mass_b.inverse_mass == 0.0;
       const Softness& soft = against_static ? static_soft : dynamic_soft;
       block.bias_rate[i] = float(soft.bias_rate);
@@ -452,7 +452,7 @@ void ContactPipeline::prepare(double dt, const Vec3& gravity) {
       // the gravity along n that free flight closes a gap with (relative, b's less a's)
       const Vec3 gravity_a = mass_a.inverse_mass > 0.0 ? gravity : Vec3::Zero();
       const Vec3 gravity_b = mass_b.inverse_mass > 0.0 ? gravity : Vec3::Zero();
-      acceleration[i] = float(c.normal.dot(gravity_b - gravity_a));
+      acceleration[i] = float(c.normal.cast<double>().dot(gravity_b - gravity_a));
       for (std::uint8_t j = 0; j < c.count; ++j) {
         const ContactPointConstraint& from = c.points[j];
         ContactBlock::Point& p = block.points[j];
@@ -460,10 +460,10 @@ void ContactPipeline::prepare(double dt, const Vec3& gravity) {
         cold[j][i] = (c.cold >> j & 1u) ? -1 : 0;
         set3(p.anchor_a, i, from.anchor_a);
         set3(p.anchor_b, i, from.anchor_b);
-        p.base_separation[i] = float(from.base_separation);
-        p.normal_impulse[i] = float(from.normal_impulse);
-        p.tangent_impulse[0][i] = float(from.tangent_impulse[0]);
-        p.tangent_impulse[1][i] = float(from.tangent_impulse[1]);
+        p.base_separation[i] = from.base_separation;
+        p.normal_impulse[i] = from.normal_impulse;
+        p.tangent_impulse[0][i] = from.tangent_impulse[0];
+        p.tangent_impulse[1][i] = from.tangent_impulse[1];
       }
     }
     prepare_lanes(block, exists, cold, acceleration);
@@ -739,14 +739,18 @@ void ContactPipeline::solve_seed(double dt) {
       Vec3 wa = bodies_[c.body_a].angular_velocity.cast<double>();
       Vec3 vb = bodies_[c.body_b].linear_velocity.cast<double>();
       Vec3 wb = bodies_[c.body_b].angular_velocity.cast<double>();
-      auto velocity = [&](const ContactPointConstraint& p, const Vec3& d) {
-        return d.dot((vb + wb.cross(p.anchor_b)) - (va + wa.cross(p.anchor_a)));
+      // the contact's numbers in double too (they are kept in single precision)
+      const Vec3 normal = c.normal.cast<double>();
+      const Vec3 tangent[2] = {c.tangent[0].cast<double>(), c.tangent[1].cast<double>()};
+      Vec3 ra, rb;  // the point's anchors
+      auto velocity = [&](const Vec3& d) {
+        return d.dot((vb + wb.cross(rb)) - (va + wa.cross(ra)));
       };
-      auto apply = [&](const ContactPointConstraint& p, const Vec3& impulse) {
+      auto apply = [&](const Vec3& impulse) {
         va -= mass_a.inverse_mass * impulse;
-        wa -= mass_a.inverse_inertia * p.anchor_a.cross(impulse);
+        wa -= mass_a.inverse_inertia * ra.cross(impulse);
         vb += mass_b.inverse_mass * impulse;
-        wb += mass_b.inverse_inertia * p.anchor_b.cross(impulse);
+        wb += mass_b.inverse_inertia * rb.cross(impulse);
       };
       double largest_change = 0.0;
       for (std::uint8_t i = 0; i < c.count; ++i) {
@@ -754,23 +758,24 @@ void ContactPipeline::solve_seed(double dt) {
         const double depth = -p.base_separation;
         // the seed's narrow phase reports touching shapes only: no speculative points
         if (depth < 0.0) continue;
-        const double normal_mass =
-            effective_mass(p.anchor_a, p.anchor_b, c.normal, mass_a, mass_b);
-        const double vn = velocity(p, c.normal);
+        ra = p.anchor_a.cast<double>();
+        rb = p.anchor_b.cast<double>();
+        const double normal_mass = effective_mass(ra, rb, normal, mass_a, mass_b);
+        const double vn = velocity(normal);
         const double j =
             normal_mass * (-(1.0 + c.restitution) * vn +
                            penalty_rate * std::max(depth - settings_.linear_slop, 0.0));
         if (j <= 0.0) continue;
-        apply(p, j * c.normal);
+        apply(j * normal);
         largest_change = std::max(largest_change, j / std::max(normal_mass, 1e-300));
         // friction against the sliding velocity, at most μ j
-        const double v0 = velocity(p, c.tangent[0]);
-        const double v1 = velocity(p, c.tangent[1]);
+        const double v0 = velocity(tangent[0]);
+        const double v1 = velocity(tangent[1]);
         const double speed = std::sqrt(v0 * v0 + v1 * v1);
         if (speed > 0.0) {
-          const Vec3 direction = (v0 * c.tangent[0] + v1 * c.tangent[1]) / speed;
-          const double mass = effective_mass(p.anchor_a, p.anchor_b, direction, mass_a, mass_b);
-          apply(p, -std::min(speed * mass, c.friction * j) * direction);
+          const Vec3 direction = (v0 * tangent[0] + v1 * tangent[1]) / speed;
+          const double mass = effective_mass(ra, rb, direction, mass_a, mass_b);
+          apply(-std::min(speed * mass, double(c.friction) * j) * direction);
         }
       }
       if (mass_a.inverse_mass > 0.0) {

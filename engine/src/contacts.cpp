@@ -295,20 +295,24 @@ void ContactPipeline::collide_pairs(std::span<const BodyState> states, double dt
       c.body_a = a;
       c.body_b = b;
       contact_keys_[i] = c.key();
-      c.normal = manifold.normal;
-      tangent_basis(c.normal, c.tangent);
+      c.normal = manifold.normal.cast<float>();
+      Vec3 tangent[2];
+      tangent_basis(manifold.normal, tangent);
+      c.tangent[0] = tangent[0].cast<float>();
+      c.tangent[1] = tangent[1].cast<float>();
       // the pair's coefficients (docs/scene-format.md): √(μa μb), max(ea, eb)
-      c.friction = std::sqrt(shapes_[a].friction * shapes_[b].friction);
-      c.restitution = std::max(shapes_[a].restitution, shapes_[b].restitution);
+      c.friction = float(std::sqrt(shapes_[a].friction * shapes_[b].friction));
+      c.restitution = float(std::max(shapes_[a].restitution, shapes_[b].restitution));
       c.count = manifold.count;
       for (std::uint8_t j = 0; j < manifold.count; ++j) {
         ContactPointConstraint& p = c.points[j];
-        p.anchor_a = manifold.points[j].point - states[a].position;
-        p.anchor_b = manifold.points[j].point - states[b].position;
+        p.anchor_a = (manifold.points[j].point - states[a].position).cast<float>();
+        p.anchor_b = (manifold.points[j].point - states[b].position).cast<float>();
         // depth of the grown shapes less the growth: the real separation (< 0: penetrating)
-        p.base_separation = pair_growth_[k] - manifold.points[j].depth;
+        const double separation = pair_growth_[k] - manifold.points[j].depth;
+        p.base_separation = float(separation);
         p.feature = manifold.points[j].feature;
-        deepest = std::max(deepest, -p.base_separation);
+        deepest = std::max(deepest, -separation);
       }
       // the same pair last step: carry each point's impulses by feature id (warm starting);
       // then which points start cold
@@ -332,18 +336,19 @@ std::uint8_t ContactPipeline::cold_points(const ContactConstraint& c, double dt,
   const SolverBody& b = bodies_[c.body_b];
   const bool moves_a = masses_[c.body_a].inverse_mass > 0.0;
   const bool moves_b = masses_[c.body_b].inverse_mass > 0.0;
-  const double acceleration = c.normal.dot((moves_b ? gravity : Vec3::Zero()) -
-                                           (moves_a ? gravity : Vec3::Zero()));
+  const Vec3 normal = c.normal.cast<double>();
+  const double acceleration = normal.dot((moves_b ? gravity : Vec3::Zero()) -
+                                         (moves_a ? gravity : Vec3::Zero()));
   const Vec3 va = a.linear_velocity.cast<double>(), wa = a.angular_velocity.cast<double>();
   const Vec3 vb = b.linear_velocity.cast<double>(), wb = b.angular_velocity.cast<double>();
   const double horizon = 2.0 * dt;
   std::uint8_t cold = 0;
   for (std::uint8_t j = 0; j < c.count; ++j) {
     const ContactPointConstraint& p = c.points[j];
-    if (p.normal_impulse != 0.0) continue;
+    if (p.normal_impulse != 0.0f) continue;
     const double s = p.base_separation;
-    const double approach =
-        c.normal.dot((vb + wb.cross(p.anchor_b)) - (va + wa.cross(p.anchor_a)));
+    const double approach = normal.dot((vb + wb.cross(p.anchor_b.cast<double>())) -
+                                       (va + wa.cross(p.anchor_a.cast<double>())));
     if (s <= 0.0 || s + horizon * approach + 0.5 * horizon * horizon * acceleration < 0.0)
       cold |= std::uint8_t(1u << j);
   }
@@ -373,7 +378,7 @@ std::size_t ContactPipeline::carry_impulses(const ContactConstraint& old,
     double nearest = match_squared;
     for (std::uint8_t j = 0; j < old.count; ++j) {
       if (claimed[j]) continue;
-      const double d = (old.points[j].anchor_a - c.points[i].anchor_a).squaredNorm();
+      const double d = (old.points[j].anchor_a - c.points[i].anchor_a).cast<double>().squaredNorm();
       if (d < nearest) nearest = d, source[i] = j;
     }
     if (source[i] >= 0) claimed[source[i]] = true;
@@ -387,10 +392,10 @@ std::size_t ContactPipeline::carry_impulses(const ContactConstraint& old,
     to.normal_impulse = from.normal_impulse;
     // the friction impulse as a world vector, onto this step's basis (the normal turns a little
     // between steps, and the basis with it)
-    const Vec3 friction =
-        from.tangent_impulse[0] * old.tangent[0] + from.tangent_impulse[1] * old.tangent[1];
-    to.tangent_impulse[0] = friction.dot(c.tangent[0]);
-    to.tangent_impulse[1] = friction.dot(c.tangent[1]);
+    const Vec3 friction = double(from.tangent_impulse[0]) * old.tangent[0].cast<double>() +
+                          double(from.tangent_impulse[1]) * old.tangent[1].cast<double>();
+    to.tangent_impulse[0] = float(friction.dot(c.tangent[0].cast<double>()));
+    to.tangent_impulse[1] = float(friction.dot(c.tangent[1].cast<double>()));
   }
   return matched;
 }

@@ -50,23 +50,26 @@ struct SolverMass {
 };
 
 // a point of a manifold as the narrow phase made it and the solver leaves it: what the next
-// step's match needs (the solver's own per-step numbers live in its lanes, contact_solver.cpp)
+// step's match needs (the solver's own per-step numbers live in its lanes, contact_solver.cpp).
+// In single precision, as the solver reads them: the narrow phase measures in double and rounds
+// once here, and a contact is 248 bytes (four cache lines), which the narrow phase writes and the
+// colouring, prepare() and store_impulses() walk every step
 struct ContactPointConstraint {
-  Vec3 anchor_a = Vec3::Zero(), anchor_b = Vec3::Zero();  // the point from each centre of mass,
-                                                          // world (m)
-  double base_separation = 0.0;  // separation at the step's start (m); < 0 penetrating
-  double normal_impulse = 0.0;   // accumulated, carried to the next step (N s)
-  std::array<double, 2> tangent_impulse{};  // along the two tangents (N s)
+  Eigen::Vector3f anchor_a = Eigen::Vector3f::Zero(),  // the point from each centre of mass,
+      anchor_b = Eigen::Vector3f::Zero();              // world (m)
+  float base_separation = 0.0f;  // separation at the step's start (m); < 0 penetrating
+  float normal_impulse = 0.0f;   // accumulated, carried to the next step (N s)
+  std::array<float, 2> tangent_impulse{};  // along the two tangents (N s)
   ContactFeature feature;
 };
 
 // one touching pair: a manifold of up to four points, normal from a to b
 struct ContactConstraint {
   BodyId body_a = 0, body_b = 0;
-  Vec3 normal = Vec3::Zero();
-  Vec3 tangent[2] = {Vec3::Zero(), Vec3::Zero()};
-  double friction = 0.0;
-  double restitution = 0.0;
+  Eigen::Vector3f normal = Eigen::Vector3f::Zero();
+  Eigen::Vector3f tangent[2] = {Eigen::Vector3f::Zero(), Eigen::Vector3f::Zero()};
+  float friction = 0.0f;
+  float restitution = 0.0f;
   std::uint8_t count = 0;
   // bit j: point j starts without an accumulated normal impulse and may push this step (it
   // touches, or free flight closes its gap within two steps). The solve runs such a manifold's
@@ -75,6 +78,7 @@ struct ContactConstraint {
   std::array<ContactPointConstraint, 4> points;
   std::uint64_t key() const { return std::uint64_t(body_a) << 32 | body_b; }
 };
+static_assert(sizeof(ContactConstraint) == 248);
 
 class ContactPipeline {
  public:
