@@ -511,7 +511,25 @@ void ContactPipeline::prepare_lanes(ContactBlock& c, const std::array<LaneMask, 
   c.fresh = fresh;
 }
 
-void ContactPipeline::warm_start() {
+void ContactPipeline::warm_start(bool first_substep) {
+  const std::ptrdiff_t n = std::ptrdiff_t(bodies_.size());
+  substep_start_.resize(bodies_.size());
+  substep_change_.resize(bodies_.size());
+  if (!first_substep) {
+#pragma omp parallel for num_threads(settings_.threads) schedule(static) if (n >= 2048)
+    for (std::ptrdiff_t i = 0; i < n; ++i) {
+      SolverBody& body = bodies_[i];
+      substep_start_[i].linear = body.linear_velocity;
+      substep_start_[i].angular = body.angular_velocity;
+      body.linear_velocity += substep_change_[i].linear;
+      body.angular_velocity += substep_change_[i].angular;
+    }
+    return;
+  }
+#pragma omp parallel for num_threads(settings_.threads) schedule(static) if (n >= 2048)
+  for (std::ptrdiff_t i = 0; i < n; ++i)
+    substep_start_[i] = {bodies_[i].linear_velocity, bodies_[i].angular_velocity,
+                         masses_[i].inverse_mass > 0.0 ? 1.0f : 0.0f};
   for_each_block([&](const ContactBlock& c, Prefetch& ahead) {
     // the warm start reads 59 of a block's 100 lines (the bodies, the directions, the masses,
     // each point's anchors and impulses): only those of the next block are asked for, since at
@@ -538,6 +556,31 @@ void ContactPipeline::warm_start() {
     }
     pair.store(bodies_, c);
   });
+}
+
+void ContactPipeline::end_substep() {
+  const std::ptrdiff_t n = std::ptrdiff_t(bodies_.size());
+#pragma omp parallel for num_threads(settings_.threads) schedule(static) if (n >= 2048)
+  for (std::ptrdiff_t i = 0; i < n; ++i) {
+    substep_change_[i].linear = bodies_[i].linear_velocity - substep_start_[i].linear;
+    substep_change_[i].angular = bodies_[i].angular_velocity - substep_start_[i].angular;
+  }
+}
+
+void ContactPipeline::next_substep(const Eigen::Vector3f& kick) {
+  const std::ptrdiff_t n = std::ptrdiff_t(bodies_.size());
+#pragma omp parallel for num_threads(settings_.threads) schedule(static) if (n >= 2048)
+  for (std::ptrdiff_t i = 0; i < n; ++i) {
+    SolverBody& body = bodies_[i];
+    Velocities& start = substep_start_[i];
+    const Eigen::Vector3f linear_change = body.linear_velocity - start.linear;
+    const Eigen::Vector3f angular_change = body.angular_velocity - start.angular;
+    if (start.dynamic != 0.0f) body.linear_velocity += kick;
+    start.linear = body.linear_velocity;
+    start.angular = body.angular_velocity;
+    body.linear_velocity += linear_change;
+    body.angular_velocity += angular_change;
+  }
 }
 
 bool ContactPipeline::solve(double h, bool bias, bool backwards, double tolerance) {

@@ -98,7 +98,19 @@ class ContactPipeline {
   // masses and velocities at the step's start
   void load_bodies(std::span<const BodyState> states, std::span<const BodyMass> masses);
   void prepare(double dt, const Vec3& gravity);
-  void warm_start();
+  // the warm start: each contact's accumulated impulses applied to its bodies. On the first
+  // substep of a step (and for a solver without substeps) by a pass over the contacts; on a later
+  // one each body takes the velocity change its contacts gave it over the substep before, which
+  // is the same impulses (a substep's impulses on a contact sum to its accumulated impulse, and
+  // the velocity change is linear in them) for a pass over the bodies alone
+  void warm_start(bool first_substep = true);
+  // the end of a substep: each body's velocity change by its contacts since the warm start, for
+  // the next substep's warm start
+  void end_substep();
+  // end_substep(), a kick of every dynamic body's velocity by `kick` (gravity over a substep: what
+  // the world's velocity integration does without springs) and warm_start(false), in one pass
+  // over the bodies
+  void next_substep(const Eigen::Vector3f& kick);
   // one pass of the velocity solve; bias: push out penetration (soft step, sequential impulse);
   // backwards: the colours in reverse order
   // returns whether every point's normal velocity changed by under `tolerance` (m/s) in the pass
@@ -188,6 +200,13 @@ class ContactPipeline {
   std::vector<Pose> poses_;  // per body, this step
   std::vector<double> pair_growth_;
   std::vector<SolverBody> bodies_;  // per body, and one at rest past the last, for empty lanes
+  // per body: its velocities as the substep's warm start found them, then the change its
+  // contacts made over the substep (warm_start(), end_substep())
+  struct Velocities {
+    Eigen::Vector3f linear = Eigen::Vector3f::Zero(), angular = Eigen::Vector3f::Zero();
+    float dynamic = 0.0f;  // substep_start_: 1 for a dynamic body, 0 for a static one
+  };
+  std::vector<Velocities> substep_start_, substep_change_;
   std::vector<SolverMass> masses_;
   std::unique_ptr<ContactLanes> lanes_;
   std::vector<bool> seed_converged_;  // seed: per contact, its impulses stopped changing

@@ -15,6 +15,7 @@
 #include <cstdlib>
 #include <new>
 #include <numbers>
+#include <vector>
 
 #include "rtp/world.h"
 
@@ -115,6 +116,61 @@ TEST(Contacts, RestingBoxDoesNotJitter) {
   }
   EXPECT_LT(std::sqrt(sum_squared / samples), 1e-3);  // m/s
   EXPECT_NEAR(world.state(box).position.y(), 0.5, 1e-3);
+}
+
+// A spring on a box resting on the ground: a substep's warm start gives each body the velocity
+// change its contacts made over the substep before, which must leave the spring's own impulse
+// out (counted there, a spring holding up 0.6 of the weight would lift the box) and must not
+// drop it (a spring pulling with 1.5 times the weight must lift the box off)
+TEST(Contacts, SpringOnARestingBoxActsOnceEverySubstep) {
+  for (const double share : {0.6, 1.5}) {
+    World world = world_with(ContactSolver::SoftStep);
+    add_ground(world, 0.6);
+    const BodyId box = add_box(world, {0.0, 0.5, 0.0}, 1.0, 0.6);
+    SpringDef spring;  // from the box's top to a point 2 m above it, stretched 1 m
+    spring.body_a = box;
+    spring.local_point_a = {0.0, 0.5, 0.0};
+    spring.point_b = {0.0, 3.0, 0.0};
+    spring.rest_length = 1.0;
+    spring.stiffness = share * 9.81;  // N/m: share × the weight at 1 m of stretch
+    world.add_spring(spring);
+    for (int i = 0; i < 30; ++i) world.step(kDt);
+    const double rise = world.state(box).position.y() - 0.5;
+    if (share < 1.0)
+      EXPECT_NEAR(rise, 0.0, 1e-3) << "share " << share;
+    else  // 0.5 g up at first, less as the spring shortens: about 0.4 m within 0.5 s
+      EXPECT_GT(rise, 0.2) << "share " << share;
+  }
+}
+
+// The soft step's later substeps start in one pass over the bodies where the world has no
+// springs (ContactPipeline::next_substep), and in three with them: a spring of stiffness zero
+// takes the second way and must change nothing
+TEST(Contacts, SubstepsStartTheSameWithOrWithoutASpringOfNoForce) {
+  auto run = [](bool spring) {
+    World world = world_with(ContactSolver::SoftStep);
+    add_ground(world, 0.6);
+    for (int i = 0; i < 3; ++i)
+      add_box(world, {0.1 * i, 0.5 + 1.01 * i, 0.0}, 1.0 + i, 0.6, 0.0,
+              Quat(Eigen::AngleAxisd(0.1 * i, Vec3::UnitY())));
+    if (spring) {
+      SpringDef none;
+      none.body_a = 2;
+      none.point_b = {5.0, 5.0, 5.0};
+      world.add_spring(none);
+    }
+    for (int i = 0; i < 120; ++i) world.step(kDt);
+    std::vector<BodyState> states;
+    for (BodyId b = 0; b < world.body_count(); ++b) states.push_back(world.state(b));
+    return states;
+  };
+  const std::vector<BodyState> with = run(true), without = run(false);
+  for (std::size_t b = 0; b < with.size(); ++b) {
+    EXPECT_EQ(with[b].position, without[b].position) << "body " << b;
+    EXPECT_EQ(with[b].orientation.coeffs(), without[b].orientation.coeffs()) << "body " << b;
+    EXPECT_EQ(with[b].linear_momentum, without[b].linear_momentum) << "body " << b;
+  }
+  EXPECT_GT(with[3].position.y() - with[1].position.y(), 1.9);  // the stack stood
 }
 
 // a closed stack (no work done on it) never gains mechanical energy
