@@ -223,7 +223,8 @@ void ContactPipeline::collide_pairs(std::span<const BodyState> states, double dt
 #pragma omp parallel for num_threads(settings_.threads) schedule(static) if (states.size() >= 2048)
   for (std::size_t i = 0; i < states.size(); ++i)
     if (shapes_[i].kind != BodyShape::None) poses_[i] = pose_of(states[i]);
-  // each candidate's entry in last step's pair cache (both lists sorted by key)
+  // each candidate's entry in last step's pair cache, which holds the pairs found apart (both
+  // lists sorted by key)
   cache_index_.assign(n, ~std::uint32_t{0});
   const bool cache = settings_.pair_cache_distance > 0.0;
   if (cache)
@@ -232,7 +233,11 @@ void ContactPipeline::collide_pairs(std::span<const BodyState> states, double dt
       if (j < pair_cache_.size() && pair_cache_[j].key == candidates_[k])
         cache_index_[k] = std::uint32_t(j);
     }
-  next_pair_cache_.resize(cache ? n : 0);
+  // per candidate, a byte: what it was found to be (kept apart for the cache, where the threads
+  // write no more than that byte for a touching pair)
+  enum : std::uint8_t { kTouching, kFoundApart, kStillApart };
+  outcome_.resize(n);
+  if (cache && found_apart_.size() < n) found_apart_.resize(n);
   std::size_t reused = 0;
 #pragma omp parallel for num_threads(settings_.threads) schedule(dynamic, 64) \
     if (n >= 1024) reduction(+ : reused)
@@ -241,10 +246,10 @@ void ContactPipeline::collide_pairs(std::span<const BodyState> states, double dt
     Shape grown_a = shapes_[a].shape, grown_b = shapes_[b].shape;
     pair_growth_[k] = grow_pair(shapes_[a], shapes_[b], grown_a, grown_b);
     const std::uint32_t entry = cache_index_[k];
-    if (cache && entry != ~std::uint32_t{0} && pair_cache_[entry].apart &&
+    if (cache && entry != ~std::uint32_t{0} &&
         still_apart(pair_cache_[entry], a, b, pair_growth_[k])) {
       manifolds_[k].count = 0;
-      next_pair_cache_[k] = pair_cache_[entry];  // from when it was tested, so motion adds up
+      outcome_[k] = kStillApart;
       ++reused;
       continue;
     }
@@ -253,22 +258,28 @@ void ContactPipeline::collide_pairs(std::span<const BodyState> states, double dt
     // only pairs found apart are cached: a touching pair moved with its bodies keeps points a
     // sliding contact has left (a 1,275-box pyramid drifted 2.2 cm in 10 s with touching pairs
     // reused within 1 mm, 0.9 cm without)
-    if (cache) {
-      next_pair_cache_[k] = manifolds_[k].count == 0 ? cache_apart(a, b, pair_growth_[k])
-                                                     : CachedPair{candidates_[k], false};
-    }
+    outcome_[k] = manifolds_[k].count != 0 ? kTouching : kFoundApart;
+    if (cache && outcome_[k] == kFoundApart) found_apart_[k] = cache_apart(a, b, pair_growth_[k]);
   }
   reused_ = reused;
+
+  // the touching candidates in pair order, each to its place in contacts_; the pairs apart into
+  // the next step's cache, those still apart with the pose they were tested at, so that motion
+  // adds up
+  next_pair_cache_.clear();
+  touching_.clear();
+  for (std::size_t k = 0; k < n; ++k) {
+    if (outcome_[k] == kTouching) touching_.push_back(std::uint32_t(k));
+    else if (cache)
+      next_pair_cache_.push_back(outcome_[k] == kFoundApart ? found_apart_[k]
+                                                           : pair_cache_[cache_index_[k]]);
+  }
   std::swap(pair_cache_, next_pair_cache_);
 
-  // the touching candidates in pair order, each to its place in contacts_, then every contact
-  // built and matched with last step's on the threads (each writes its own; last step's is
-  // found by key in its sorted list): the same contacts on any number of threads
+  // every contact built and matched with last step's on the threads (each writes its own; last
+  // step's is found by key in its sorted list): the same contacts on any number of threads
   std::swap(contacts_, previous_);
   std::swap(contact_keys_, previous_keys_);
-  touching_.clear();
-  for (std::size_t k = 0; k < n; ++k)
-    if (manifolds_[k].count != 0) touching_.push_back(std::uint32_t(k));
   const std::size_t m = touching_.size();
   contacts_.resize(m);
   contact_keys_.resize(m);
@@ -406,7 +417,6 @@ ContactPipeline::CachedPair ContactPipeline::cache_apart(BodyId a, BodyId b,
   const Pose& pb = poses_[b];
   CachedPair out;
   out.key = pair_key(a, b);
-  out.apart = true;
   out.offset_in_a = pa.rotation.transpose() * (pb.position - pa.position);
   out.offset_in_b = pb.rotation.transpose() * (pa.position - pb.position);
   out.relative_rotation = pa.rotation.transpose() * pb.rotation;

@@ -186,14 +186,16 @@ class ContactPipeline {
   // found apart is taken to be apart still instead of tested again (docs/solver.md)
   struct CachedPair {
     std::uint64_t key = ~std::uint64_t{0};
-    bool apart = false;  // found apart, so cached (a touching pair is always computed again)
     Vec3 offset_in_a = Vec3::Zero(), offset_in_b = Vec3::Zero();  // Raᵀ(xb − xa), Rbᵀ(xa − xb)
     Mat3 relative_rotation = Mat3::Identity();                    // Raᵀ Rb
     double growth = 0.0;  // the pair's growth then (m)
   };
   bool still_apart(const CachedPair& cached, BodyId a, BodyId b, double growth) const;
   CachedPair cache_apart(BodyId a, BodyId b, double growth) const;
-  std::vector<CachedPair> pair_cache_, next_pair_cache_;  // by candidate, sorted by key
+  // the pairs found apart, sorted by key (a touching pair is always computed again)
+  std::vector<CachedPair> pair_cache_, next_pair_cache_;
+  std::vector<CachedPair> found_apart_;  // per candidate, written where it was found apart
+  std::vector<std::uint8_t> outcome_;    // per candidate: touching, found apart, still apart
   std::vector<std::uint32_t> touching_;     // the candidates whose manifold has points
   std::vector<std::uint32_t> cache_index_;  // per candidate: its entry in pair_cache_, or ~0
   std::size_t reused_ = 0;
