@@ -26,6 +26,12 @@ struct ContactBlock {
   Lane inverse_mass_a, inverse_mass_b;
   Lane inverse_inertia_a[6], inverse_inertia_b[6];  // world, symmetric: xx yy zz xy xz yz
   Lane friction, restitution;
+  // friction at the centre of the manifold's points: its anchors from each body, the effective
+  // masses along the tangents and about the normal, the mean distance of the points from it
+  // (the twist's lever), and the accumulated impulses
+  Lane centre_a[3], centre_b[3];
+  Lane tangent_mass[2], twist_mass, twist_arm;
+  Lane friction_impulse[2], twist_impulse;
   Lane bias_rate, mass_scale, impulse_scale;  // the soft step's stiffness (Catto, b2MakeSoft)
   LaneMask fresh;  // a point without a warm start, or hitting: the manifold is solved locally
   struct Point {
@@ -33,17 +39,16 @@ struct ContactBlock {
     Lane base_separation;  // at the step's start, less n·(anchor_b − anchor_a) (m)
     Lane separation;       // as the bodies last moved: the base, plus their motion along n since
                            // the step's start (m); computed again once the positions change
-    Lane normal_mass, tangent_mass[2];  // 1 / the velocity change per unit impulse (kg); 0 for
-                                        // an empty point
-    Lane normal_impulse, tangent_impulse[2];
+    Lane normal_mass;  // 1 / the velocity change per unit impulse (kg); 0 for an empty point
+    Lane normal_impulse;
     Lane max_normal_impulse;  // the largest this step (N s)
     Lane approach_velocity;   // relative normal velocity at impact (m/s), < 0 closing
     LaneMask starts_apart;    // a speculative point at the step's start
   } points[4];
 };
-// 100 floats a lane: 29 for the manifold, 17 for each of four points, 3 for the indices (400
-// bytes a manifold, 100 a point)
-static_assert(sizeof(ContactBlock) == 100 * sizeof(float) * kBlockLanes);
+// 97 floats a lane: 42 for the manifold, 13 for each of four points, 3 for the indices (388
+// bytes a manifold, 97 a point)
+static_assert(sizeof(ContactBlock) == 97 * sizeof(float) * kBlockLanes);
 inline constexpr std::uint32_t kNoContact = ~std::uint32_t{0};
 
 struct ContactLanes {

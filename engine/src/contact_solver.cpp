@@ -140,12 +140,21 @@ struct LanePair {
     vb = vb + (c.inverse_mass_b * impulse) * n;
     wb = wb + impulse * times(c.inverse_inertia_b, row.angular_b);
   }
-  // an impulse P on b at its anchor, and −P on a
-  void apply(const ContactBlock& c, const ContactBlock::Point& p, const V3& impulse) {
+  // an impulse P on b at its anchor rb, and −P on a at ra
+  void apply(const ContactBlock& c, const V3& ra, const V3& rb, const V3& impulse) {
     va = va - c.inverse_mass_a * impulse;
-    wa = wa - times(c.inverse_inertia_a, cross(load3(p.anchor_a), impulse));
+    wa = wa - times(c.inverse_inertia_a, cross(ra, impulse));
     vb = vb + c.inverse_mass_b * impulse;
-    wb = wb + times(c.inverse_inertia_b, cross(load3(p.anchor_b), impulse));
+    wb = wb + times(c.inverse_inertia_b, cross(rb, impulse));
+  }
+  // an angular impulse L n on b, and its opposite on a
+  void apply_twist(const ContactBlock& c, const V3& n, Lane impulse) {
+    wa = wa - impulse * times(c.inverse_inertia_a, n);
+    wb = wb + impulse * times(c.inverse_inertia_b, n);
+  }
+  // the relative velocity at the anchors ra, rb
+  V3 relative_velocity(const V3& ra, const V3& rb) const {
+    return (vb + cross(wb, rb)) - (va + cross(wa, ra));
   }
 };
 
@@ -216,7 +225,7 @@ std::size_t contact_block_lanes() { return W; }
 namespace {
 // The next block's cache lines, asked for a few at a time while this one is solved: a pass
 // streams the blocks in order, and at a large pyramid they come from L3, whose latency the kernel
-// otherwise waits on (docs/solver.md, "Cost"). Asked for all at once, the 100 lines a block fill
+// otherwise waits on (docs/solver.md, "Cost"). Asked for all at once, the 97 lines a block fill
 // the core's line-fill buffers and the prefetches stall the kernel behind them.
 class Prefetch {
  public:
@@ -276,10 +285,10 @@ void ContactPipeline::colour_contacts() {
       if (dynamic_a) body_colours_[c.body_a] |= std::uint64_t{1} << colour;
       if (dynamic_b) body_colours_[c.body_b] |= std::uint64_t{1} << colour;
     }
-    bool quiet = c.cold == 0;
+    bool quiet = c.cold == 0 && c.friction_impulse[0] == 0.0f &&
+                 c.friction_impulse[1] == 0.0f && c.twist_impulse == 0.0f;
     for (std::uint8_t j = 0; j < c.count && quiet; ++j)
-      quiet = c.points[j].normal_impulse == 0.0f && c.points[j].tangent_impulse[0] == 0.0f &&
-              c.points[j].tangent_impulse[1] == 0.0f;
+      quiet = c.points[j].normal_impulse == 0.0f;
     colour_of[i] = std::uint8_t(colour | (c.cold != 0 ? kCold : quiet ? kQuiet : 0));
     ++counts[colour + 1];
   }
@@ -444,6 +453,9 @@ void ContactPipeline::prepare(double dt, const Vec3& gravity) {
       set_symmetric(block.inverse_inertia_b, i, mass_b.inverse_inertia);
       block.friction[i] = c.friction;
       block.restitution[i] = c.restitution;
+      block.friction_impulse[0][i] = c.friction_impulse[0];
+      block.friction_impulse[1][i] = c.friction_impulse[1];
+      block.twist_impulse[i] = c.twist_impulse;
       const bool against_static = mass_a.inverse_mass == 0.0 || mass_b.inverse_mass == 0.0;
       const Softness& soft = against_static ? static_soft : dynamic_soft;
       block.bias_rate[i] = float(soft.bias_rate);
@@ -462,8 +474,6 @@ void ContactPipeline::prepare(double dt, const Vec3& gravity) {
         set3(p.anchor_b, i, from.anchor_b);
         p.base_separation[i] = from.base_separation;
         p.normal_impulse[i] = from.normal_impulse;
-        p.tangent_impulse[0][i] = from.tangent_impulse[0];
-        p.tangent_impulse[1][i] = from.tangent_impulse[1];
       }
     }
     prepare_lanes(block, exists, cold, acceleration);
@@ -487,6 +497,34 @@ void ContactPipeline::prepare_lanes(ContactBlock& c, const std::array<LaneMask, 
     return simd::select(valid, splat(1.0f) / simd::select(valid, k, splat(1.0f)), zero);
   };
   LaneMask fresh = zero != zero;
+  // the centre of each manifold's points, and their mean distance from it
+  V3 sum_a{zero, zero, zero}, sum_b{zero, zero, zero};
+  Lane count = zero;
+  for (int j = 0; j < 4; ++j) {
+    const Lane one_if = simd::select(exists[j], splat(1.0f), zero);
+    sum_a = sum_a + one_if * load3(c.points[j].anchor_a);
+    sum_b = sum_b + one_if * load3(c.points[j].anchor_b);
+    count = count + one_if;
+  }
+  const LaneMask any = count > zero;
+  const Lane inverse_count =
+      simd::select(any, splat(1.0f) / simd::select(any, count, splat(1.0f)), zero);
+  const V3 centre_a = inverse_count * sum_a, centre_b = inverse_count * sum_b;
+  Lane arm = zero;
+  for (int j = 0; j < 4; ++j) {
+    const V3 d = load3(c.points[j].anchor_a) - centre_a;
+    arm = arm + simd::select(exists[j], simd::sqrt(dot(d, d)), zero);
+  }
+  c.centre_a[0] = centre_a.x, c.centre_a[1] = centre_a.y, c.centre_a[2] = centre_a.z;
+  c.centre_b[0] = centre_b.x, c.centre_b[1] = centre_b.y, c.centre_b[2] = centre_b.z;
+  c.twist_arm = inverse_count * arm;
+  c.tangent_mass[0] = effective_mass(centre_a, centre_b, load3(c.tangent[0]), any);
+  c.tangent_mass[1] = effective_mass(centre_a, centre_b, load3(c.tangent[1]), any);
+  {
+    const Lane k = dot(n, times(c.inverse_inertia_a, n)) + dot(n, times(c.inverse_inertia_b, n));
+    const LaneMask valid = any & (k > zero);
+    c.twist_mass = simd::select(valid, splat(1.0f) / simd::select(valid, k, splat(1.0f)), zero);
+  }
   for (int j = 0; j < 4; ++j) {
     ContactBlock::Point& p = c.points[j];
     const V3 ra = load3(p.anchor_a), rb = load3(p.anchor_b);
@@ -494,8 +532,6 @@ void ContactPipeline::prepare_lanes(ContactBlock& c, const std::array<LaneMask, 
     // the separation is tracked from here: s = base + n·(motion of b's anchor − a's)
     p.base_separation = separation - dot(n, rb - ra);
     p.normal_mass = effective_mass(ra, rb, n, exists[j]);
-    p.tangent_mass[0] = effective_mass(ra, rb, load3(c.tangent[0]), exists[j]);
-    p.tangent_mass[1] = effective_mass(ra, rb, load3(c.tangent[1]), exists[j]);
     // a point still apart hits, if it hits this step, at the speed free flight gives it over the
     // gap: v² = v₀² − 2 a s₀ with a the relative acceleration gravity gives along n (the speed
     // the solve sees is one a speculative push has already slowed)
@@ -531,29 +567,32 @@ void ContactPipeline::warm_start(bool first_substep) {
     substep_start_[i] = {bodies_[i].linear_velocity, bodies_[i].angular_velocity,
                          masses_[i].inverse_mass > 0.0 ? 1.0f : 0.0f};
   for_each_block([&](const ContactBlock& c, Prefetch& ahead) {
-    // the warm start reads 59 of a block's 100 lines (the bodies, the directions, the masses,
-    // each point's anchors and impulses): only those of the next block are asked for, since at
-    // a large pyramid this pass waits on memory more than it computes
+    // the warm start reads 62 of a block's 97 lines (the bodies, the directions, the masses,
+    // the friction's centre and impulses, each point's anchors and normal impulse): only those
+    // of the next block are asked for, since at a large pyramid this pass waits on memory more
+    // than it computes
     ahead.same(c, &c, offsetof(ContactBlock, friction));
+    ahead.same(c, &c.centre_a, 6 * sizeof(Lane));
+    ahead.same(c, &c.friction_impulse, 3 * sizeof(Lane));
     for (const ContactBlock::Point& p : c.points) {
       ahead.same(c, &p.anchor_a, 6 * sizeof(Lane));
-      ahead.same(c, &p.normal_impulse, 3 * sizeof(Lane));
+      ahead.same(c, &p.normal_impulse, sizeof(Lane));
     }
     ahead.done();
     // a block without an impulse to apply (its contacts all carried none: the colouring packs
     // such contacts together) leaves the velocities as they are
     const Lane zero = splat(0.0f);
-    LaneMask any = zero != zero;
-    for (const ContactBlock::Point& p : c.points)
-      any |= (p.normal_impulse != zero) | (p.tangent_impulse[0] != zero) |
-             (p.tangent_impulse[1] != zero);
+    LaneMask any = (c.friction_impulse[0] != zero) | (c.friction_impulse[1] != zero) |
+                   (c.twist_impulse != zero);
+    for (const ContactBlock::Point& p : c.points) any |= p.normal_impulse != zero;
     if (!simd::any_of(any)) return;
     LanePair pair(bodies_, c);
     const V3 n = load3(c.normal), t0 = load3(c.tangent[0]), t1 = load3(c.tangent[1]);
-    for (const ContactBlock::Point& p : c.points) {
-      pair.apply(c, p, p.normal_impulse * n + p.tangent_impulse[0] * t0 +
-                           p.tangent_impulse[1] * t1);
-    }
+    for (const ContactBlock::Point& p : c.points)
+      pair.apply(c, load3(p.anchor_a), load3(p.anchor_b), p.normal_impulse * n);
+    pair.apply(c, load3(c.centre_a), load3(c.centre_b),
+               c.friction_impulse[0] * t0 + c.friction_impulse[1] * t1);
+    pair.apply_twist(c, n, c.twist_impulse);
     pair.store(bodies_, c);
   });
 }
@@ -631,7 +670,7 @@ bool ContactPipeline::solve(double h, bool bias, bool backwards, double toleranc
     for (int round = 0; round < rounds; ++round) {
       const LaneMask active = round == 0 ? LaneMask(zero == zero) : c.fresh;
       for (ContactBlock::Point& p : c.points) {
-        ahead.ahead(10);
+        ahead.ahead(16);
         const Lane s = p.separation;
         const NormalRow row(p, n);
         const Lane vn = pair.normal_velocity(n, row);
@@ -667,33 +706,47 @@ bool ContactPipeline::solve(double h, bool bias, bool backwards, double toleranc
         }
       }
     }
-    // Coulomb friction: the friction impulse accumulates on the two tangents and its length
-    // stays within μ times the normal impulse (the friction cone as a circle)
-    for (ContactBlock::Point& p : c.points) {
-      ahead.ahead(10);
-      const Lane old0 = p.tangent_impulse[0], old1 = p.tangent_impulse[1];
+    // Coulomb friction at the manifold's centre: the friction impulse accumulates on the two
+    // tangents and its length stays within μ times the manifold's normal impulse (the friction
+    // cone as a circle); about the normal, the twist stays within that times the points' mean
+    // distance from the centre
+    ahead.ahead(17);
+    {
+      const Lane total = c.points[0].normal_impulse + c.points[1].normal_impulse +
+                         c.points[2].normal_impulse + c.points[3].normal_impulse;
+      const Lane old0 = c.friction_impulse[0], old1 = c.friction_impulse[1];
+      const Lane old_twist = c.twist_impulse;
       // no normal impulse and no friction impulse in any lane: the cone is a point, and the
       // friction impulse stays zero
-      if (!simd::any_of((p.normal_impulse != zero) | (old0 != zero) | (old1 != zero))) continue;
-      const Lane limit = c.friction * p.normal_impulse;
-      const V3 dv = pair.relative_velocity(p);
-      Lane f0 = old0 - p.tangent_mass[0] * dot(t0, dv);
-      Lane f1 = old1 - p.tangent_mass[1] * dot(t1, dv);
-      const Lane length_squared = f0 * f0 + f1 * f1;
-      // (where the limit is zero the cone is a point: an impulse whose square underflows to zero
-      // is outside it too)
-      const LaneMask outside = (length_squared > limit * limit) | (limit == zero);
-      if (simd::any_of(outside)) {
-        const Lane scale =
-            simd::select(outside, limit / simd::sqrt(simd::max(length_squared, splat(1e-30f))),
-                         one);
-        f0 = f0 * scale;
-        f1 = f1 * scale;
+      if (simd::any_of((total != zero) | (old0 != zero) | (old1 != zero) |
+                       (old_twist != zero))) {
+        const Lane limit = c.friction * total;
+        const V3 ra = load3(c.centre_a), rb = load3(c.centre_b);
+        const V3 dv = pair.relative_velocity(ra, rb);
+        Lane f0 = old0 - c.tangent_mass[0] * dot(t0, dv);
+        Lane f1 = old1 - c.tangent_mass[1] * dot(t1, dv);
+        const Lane length_squared = f0 * f0 + f1 * f1;
+        // (where the limit is zero the cone is a point: an impulse whose square underflows to
+        // zero is outside it too)
+        const LaneMask outside = (length_squared > limit * limit) | (limit == zero);
+        if (simd::any_of(outside)) {
+          const Lane scale =
+              simd::select(outside, limit / simd::sqrt(simd::max(length_squared, splat(1e-30f))),
+                           one);
+          f0 = f0 * scale;
+          f1 = f1 * scale;
+        }
+        c.friction_impulse[0] = f0;
+        c.friction_impulse[1] = f1;
+        pair.apply(c, ra, rb, (f0 - old0) * t0 + (f1 - old1) * t1);
+        const Lane twist_limit = limit * c.twist_arm;
+        const Lane twist = simd::max(
+            simd::min(old_twist - c.twist_mass * dot(n, pair.wb - pair.wa), twist_limit),
+            zero - twist_limit);
+        c.twist_impulse = twist;
+        pair.apply_twist(c, n, twist - old_twist);
+        wrote = true;
       }
-      p.tangent_impulse[0] = f0;
-      p.tangent_impulse[1] = f1;
-      pair.apply(c, p, (f0 - old0) * t0 + (f1 - old1) * t1);
-      wrote = true;
     }
     if (wrote) pair.store(bodies_, c);
     // written once a pass at most: the biased passes (no tolerance) and a settling pass would
@@ -750,11 +803,10 @@ void ContactPipeline::store_impulses() {
                                             : kNoContact;
       if (ahead != kNoContact) simd::prefetch(&contacts_[ahead], sizeof(ContactConstraint));
       ContactConstraint& c = contacts_[block.contact[i]];
-      for (std::uint8_t j = 0; j < c.count; ++j) {
-        const ContactBlock::Point& p = block.points[j];
-        c.points[j].normal_impulse = p.normal_impulse[i];
-        c.points[j].tangent_impulse = {p.tangent_impulse[0][i], p.tangent_impulse[1][i]};
-      }
+      for (std::uint8_t j = 0; j < c.count; ++j)
+        c.points[j].normal_impulse = block.points[j].normal_impulse[i];
+      c.friction_impulse = {block.friction_impulse[0][i], block.friction_impulse[1][i]};
+      c.twist_impulse = block.twist_impulse[i];
     }
   }
 }

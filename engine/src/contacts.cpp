@@ -398,16 +398,16 @@ std::size_t ContactPipeline::carry_impulses(const ContactConstraint& old,
   for (std::uint8_t i = 0; i < c.count; ++i) {
     if (source[i] < 0) continue;
     ++matched;
-    const ContactPointConstraint& from = old.points[source[i]];
-    ContactPointConstraint& to = c.points[i];
-    to.normal_impulse = from.normal_impulse;
-    // the friction impulse as a world vector, onto this step's basis (the normal turns a little
-    // between steps, and the basis with it)
-    const Vec3 friction = double(from.tangent_impulse[0]) * old.tangent[0].cast<double>() +
-                          double(from.tangent_impulse[1]) * old.tangent[1].cast<double>();
-    to.tangent_impulse[0] = float(friction.dot(c.tangent[0].cast<double>()));
-    to.tangent_impulse[1] = float(friction.dot(c.tangent[1].cast<double>()));
+    c.points[i].normal_impulse = old.points[source[i]].normal_impulse;
   }
+  if (matched == 0) return 0;
+  // the manifold's friction impulse as a world vector, onto this step's basis (the normal turns
+  // a little between steps, and the basis with it), and its twist
+  const Vec3 friction = double(old.friction_impulse[0]) * old.tangent[0].cast<double>() +
+                        double(old.friction_impulse[1]) * old.tangent[1].cast<double>();
+  c.friction_impulse[0] = float(friction.dot(c.tangent[0].cast<double>()));
+  c.friction_impulse[1] = float(friction.dot(c.tangent[1].cast<double>()));
+  c.twist_impulse = old.twist_impulse;
   return matched;
 }
 

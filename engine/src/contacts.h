@@ -59,7 +59,6 @@ struct ContactPointConstraint {
       anchor_b = Eigen::Vector3f::Zero();              // world (m)
   float base_separation = 0.0f;  // separation at the step's start (m); < 0 penetrating
   float normal_impulse = 0.0f;   // accumulated, carried to the next step (N s)
-  std::array<float, 2> tangent_impulse{};  // along the two tangents (N s)
   ContactFeature feature;
 };
 
@@ -70,6 +69,10 @@ struct ContactConstraint {
   Eigen::Vector3f tangent[2] = {Eigen::Vector3f::Zero(), Eigen::Vector3f::Zero()};
   float friction = 0.0f;
   float restitution = 0.0f;
+  // the manifold's friction, at the centre of its points: accumulated along the two tangents
+  // (N s), and about the normal (N m s), carried to the next step
+  std::array<float, 2> friction_impulse{};
+  float twist_impulse = 0.0f;
   std::uint8_t count = 0;
   // bit j: point j starts without an accumulated normal impulse and may push this step (it
   // touches, or free flight closes its gap within two steps). The solve runs such a manifold's
@@ -78,7 +81,7 @@ struct ContactConstraint {
   std::array<ContactPointConstraint, 4> points;
   std::uint64_t key() const { return std::uint64_t(body_a) << 32 | body_b; }
 };
-static_assert(sizeof(ContactConstraint) == 248);
+static_assert(sizeof(ContactConstraint) == 228);
 
 class ContactPipeline {
  public:
