@@ -374,7 +374,10 @@ void ContactPipeline::load_bodies(std::span<const BodyState> states,
   masses_.resize(states.size() + 1);
   bodies_.back() = SolverBody{};
   masses_.back() = SolverMass{};
-  for (std::size_t i = 0; i < states.size(); ++i) {
+  // each body by itself, on the threads
+  const std::ptrdiff_t n = std::ptrdiff_t(states.size());
+#pragma omp parallel for num_threads(settings_.threads) schedule(static) if (n >= 2048)
+  for (std::ptrdiff_t i = 0; i < n; ++i) {
     SolverBody& body = bodies_[i];
     SolverMass& mass = masses_[i];
     mass.inverse_mass = masses[i].inverse_mass;

@@ -413,7 +413,10 @@ void World::integrate_positions(double h) {
 void World::store_momenta() {
   // back to the momentum form: P = m v, L = I(q) ω with the step's final orientation
   const std::vector<SolverBody>& bodies = pipeline_->bodies();
-  for (std::size_t i = 0; i < states_.size(); ++i) {
+  // each body by itself, on the threads
+  const std::ptrdiff_t n = std::ptrdiff_t(states_.size());
+#pragma omp parallel for num_threads(contact_settings_.threads) schedule(static) if (n >= 2048)
+  for (std::ptrdiff_t i = 0; i < n; ++i) {
     const BodyMass& m = masses_[i];
     if (m.inverse_mass == 0.0) continue;
     BodyState& s = states_[i];
