@@ -129,10 +129,6 @@ struct LanePair {
     simd::scatter_records(base, a, rows_a, block.inverse_mass_a > zero);
     simd::scatter_records(base, b, rows_b, block.inverse_mass_b > zero);
   }
-  // the relative velocity at a point: (v_b + ω_b × r_b) − (v_a + ω_a × r_a)
-  V3 relative_velocity(const ContactBlock::Point& p) const {
-    return (vb + cross(wb, load3(p.anchor_b))) - (va + cross(wa, load3(p.anchor_a)));
-  }
   // the relative velocity along the normal, by the point's row
   Lane normal_velocity(const V3& n, const NormalRow& row) const {
     return dot(n, vb - va) + dot(wb, row.angular_b) - dot(wa, row.angular_a);
@@ -330,26 +326,32 @@ void ContactPipeline::colour_contacts() {
   // in pair order, so a body's lines stay with one core (packed across the whole colour, two
   // threads took 10 % longer a step at base 100). A colour's contacts share no dynamic body, so
   // their order in it, and which block each lands in, changes no result
+  // (each colour in pair order first, then each share packed from there into colour_order_)
   constexpr std::uint8_t kClass = kCold | kQuiet;
+  std::vector<std::uint32_t>& by_colour = colour_scratch_order_;
+  by_colour.resize(contacts_.size());
   colour_order_.resize(contacts_.size());
   std::array<std::uint32_t, kColours> next{};
   for (int k = 0; k < kColours; ++k) next[k] = colour_start_[k];
   for (std::size_t i = 0; i < contacts_.size(); ++i)
-    colour_order_[next[colour_of[i] & ~kClass]++] = std::uint32_t(i);
+    by_colour[next[colour_of[i] & ~kClass]++] = std::uint32_t(i);
   const int threads = std::max(1, settings_.threads);
-  for (int k = 0; k + 1 < kColours; ++k) {
+  for (int k = 0; k < kColours; ++k) {
     const std::size_t first = colour_start_[k], n = colour_start_[k + 1] - first;
+    if (k + 1 == kColours) {  // the overflow, solved in order: left in pair order
+      std::copy_n(by_colour.begin() + std::ptrdiff_t(first), n,
+                  colour_order_.begin() + std::ptrdiff_t(first));
+      continue;
+    }
     const std::size_t blocks = (n + W - 1) / W;
     const int parts = blocks >= kParallelColour / W ? threads : 1;  // as for_each_block's `wide`
     for (int part = 0; part < parts; ++part) {
       const auto [begin, end] = share_of(blocks, parts, part);
       const std::size_t from = first + begin * W, to = first + std::min(end * W, n);
-      colour_scratch_order_.assign(colour_order_.begin() + std::ptrdiff_t(from),
-                                   colour_order_.begin() + std::ptrdiff_t(to));
       std::size_t at = from;
       for (const std::uint8_t pass : {kCold, std::uint8_t(0), kQuiet})
-        for (const std::uint32_t i : colour_scratch_order_)
-          if ((colour_of[i] & kClass) == pass) colour_order_[at++] = i;
+        for (std::size_t j = from; j < to; ++j)
+          if ((colour_of[by_colour[j]] & kClass) == pass) colour_order_[at++] = by_colour[j];
     }
   }
 

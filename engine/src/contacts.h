@@ -181,7 +181,7 @@ class ContactPipeline {
   std::vector<std::uint32_t> colour_start_;  // colour k: colour_order_[start[k], start[k + 1])
   std::vector<std::uint64_t> body_colours_;  // per body, the colours holding it this step
   std::vector<std::uint8_t> colour_scratch_;
-  std::vector<std::uint32_t> colour_scratch_order_;  // one thread's share of a colour, in order
+  std::vector<std::uint32_t> colour_scratch_order_;  // the contacts by colour, in pair order
   // the narrow phase's results per candidate, filled in parallel
   std::vector<Manifold> manifolds_;
   // the pair cache (as Jolt's body pair cache, for pairs found apart): each candidate's result
