@@ -8,6 +8,10 @@
 #include <limits>
 #include <vector>
 
+#if defined(_OPENMP)
+#include <omp.h>
+#endif
+
 #include "broadphase_internal.h"
 #include "simd.h"
 
@@ -23,6 +27,7 @@ class BoxPruning final : public ProxyStore {
   void move(ProxyId id, const Aabb& box) override { set(id, box); }
   void remove(ProxyId id) override { release(id); }
   const std::vector<ProxyPair>& pairs() const override { return pairs_; }
+  void set_threads(int threads) override { threads_ = std::max(1, threads); }
 
   void update() override {
     // the previous update's slabs, and each slab's order on x, are kept while no box arrives or
@@ -246,10 +251,42 @@ class BoxPruning final : public ProxyStore {
     first_.push_back(end);
   }
 
-  // in each slab, each box against the boxes after it that start before it ends on x
+  // every slab swept; on threads, each takes a run of whole slabs holding about an equal share
+  // of the entries (a pyramid's low slabs hold many more boxes than its high ones), into its own
+  // list, and the lists are joined in slab order: the same pairs in the same order as on one
   void sweep() {
+    const std::size_t slabs = members_.size();
+    const std::size_t entries = first_.back();
+#if defined(_OPENMP)
+    if (threads_ > 1 && slabs > 1 && entries >= kParallelEntries) {
+      thread_pairs_.resize(std::size_t(threads_));
+#pragma omp parallel num_threads(threads_)
+      {
+        const std::size_t parts = std::size_t(omp_get_num_threads());
+        const std::size_t part = std::size_t(omp_get_thread_num());
+        // a slab is this part's when its first entry falls in the part's share of the entries
+        auto first_slab = [&](std::size_t k) {
+          const std::size_t at = entries * k / parts;
+          return std::size_t(std::lower_bound(first_.begin(), first_.end() - 1, at) -
+                             first_.begin());
+        };
+        std::vector<ProxyPair>& out = part == 0 ? pairs_ : thread_pairs_[part];
+        out.clear();
+        sweep_slabs(first_slab(part), first_slab(part + 1), out);
+      }
+      for (std::size_t part = 1; part < thread_pairs_.size(); ++part)
+        pairs_.insert(pairs_.end(), thread_pairs_[part].begin(), thread_pairs_[part].end());
+      return;
+    }
+#endif
+    sweep_slabs(0, slabs, pairs_);
+  }
+
+  // in each slab of [from, to), each box against the boxes after it that start before it ends
+  // on x
+  void sweep_slabs(std::size_t from, std::size_t to, std::vector<ProxyPair>& out) const {
     using simd::at_least, simd::at_most, simd::load_floats, simd::splat_floats;
-    for (std::size_t s = 0; s < members_.size(); ++s) {
+    for (std::size_t s = from; s < to; ++s) {
       const Lanes this_slab = splat_floats(float(s));
       const std::size_t end = first_[s] + members_[s].size();
       for (std::size_t i = first_[s]; i < end; ++i) {
@@ -267,7 +304,7 @@ class BoxPruning final : public ProxyStore {
           if (simd::any_of(hit)) {
             // the hits as bits, then one pass per set bit: usually one, and no branch per lane
             for (unsigned bits = simd::lane_bits(hit); bits != 0; bits &= bits - 1)
-              pairs_.push_back(ordered(ids_[i], ids_[j + std::size_t(std::countr_zero(bits))]));
+              out.push_back(ordered(ids_[i], ids_[j + std::size_t(std::countr_zero(bits))]));
           }
           if (!simd::all_of(on_x)) break;  // sorted: the boxes after these start later still
         }
@@ -276,6 +313,10 @@ class BoxPruning final : public ProxyStore {
   }
 
   static constexpr std::size_t kMaxSwapsPerBox = 8;
+  // fewer slab entries than this are swept on one thread: below it the team costs more
+  static constexpr std::size_t kParallelEntries = 4096;
+  int threads_ = 1;
+  std::vector<std::vector<ProxyPair>> thread_pairs_;  // the sweep's lists, one a thread
   // more than this fraction (1/k) of the boxes changing slabs in one step: rebuild instead
   static constexpr std::size_t kMaxChangedFraction = 4;
   // at most this many slabs: beyond it the per-slab padding and bookkeeping outweigh the gain

@@ -162,6 +162,9 @@ class ContactPipeline {
     Vec3 position;  // at the step's start
     Quat orientation;
   };
+  std::vector<std::uint32_t> bucket_start_, bucket_fill_;  // find_pairs' counting sort
+  std::vector<std::uint64_t> sorted_candidates_;           // and its output
+  std::vector<std::uint8_t> fast_flags_;  // update_bounds' scratch: 1 for a fast body
   std::vector<FastBody> fast_;  // this step's bodies that move beyond their bounds' growth
   std::vector<std::uint64_t> candidates_;  // pair keys, sorted
   std::vector<ContactConstraint> contacts_, previous_;
@@ -218,6 +221,7 @@ class ContactPipeline {
   std::vector<bool> seed_converged_;  // seed: per contact, its impulses stopped changing
   double deepest_ = 0.0;
   std::size_t matched_ = 0;
+  std::size_t point_count_ = 0;  // the points of contacts_, counted as they are built
   bool separations_stale_ = true;  // the blocks' separations predate the positions
 };
 

@@ -157,6 +157,38 @@ TEST_P(BroadPhaseVariant, BoxesDriftingOutOfAKeptLayoutMatchBruteForce) {
   });
 }
 
+// a tall world of 5,000 boxes (dozens of box pruning's slabs, enough entries for its sweep to go
+// to threads): on two threads the same pairs in the same order as on one, and those exact
+TEST_P(BroadPhaseVariant, TwoThreadsFindThePairsOneFinds) {
+  std::mt19937 random(7);
+  std::uniform_real_distribution<float> across(0.0f, 20.0f), up(0.0f, 100.0f), size(0.25f, 1.0f),
+      step(-0.05f, 0.05f);
+  auto one = rtp::make_broad_phase(GetParam()), two = rtp::make_broad_phase(GetParam());
+  two->set_threads(2);
+  std::vector<rtp::Aabb> boxes(5000);
+  for (rtp::Aabb& b : boxes) {
+    b.min = {across(random), up(random), across(random)};
+    b.max = {b.min[0] + size(random), b.min[1] + size(random), b.min[2] + size(random)};
+    one->add(b);
+    two->add(b);
+  }
+  for (int frame = 0; frame < 4; ++frame) {
+    one->update();
+    two->update();
+    ASSERT_EQ(two->pairs(), one->pairs()) << "frame " << frame;
+    ASSERT_EQ(sorted_pairs(*two), rtp::brute_force_pairs(boxes)) << "frame " << frame;
+    for (std::size_t id = 0; id < boxes.size(); ++id) {
+      for (int k = 0; k < 3; ++k) {
+        const float d = step(random);
+        boxes[id].min[k] += d;
+        boxes[id].max[k] += d;
+      }
+      one->move(rtp::ProxyId(id), boxes[id]);
+      two->move(rtp::ProxyId(id), boxes[id]);
+    }
+  }
+}
+
 TEST_P(BroadPhaseVariant, TouchingBoxesOverlapAndSeparatedOnesDoNot) {
   auto phase = rtp::make_broad_phase(GetParam());
   const rtp::Aabb unit{{0, 0, 0}, {1, 1, 1}};

@@ -77,6 +77,9 @@ class BroadPhase {
   virtual void update() = 0;
   // every overlapping pair of live boxes once, a < b, in no particular order
   virtual const std::vector<ProxyPair>& pairs() const = 0;
+  // update() may share its work among this many threads (OpenMP; the pairs found are the same).
+  // A variant without a parallel update ignores it
+  virtual void set_threads(int /*threads*/) {}
 };
 
 // the seed's pair table is n²/2 bytes: 2·10⁸ at this count
