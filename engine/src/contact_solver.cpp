@@ -289,30 +289,25 @@ void ContactPipeline::colour_contacts() {
   // greedy, in pair order: each contact takes the first colour neither dynamic body holds
   body_colours_.assign(bodies_.size(), 0);
   std::array<std::uint32_t, kColours + 1> counts{};
-  // each contact's colour, and whether it is cold (the top bit) or quiet (the next: it carries
-  // no impulse and none of its points is cold: a speculative contact that has not pushed, 9 % of
-  // a settled 5,050-box pyramid's; most of its side neighbours press on each other)
-  constexpr std::uint8_t kCold = 0x80, kQuiet = 0x40;
-  static_assert(kColours <= kQuiet);
+  // each contact's colour, and its class (contact_class_) in the top bits; read from the keys
+  // and the classes alone, not the contacts (a 5,050-box pyramid's are 3.4 MB)
+  constexpr std::uint8_t kCold = kColdContact, kQuiet = kQuietContact;
+  static_assert(kColours <= kQuiet && (kCold & kQuiet) == 0);
   std::vector<std::uint8_t>& colour_of = colour_scratch_;
   colour_of.resize(contacts_.size());
   for (std::size_t i = 0; i < contacts_.size(); ++i) {
-    const ContactConstraint& c = contacts_[i];
-    const bool dynamic_a = masses_[c.body_a].inverse_mass > 0.0;
-    const bool dynamic_b = masses_[c.body_b].inverse_mass > 0.0;
-    const std::uint64_t taken = (dynamic_a ? body_colours_[c.body_a] : 0) |
-                                (dynamic_b ? body_colours_[c.body_b] : 0);
+    const BodyId a = BodyId(contact_keys_[i] >> 32), b = BodyId(contact_keys_[i] & 0xffffffffu);
+    const bool dynamic_a = masses_[a].inverse_mass > 0.0;
+    const bool dynamic_b = masses_[b].inverse_mass > 0.0;
+    const std::uint64_t taken =
+        (dynamic_a ? body_colours_[a] : 0) | (dynamic_b ? body_colours_[b] : 0);
     // the last colour is the overflow group and takes anything
     const int colour = std::min(std::countr_one(taken), kColours - 1);
     if (colour < kColours - 1) {
-      if (dynamic_a) body_colours_[c.body_a] |= std::uint64_t{1} << colour;
-      if (dynamic_b) body_colours_[c.body_b] |= std::uint64_t{1} << colour;
+      if (dynamic_a) body_colours_[a] |= std::uint64_t{1} << colour;
+      if (dynamic_b) body_colours_[b] |= std::uint64_t{1} << colour;
     }
-    bool quiet = c.cold == 0 && c.friction_impulse[0] == 0.0f &&
-                 c.friction_impulse[1] == 0.0f && c.twist_impulse == 0.0f;
-    for (std::uint8_t j = 0; j < c.count && quiet; ++j)
-      quiet = c.points[j].normal_impulse == 0.0f;
-    colour_of[i] = std::uint8_t(colour | (c.cold != 0 ? kCold : quiet ? kQuiet : 0));
+    colour_of[i] = std::uint8_t(colour | contact_class_[i]);
     ++counts[colour + 1];
   }
   colour_start_.assign(counts.begin(), counts.end());

@@ -309,6 +309,7 @@ void ContactPipeline::collide_pairs(std::span<const BodyState> states, double dt
   const std::size_t m = touching_.size();
   contacts_.resize(m);
   contact_keys_.resize(m);
+  contact_class_.resize(m);
   double deepest = 0.0;
   std::size_t matched = 0, points = 0;
   // in chunks, each of which finds its first contact's place among last step's keys by a search
@@ -358,6 +359,11 @@ void ContactPipeline::collide_pairs(std::span<const BodyState> states, double dt
       if (settings_.warm_start && old < previous_keys_.size() && previous_keys_[old] == c.key())
         matched += carry_impulses(previous_[old], c);
       c.cold = cold_points(c, dt, gravity);
+      bool quiet = c.cold == 0 && c.friction_impulse[0] == 0.0f &&
+                   c.friction_impulse[1] == 0.0f && c.twist_impulse == 0.0f;
+      for (std::uint8_t j = 0; j < c.count && quiet; ++j)
+        quiet = c.points[j].normal_impulse == 0.0f;
+      contact_class_[i] = c.cold != 0 ? kColdContact : quiet ? kQuietContact : 0;
     }
   }
   deepest_ = deepest;
