@@ -255,6 +255,30 @@ class Prefetch {
 };
 }  // namespace
 
+// where prepare() finds a contact's numbers among its floats (ContactConstraint's layout)
+constexpr std::size_t kContactFloats = sizeof(ContactConstraint) / sizeof(float);
+constexpr std::size_t kNormalFloat = offsetof(ContactConstraint, normal) / sizeof(float);
+constexpr std::size_t kPointFloat = offsetof(ContactConstraint, points) / sizeof(float);
+constexpr std::size_t kPointFloats = sizeof(ContactPointConstraint) / sizeof(float);
+static_assert(sizeof(ContactConstraint) % sizeof(float) == 0 &&
+              sizeof(ContactPointConstraint) % sizeof(float) == 0);
+// the header's floats in the order prepare() reads them, two records from the normal on
+static_assert(offsetof(ContactConstraint, tangent) == offsetof(ContactConstraint, normal) + 12 &&
+              offsetof(ContactConstraint, friction) == offsetof(ContactConstraint, normal) + 36 &&
+              offsetof(ContactConstraint, restitution) ==
+                  offsetof(ContactConstraint, normal) + 40 &&
+              offsetof(ContactConstraint, friction_impulse) ==
+                  offsetof(ContactConstraint, normal) + 44 &&
+              offsetof(ContactConstraint, twist_impulse) ==
+                  offsetof(ContactConstraint, normal) + 52);
+// a point's first eight floats: its anchors, base separation and normal impulse
+static_assert(offsetof(ContactPointConstraint, anchor_b) == 12 &&
+              offsetof(ContactPointConstraint, base_separation) == 24 &&
+              offsetof(ContactPointConstraint, normal_impulse) == 28);
+// the records read past the header and each point stay inside the contact
+static_assert((kNormalFloat + 16) * sizeof(float) <= sizeof(ContactConstraint) &&
+              kPointFloat + 3 * kPointFloats + 8 <= kContactFloats);
+
 // how many contacts ahead prepare() and store_impulses() ask for a contact's lines
 constexpr std::size_t kContactsAhead = 4;
 // a colour's blocks go to threads only past this many contacts: below it the barrier costs more
@@ -417,8 +441,10 @@ void ContactPipeline::load_bodies(std::span<const BodyState> states,
   // one body past the last, at rest and static: what an empty lane reads
   bodies_.resize(states.size() + 1);
   masses_.resize(states.size() + 1);
+  mass_records_.resize(states.size() + 1);
   bodies_.back() = SolverBody{};
   masses_.back() = SolverMass{};
+  mass_records_.back() = {};
   // each body by itself, on the threads
   const std::ptrdiff_t n = std::ptrdiff_t(states.size());
 #pragma omp parallel for num_threads(settings_.threads) schedule(static) if (n >= 2048)
@@ -432,12 +458,16 @@ void ContactPipeline::load_bodies(std::span<const BodyState> states,
       mass.inverse_inertia.setZero();
       body.linear_velocity.setZero();
       body.angular_velocity.setZero();
+      mass_records_[i] = {};
       continue;
     }
     mass.inverse_inertia =
         world_inverse_inertia(states[i].orientation, masses[i].inverse_inertia_body);
     body.linear_velocity = (states[i].linear_momentum * mass.inverse_mass).cast<float>();
     body.angular_velocity = (mass.inverse_inertia * states[i].angular_momentum).cast<float>();
+    const Mat3& m = mass.inverse_inertia;
+    mass_records_[i] = {float(mass.inverse_mass), float(m(0, 0)), float(m(1, 1)), float(m(2, 2)),
+                        float(m(0, 1)),           float(m(0, 2)), float(m(1, 2)), 0.0f};
   }
 }
 
@@ -460,6 +490,7 @@ void ContactPipeline::prepare(double dt, const Vec3& gravity) {
   const std::vector<std::uint32_t>& block_start = lanes_->colour_start;
   std::vector<ContactBlock>& blocks = lanes_->blocks;
   const std::size_t block_count = blocks.size();
+  const Lane zero_lane = splat(0.0f);
 #pragma omp parallel for num_threads(settings_.threads) schedule(static) if (block_count >= 64)
   for (std::size_t bi = 0; bi < block_count; ++bi) {
     ContactBlock& block = blocks[bi];
@@ -479,50 +510,95 @@ void ContactPipeline::prepare(double dt, const Vec3& gravity) {
     std::array<LaneMask, 4> exists{};  // the lanes where each point is
     std::array<LaneMask, 4> cold{};    // and where it is cold (ContactConstraint::cold)
     Lane acceleration{};
-    for (std::size_t i = 0; first + i < last; ++i) {
-      const std::uint32_t index = colour_order_[first + i];
-      // a colour's contacts lie far apart in contacts_ (a 5,050-box pyramid's are 6.8 MB): the
-      // one a few lanes on is asked for now, so its lines arrive while these are packed
-      if (first + i + kContactsAhead < colour_order_.size())
-        simd::prefetch(&contacts_[colour_order_[first + i + kContactsAhead]],
-                       sizeof(ContactConstraint));
-      const ContactConstraint& c = contacts_[index];
-      const SolverMass& mass_a = masses_[c.body_a];
-      const SolverMass& mass_b = masses_[c.body_b];
-      block.contact[i] = index;
-      block.body_a[i] = c.body_a;
-      block.body_b[i] = c.body_b;
-      set3(block.normal, i, c.normal);
-      set3(block.tangent[0], i, c.tangent[0]);
-      set3(block.tangent[1], i, c.tangent[1]);
-      block.inverse_mass_a[i] = float(mass_a.inverse_mass);
-      block.inverse_mass_b[i] = float(mass_b.inverse_mass);
-      set_symmetric(block.inverse_inertia_a, i, mass_a.inverse_inertia);
-      set_symmetric(block.inverse_inertia_b, i, mass_b.inverse_inertia);
-      block.friction[i] = c.friction;
-      block.restitution[i] = c.restitution;
-      block.friction_impulse[0][i] = c.friction_impulse[0];
-      block.friction_impulse[1][i] = c.friction_impulse[1];
-      block.twist_impulse[i] = c.twist_impulse;
-      const bool against_static = mass_a.inverse_mass == 0.0 || mass_b.inverse_mass == 0.0;
-      const Softness& soft = against_static ? static_soft : dynamic_soft;
-      block.bias_rate[i] = float(soft.bias_rate);
-      block.mass_scale[i] = float(soft.mass_scale);
-      block.impulse_scale[i] = float(soft.impulse_scale);
-      // the gravity along n that free flight closes a gap with (relative, b's less a's)
-      const Vec3 gravity_a = mass_a.inverse_mass > 0.0 ? gravity : Vec3::Zero();
-      const Vec3 gravity_b = mass_b.inverse_mass > 0.0 ? gravity : Vec3::Zero();
-      acceleration[i] = float(c.normal.cast<double>().dot(gravity_b - gravity_a));
-      for (std::uint8_t j = 0; j < c.count; ++j) {
-        const ContactPointConstraint& from = c.points[j];
-        ContactBlock::Point& p = block.points[j];
-        exists[j][i] = -1;
-        cold[j][i] = (c.cold >> j & 1u) ? -1 : 0;
-        set3(p.anchor_a, i, from.anchor_a);
-        set3(p.anchor_b, i, from.anchor_b);
-        p.base_separation[i] = from.base_separation;
-        p.normal_impulse[i] = from.normal_impulse;
+    // the next block's contacts asked for now (a colour's contacts lie far apart in contacts_, a
+    // 5,050-box pyramid's 3.4 MB), so that their lines arrive while this one is packed
+    if (bi + 1 < block_count) {
+      const int next_colour = int(std::upper_bound(block_start.begin(), block_start.end(),
+                                                   std::uint32_t(bi + 1)) -
+                                  block_start.begin()) -
+                              1;
+      const std::size_t next_per_block = next_colour + 1 < kColours ? W : 1;
+      const std::size_t next_first =
+          colour_start_[next_colour] + (bi + 1 - block_start[next_colour]) * next_per_block;
+      const std::size_t next_last =
+          std::min<std::size_t>(next_first + next_per_block, colour_start_[next_colour + 1]);
+      for (std::size_t k = next_first; k < next_last; ++k)
+        simd::prefetch(&contacts_[colour_order_[k]], sizeof(ContactConstraint));
+    }
+    // the lanes' contacts and bodies; an empty lane reads contact 0 and the body at rest, and its
+    // contact's numbers are cleared below
+    LaneIndex contact_offsets, mass_a_offsets, mass_b_offsets;
+    LaneMask filled = zero_lane != zero_lane;
+    for (std::size_t i = 0; i < W; ++i) {
+      std::uint32_t index = 0;
+      if (first + i < last) {
+        index = colour_order_[first + i];
+        const ContactConstraint& c = contacts_[index];
+        block.contact[i] = index;
+        block.body_a[i] = c.body_a;
+        block.body_b[i] = c.body_b;
+        filled[i] = -1;
+        for (std::uint8_t j = 0; j < c.count; ++j) {
+          exists[j][i] = -1;
+          cold[j][i] = (c.cold >> j & 1u) ? -1 : 0;
+        }
       }
+      contact_offsets[i] = std::int32_t(index * kContactFloats);
+      mass_a_offsets[i] = std::int32_t(block.body_a[i] * 8);
+      mass_b_offsets[i] = std::int32_t(block.body_b[i] * 8);
+    }
+    // each contact's numbers by records transposed to lanes (ContactConstraint's floats: the
+    // normal, the tangents, friction, restitution and the friction impulses, then each point's
+    // anchors, base separation and normal impulse; a point past the contact's count is zero)
+    const float* contact_floats = reinterpret_cast<const float*>(contacts_.data());
+    Lane rows[8];
+    auto clear = [&](Lane x) { return simd::select(filled, x, zero_lane); };
+    simd::gather_records(contact_floats + kNormalFloat, contact_offsets, rows);
+    for (int k = 0; k < 3; ++k) {
+      block.normal[k] = clear(rows[k]);
+      block.tangent[0][k] = clear(rows[3 + k]);
+    }
+    block.tangent[1][0] = clear(rows[6]), block.tangent[1][1] = clear(rows[7]);
+    simd::gather_records(contact_floats + kNormalFloat + 8, contact_offsets, rows);
+    block.tangent[1][2] = clear(rows[0]);
+    block.friction = clear(rows[1]), block.restitution = clear(rows[2]);
+    block.friction_impulse[0] = clear(rows[3]), block.friction_impulse[1] = clear(rows[4]);
+    block.twist_impulse = clear(rows[5]);
+    for (int j = 0; j < 4; ++j) {
+      ContactBlock::Point& p = block.points[j];
+      simd::gather_records(contact_floats + kPointFloat + j * kPointFloats, contact_offsets, rows);
+      for (int k = 0; k < 3; ++k) {
+        p.anchor_a[k] = clear(rows[k]);
+        p.anchor_b[k] = clear(rows[3 + k]);
+      }
+      p.base_separation = clear(rows[6]);
+      p.normal_impulse = clear(rows[7]);
+    }
+    // each body's masses (mass_records_: the body at rest's are zero)
+    const float* mass_floats = mass_records_.front().data();
+    simd::gather_records(mass_floats, mass_a_offsets, rows);
+    block.inverse_mass_a = rows[0];
+    for (int k = 0; k < 6; ++k) block.inverse_inertia_a[k] = rows[1 + k];
+    simd::gather_records(mass_floats, mass_b_offsets, rows);
+    block.inverse_mass_b = rows[0];
+    for (int k = 0; k < 6; ++k) block.inverse_inertia_b[k] = rows[1 + k];
+    // the soft step's stiffness: twice as stiff against a static body
+    const LaneMask against_static =
+        (block.inverse_mass_a == zero_lane) | (block.inverse_mass_b == zero_lane);
+    block.bias_rate = clear(simd::select(against_static, splat(float(static_soft.bias_rate)),
+                                         splat(float(dynamic_soft.bias_rate))));
+    block.mass_scale = clear(simd::select(against_static, splat(float(static_soft.mass_scale)),
+                                          splat(float(dynamic_soft.mass_scale))));
+    block.impulse_scale =
+        clear(simd::select(against_static, splat(float(static_soft.impulse_scale)),
+                           splat(float(dynamic_soft.impulse_scale))));
+    for (std::size_t i = 0; first + i < last; ++i) {
+      // the gravity along n that free flight closes a gap with (relative, b's less a's)
+      const Vec3 normal(double(block.normal[0][i]), double(block.normal[1][i]),
+                        double(block.normal[2][i]));
+      const Vec3 gravity_a = block.inverse_mass_a[i] > 0.0f ? gravity : Vec3::Zero();
+      const Vec3 gravity_b = block.inverse_mass_b[i] > 0.0f ? gravity : Vec3::Zero();
+      acceleration[i] = float(normal.dot(gravity_b - gravity_a));
     }
     prepare_lanes(block, exists, cold, acceleration);
   }

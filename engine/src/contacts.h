@@ -224,6 +224,9 @@ class ContactPipeline {
   };
   std::vector<Velocities> substep_start_, substep_change_;
   std::vector<SolverMass> masses_;
+  // each body's masses as prepare() packs them, 8 floats: 1/m, then the world inverse inertia's
+  // xx yy zz xy xz yz, then 0 (one record a body, read by transposes)
+  std::vector<std::array<float, 8>> mass_records_;
   std::unique_ptr<ContactLanes> lanes_;
   std::vector<bool> seed_converged_;  // seed: per contact, its impulses stopped changing
   double deepest_ = 0.0;
