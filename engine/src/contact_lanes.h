@@ -54,6 +54,9 @@ inline constexpr std::uint32_t kNoContact = ~std::uint32_t{0};
 struct ContactLanes {
   std::vector<ContactBlock> blocks;
   std::vector<std::uint32_t> colour_start;  // colour k: blocks[start[k], start[k + 1])
+  // per block, 1 where every lane's two bodies have an inverse inertia c·1 (cubes, spheres,
+  // static bodies): the solve then applies it as a number, not a matrix
+  std::vector<std::uint8_t> isotropic;
 };
 
 }  // namespace rtp

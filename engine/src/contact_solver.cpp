@@ -61,6 +61,16 @@ V3 times(const Lane (&m)[6], const V3& v) {
           m[4] * v.x + m[5] * v.y + m[2] * v.z};
 }
 
+// the inverse inertia times a vector: a symmetric 3×3 in six lanes, or on an isotropic block
+// (ContactLanes::isotropic: every lane's c·1, c in the first lane) the number c
+template <bool kIsotropic>
+V3 inertia_times(const Lane (&m)[6], const V3& v) {
+  if constexpr (kIsotropic)
+    return m[0] * v;
+  else
+    return times(m, v);
+}
+
 // v turned by the inverse of the unit quaternion (x, y, z, w): Rᵀ v
 V3 rotate_back(const V3& q, Lane w, const V3& v) {
   const V3 t = splat(2.0f) * cross(v, q);  // 2 (v × q) = 2 ((−q) × v)
@@ -134,23 +144,26 @@ struct LanePair {
     return dot(n, vb - va) + dot(wb, row.angular_b) - dot(wa, row.angular_a);
   }
   // an impulse λ n on b at its anchor, and its opposite on a, by the point's row
+  template <bool kIsotropic = false>
   void apply_normal(const ContactBlock& c, const NormalRow& row, const V3& n, Lane impulse) {
     va = va - (c.inverse_mass_a * impulse) * n;
-    wa = wa - impulse * times(c.inverse_inertia_a, row.angular_a);
+    wa = wa - impulse * inertia_times<kIsotropic>(c.inverse_inertia_a, row.angular_a);
     vb = vb + (c.inverse_mass_b * impulse) * n;
-    wb = wb + impulse * times(c.inverse_inertia_b, row.angular_b);
+    wb = wb + impulse * inertia_times<kIsotropic>(c.inverse_inertia_b, row.angular_b);
   }
   // an impulse P on b at its anchor rb, and −P on a at ra
+  template <bool kIsotropic = false>
   void apply(const ContactBlock& c, const V3& ra, const V3& rb, const V3& impulse) {
     va = va - c.inverse_mass_a * impulse;
-    wa = wa - times(c.inverse_inertia_a, cross(ra, impulse));
+    wa = wa - inertia_times<kIsotropic>(c.inverse_inertia_a, cross(ra, impulse));
     vb = vb + c.inverse_mass_b * impulse;
-    wb = wb + times(c.inverse_inertia_b, cross(rb, impulse));
+    wb = wb + inertia_times<kIsotropic>(c.inverse_inertia_b, cross(rb, impulse));
   }
   // an angular impulse L n on b, and its opposite on a
+  template <bool kIsotropic = false>
   void apply_twist(const ContactBlock& c, const V3& n, Lane impulse) {
-    wa = wa - impulse * times(c.inverse_inertia_a, n);
-    wb = wb + impulse * times(c.inverse_inertia_b, n);
+    wa = wa - impulse * inertia_times<kIsotropic>(c.inverse_inertia_a, n);
+    wb = wb + impulse * inertia_times<kIsotropic>(c.inverse_inertia_b, n);
   }
   // the relative velocity at the anchors ra, rb
   V3 relative_velocity(const V3& ra, const V3& rb) const {
@@ -383,6 +396,7 @@ void ContactPipeline::colour_contacts() {
     block_start[k + 1] = block_start[k] + std::uint32_t(k + 1 < kColours ? (n + W - 1) / W : n);
   }
   lanes_->blocks.resize(block_start[kColours]);
+  lanes_->isotropic.resize(block_start[kColours]);
 }
 
 template <class Kernel>
@@ -461,8 +475,14 @@ void ContactPipeline::load_bodies(std::span<const BodyState> states,
       mass_records_[i] = {};
       continue;
     }
+    // a body whose inertia is the same about every axis (a cube, a sphere) has it so in the
+    // world too, exactly: R (c 1) Rᵀ = c 1, where the product leaves round-off off the diagonal
+    // (and the solve's isotropic blocks need it exact)
+    const Vec3& body_inertia = masses[i].inverse_inertia_body;
     mass.inverse_inertia =
-        world_inverse_inertia(states[i].orientation, masses[i].inverse_inertia_body);
+        body_inertia.x() == body_inertia.y() && body_inertia.y() == body_inertia.z()
+            ? Mat3(body_inertia.x() * Mat3::Identity())
+            : world_inverse_inertia(states[i].orientation, body_inertia);
     body.linear_velocity = (states[i].linear_momentum * mass.inverse_mass).cast<float>();
     body.angular_velocity = (mass.inverse_inertia * states[i].angular_momentum).cast<float>();
     const Mat3& m = mass.inverse_inertia;
@@ -582,6 +602,12 @@ void ContactPipeline::prepare(double dt, const Vec3& gravity) {
     simd::gather_records(mass_floats, mass_b_offsets, rows);
     block.inverse_mass_b = rows[0];
     for (int k = 0; k < 6; ++k) block.inverse_inertia_b[k] = rows[1 + k];
+    auto isotropic = [&](const Lane (&m)[6]) {
+      return (m[1] == m[0]) & (m[2] == m[0]) & (m[3] == zero_lane) & (m[4] == zero_lane) &
+             (m[5] == zero_lane);
+    };
+    lanes_->isotropic[bi] = simd::all_of(isotropic(block.inverse_inertia_a) &
+                                         isotropic(block.inverse_inertia_b));
     // the soft step's stiffness: twice as stiff against a static body
     const LaneMask against_static =
         (block.inverse_mass_a == zero_lane) | (block.inverse_mass_b == zero_lane);
@@ -765,7 +791,7 @@ bool ContactPipeline::solve(double h, bool bias, bool backwards, double toleranc
   // a pass
   const bool refresh = separations_stale_;
   separations_stale_ = false;
-  for_each_block([&](ContactBlock& c, Prefetch& ahead) {
+  auto solve_block = [&]<bool kIsotropic>(ContactBlock& c, Prefetch& ahead) {
     LaneMask changed = zero != zero;
     bool wrote = false;  // whether any lane's velocities changed
     LanePair pair(bodies_, c);
@@ -825,7 +851,7 @@ bool ContactPipeline::solve(double h, bool bias, bool backwards, double toleranc
         // response is not computed
         const LaneMask pushes = applied != zero;
         if (simd::any_of(pushes)) {
-          pair.apply_normal(c, row, n, applied);
+          pair.apply_normal<kIsotropic>(c, row, n, applied);
           wrote = true;
         }
       }
@@ -862,13 +888,13 @@ bool ContactPipeline::solve(double h, bool bias, bool backwards, double toleranc
         }
         c.friction_impulse[0] = f0;
         c.friction_impulse[1] = f1;
-        pair.apply(c, ra, rb, (f0 - old0) * t0 + (f1 - old1) * t1);
+        pair.apply<kIsotropic>(c, ra, rb, (f0 - old0) * t0 + (f1 - old1) * t1);
         const Lane twist_limit = limit * c.twist_arm;
         const Lane twist = simd::max(
             simd::min(old_twist - c.twist_mass * dot(n, pair.wb - pair.wa), twist_limit),
             zero - twist_limit);
         c.twist_impulse = twist;
-        pair.apply_twist(c, n, twist - old_twist);
+        pair.apply_twist<kIsotropic>(c, n, twist - old_twist);
         wrote = true;
       }
     }
@@ -877,7 +903,17 @@ bool ContactPipeline::solve(double h, bool bias, bool backwards, double toleranc
     // otherwise have both threads write the flag's cache line after every block
     if (tolerance > 0.0 && simd::any_of(changed) && !moved.load(std::memory_order_relaxed))
       moved.store(true, std::memory_order_relaxed);
-  }, backwards);
+  };
+  const ContactBlock* const first_block = lanes_->blocks.data();
+  const std::uint8_t* const isotropic = lanes_->isotropic.data();
+  for_each_block(
+      [&](ContactBlock& c, Prefetch& ahead) {
+        if (isotropic[&c - first_block])
+          solve_block.template operator()<true>(c, ahead);
+        else
+          solve_block.template operator()<false>(c, ahead);
+      },
+      backwards);
   return !moved.load(std::memory_order_relaxed);
 }
 
