@@ -119,7 +119,7 @@ struct LanePair {
 
   // each body's velocities are its first six floats: read as records (its first eight) and
   // transposed, rather than gathered a float at a time (simd::gather_records)
-  LanePair(const std::vector<SolverBody>& bodies, const ContactBlock& block)
+  [[gnu::always_inline]] LanePair(const std::vector<SolverBody>& bodies, const ContactBlock& block)
       : a(body_offsets(block.body_a)), b(body_offsets(block.body_b)) {
     static_assert(kLinearVelocity == 0 && kAngularVelocity == 3);
     const float* base = reinterpret_cast<const float*>(bodies.data());
@@ -131,7 +131,8 @@ struct LanePair {
   }
   // static bodies and the body at rest are never written: colours share them, and their
   // threads may not write the same memory (a colour's dynamic bodies are each in one lane)
-  void store(std::vector<SolverBody>& bodies, const ContactBlock& block) const {
+  [[gnu::always_inline]] void store(std::vector<SolverBody>& bodies,
+                                    const ContactBlock& block) const {
     float* base = reinterpret_cast<float*>(bodies.data());
     const Lane zero = splat(0.0f);
     const Lane rows_a[6] = {va.x, va.y, va.z, wa.x, wa.y, wa.z};
