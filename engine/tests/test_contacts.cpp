@@ -12,7 +12,6 @@
 
 #include <atomic>
 #include <cmath>
-#include <cstdio>
 #include <cstdlib>
 #include <new>
 #include <numbers>
@@ -143,41 +142,58 @@ TEST(Contacts, SpinningBoxStopsByTwistFriction) {
   EXPECT_LT(std::abs(world.state(id).position.x()) + std::abs(world.state(id).position.z()), 1e-3);
 }
 
-// A door-shaped box (0.2 × 2 × 2 m) stood on one edge, leaning 0.1 rad past it, topples about
-// that edge as a rigid body on a pivot: φ'' = m g r sin φ / (I_z + m r²), φ the lean of the
-// line from the edge to the centre, r its length (its inertia differs by axis, I_z half I_x, and
-// its world inverse inertia has off-diagonal terms once it turns). The time to lean 0.8 rad,
-// against the equation's (about 1 s; 2.2 % longer, measured)
+// A door-shaped box, 0.2 × 2 × 2 m and 1 kg (its inertia differs by axis: I_z, about its edges
+// along z, is half I_x), stood on its edge (hx, −hy) at x = 0 on a ground of μ = 1 and leaning φ
+// past it towards +x: φ is the lean of the line from the edge to the centre, r its length
+struct Door {
+  const double hx = 0.1, hy = 1.0, hz = 1.0, mass = 1.0;
+  const double inertia_z = mass / 3.0 * (hx * hx + hy * hy);
+  const double r = std::hypot(hx, hy), rest_angle = std::atan(hx / hy);
+  // about the edge: I_z + m r²
+  double pivot_inertia() const { return inertia_z + mass * r * r; }
+  // the door leaning phi, its edge lift above the ground
+  BodyDef def(double phi, double lift) const {
+    const double tilt = rest_angle + phi;
+    BodyDef door;
+    door.mass = mass;
+    door.principal_inertia = {mass / 3.0 * (hy * hy + hz * hz), mass / 3.0 * (hx * hx + hz * hz),
+                              inertia_z};
+    door.shape.kind = BodyShape::Box;
+    door.shape.half_extents = {hx, hy, hz};
+    door.friction = 1.0;
+    // turned by −tilt about z (its top towards +x)
+    door.orientation = Quat(Eigen::AngleAxisd(-tilt, Vec3::UnitZ()));
+    door.position = {-hx * std::cos(tilt) + hy * std::sin(tilt),
+                     hx * std::sin(tilt) + hy * std::cos(tilt) + lift, 0.0};
+    return door;
+  }
+  // φ as the door stands: its tilt (its y axis from the vertical, towards +x) less the rest
+  double lean(const World& world, BodyId id) const {
+    const Vec3 up = world.state(id).orientation * Vec3::UnitY();
+    return std::atan2(up.x(), up.y()) - rest_angle;
+  }
+  // the edge it stands on, from its centre
+  Vec3 edge_offset(const World& world, BodyId id) const {
+    return world.state(id).orientation * Vec3(hx, -hy, 0.0);
+  }
+};
+
+// The door leaning 0.1 rad topples about its edge as a rigid body on a pivot:
+// φ'' = m g r sin φ / (I_z + m r²) (its world inverse inertia has off-diagonal terms once it
+// turns). The time to lean 0.8 rad, against the equation's (about 1 s; 2.2 % longer, measured)
 TEST(Contacts, ToppledDoorFallsAsAPivotedBody) {
   World world = world_with(ContactSolver::SoftStep);
   add_ground(world, 1.0);
-  const double hx = 0.1, hy = 1.0, hz = 1.0, mass = 1.0, g = 9.81;
-  const double inertia_z = mass / 3.0 * (hx * hx + hy * hy);
-  const double r = std::hypot(hx, hy), rest_angle = std::atan(hx / hy);
-  const double phi0 = 0.1, tilt = rest_angle + phi0, phi_end = 0.8;
-  BodyDef door;
-  door.mass = mass;
-  door.principal_inertia = {mass / 3.0 * (hy * hy + hz * hz), mass / 3.0 * (hx * hx + hz * hz),
-                            inertia_z};
-  door.shape.kind = BodyShape::Box;
-  door.shape.half_extents = {hx, hy, hz};
-  door.friction = 1.0;
-  // turned by −tilt about z (its top towards +x), its edge (hx, −hy) on the ground at x = 0
-  door.orientation = Quat(Eigen::AngleAxisd(-tilt, Vec3::UnitZ()));
-  door.position = {-hx * std::cos(tilt) + hy * std::sin(tilt),
-                   hx * std::sin(tilt) + hy * std::cos(tilt), 0.0};
-  const BodyId id = world.add_body(door);
-  auto lean = [&] {  // φ: the door's tilt (its y axis from the vertical, towards +x) less the rest
-    const Vec3 up = world.state(id).orientation * Vec3::UnitY();
-    return std::atan2(up.x(), up.y()) - rest_angle;
-  };
-  ASSERT_NEAR(lean(), phi0, 1e-12);
+  const Door door;
+  const double phi0 = 0.1, phi_end = 0.8;
+  const BodyId id = world.add_body(door.def(phi0, 0.0));
+  ASSERT_NEAR(door.lean(world, id), phi0, 1e-12);
   // the pivot's equation by RK4 at 0.1 ms, to the time φ reaches phi_end
-  const double rate = mass * g * r / (inertia_z + mass * r * r);
+  const double rate = door.mass * 9.81 * door.r / door.pivot_inertia();
+  auto accel = [&](double p) { return rate * std::sin(p); };
   double phi = phi0, speed = 0.0, t_reference = 0.0;
   const double h = 1e-4;
   while (phi < phi_end) {
-    auto accel = [&](double p) { return rate * std::sin(p); };
     const double k1p = speed, k1v = accel(phi);
     const double k2p = speed + 0.5 * h * k1v, k2v = accel(phi + 0.5 * h * k1p);
     const double k3p = speed + 0.5 * h * k2v, k3v = accel(phi + 0.5 * h * k2p);
@@ -187,10 +203,10 @@ TEST(Contacts, ToppledDoorFallsAsAPivotedBody) {
     t_reference += h;
   }
   // the simulation's time to phi_end, between steps by the lean's straight line
-  double t = 0.0, before = lean();
+  double t = 0.0, before = door.lean(world, id);
   for (int step = 0; step < 600; ++step) {
     world.step(kDt);
-    const double now = lean();
+    const double now = door.lean(world, id);
     if (now >= phi_end) {
       t += kDt * (phi_end - before) / (now - before);
       break;
@@ -200,46 +216,32 @@ TEST(Contacts, ToppledDoorFallsAsAPivotedBody) {
   }
   EXPECT_NEAR(t, t_reference, 0.03 * t_reference) << "reference " << t_reference << " s";
   // the edge stayed where it stood (no slip on μ = 1 by then)
-  const Vec3 edge = world.state(id).position + world.state(id).orientation * Vec3(hx, -hy, 0.0);
-  EXPECT_LT(std::abs(edge.x()), 0.01);
+  EXPECT_LT(std::abs((world.state(id).position + door.edge_offset(world, id)).x()), 0.01);
 }
 
-// The same door dropped on its edge at 3 m/s, leaning 0.3 rad past it, without bounce (e = 0) or
-// slip (μ = 1): the impact keeps the angular momentum about the edge, m v r sin φ, and turns it
-// into a turn about the edge, ω = m v r sin φ / (I_z + m r²). Measured at the end of the step the
-// edge lands in, where the solve alone (no warm start yet) applied the whole impact through the
-// door's inverse inertia
+// The door dropped on its edge at 3 m/s, leaning 0.3 rad, without bounce (e = 0) or slip: the
+// impact keeps the angular momentum about the edge, m v r sin φ, and turns it into a turn about
+// the edge, ω = m v r sin φ / (I_z + m r²). Measured at the end of the step the edge lands in,
+// where the solve alone (no warm start yet) applied the whole impact through the door's inverse
+// inertia
 TEST(Contacts, DoorDroppedOnItsEdgeTurnsByItsAngularMomentum) {
   World world = world_with(ContactSolver::SoftStep);
   add_ground(world, 1.0);
-  const double hx = 0.1, hy = 1.0, hz = 1.0, mass = 1.0, speed = 3.0;
-  const double inertia_z = mass / 3.0 * (hx * hx + hy * hy);
-  const double r = std::hypot(hx, hy), rest_angle = std::atan(hx / hy), phi = 0.3;
-  const double tilt = rest_angle + phi;
-  BodyDef door;
-  door.mass = mass;
-  door.principal_inertia = {mass / 3.0 * (hy * hy + hz * hz), mass / 3.0 * (hx * hx + hz * hz),
-                            inertia_z};
-  door.shape.kind = BodyShape::Box;
-  door.shape.half_extents = {hx, hy, hz};
-  door.friction = 1.0;
-  door.orientation = Quat(Eigen::AngleAxisd(-tilt, Vec3::UnitZ()));
+  const Door door;
+  const double phi = 0.3, speed = 3.0;
   // its edge 1 mm above the ground, falling at `speed`: it lands within the first step
-  door.position = {-hx * std::cos(tilt) + hy * std::sin(tilt),
-                   hx * std::sin(tilt) + hy * std::cos(tilt) + 1e-3, 0.0};
-  door.linear_velocity = {0.0, -speed, 0.0};
-  const BodyId id = world.add_body(door);
+  BodyDef def = door.def(phi, 1e-3);
+  def.linear_velocity = {0.0, -speed, 0.0};
+  const BodyId id = world.add_body(def);
   world.step(kDt);
   // the turn about −z (towards +x) the angular momentum about the edge gives, and what gravity's
   // torque about the edge adds over the rest of the step (6 % of it)
-  const double pivot_inertia = inertia_z + mass * r * r;
-  const double expected = -mass * speed * r * std::sin(phi) / pivot_inertia -
-                          mass * 9.81 * r * std::sin(phi) / pivot_inertia * kDt;
+  const double expected = -door.mass * speed * door.r * std::sin(phi) / door.pivot_inertia() -
+                          door.mass * 9.81 * door.r * std::sin(phi) / door.pivot_inertia() * kDt;
   EXPECT_NEAR(world.angular_velocity(id).z(), expected, 0.03 * std::abs(expected));
   // and the edge at rest on the ground
-  const Vec3 edge_offset = world.state(id).orientation * Vec3(hx, -hy, 0.0);
-  const Vec3 edge_velocity =
-      world.state(id).linear_momentum / mass + world.angular_velocity(id).cross(edge_offset);
+  const Vec3 edge_velocity = world.state(id).linear_momentum / door.mass +
+                             world.angular_velocity(id).cross(door.edge_offset(world, id));
   EXPECT_LT(edge_velocity.norm(), 0.05 * speed);
 }
 
