@@ -41,7 +41,7 @@ struct ContactBlock {
                            // the step's start (m); computed again once the positions change
     Lane normal_mass;  // 1 / the velocity change per unit impulse (kg); 0 for an empty point
     Lane normal_impulse;
-    Lane max_normal_impulse;  // the largest this step (N s)
+    Lane max_normal_impulse;  // the largest this step (N s; kept where some lane bounces)
     Lane approach_velocity;   // relative normal velocity at impact (m/s), < 0 closing
     LaneMask starts_apart;    // a speculative point at the step's start
   } points[4];

@@ -806,13 +806,17 @@ bool ContactPipeline::solve(double h, bool bias, bool backwards, double toleranc
     // the approach speed restitution reverses, for points that started the step touching: each
     // one's last before it first pushed, all read before this manifold pushes at all (read one
     // by one, the points after the first would see the first's push, and bounce unequally)
-    for (ContactBlock::Point& p : c.points) {
-      const LaneMask unread =
-          (p.max_normal_impulse == zero) & ~p.starts_apart & (c.restitution > zero);
-      if (simd::any_of(unread))
-        p.approach_velocity =
-            simd::select(unread, pair.normal_velocity(n, NormalRow(p, n)), p.approach_velocity);
-    }
+    // (a block where no lane bounces needs neither that speed nor the largest impulse, which
+    // only restitution reads)
+    const LaneMask bounces = c.restitution > zero;
+    const bool any_bounce = simd::any_of(bounces);
+    if (any_bounce)
+      for (ContactBlock::Point& p : c.points) {
+        const LaneMask unread = (p.max_normal_impulse == zero) & ~p.starts_apart & bounces;
+        if (simd::any_of(unread))
+          p.approach_velocity = simd::select(unread, pair.normal_velocity(n, NormalRow(p, n)),
+                                             p.approach_velocity);
+      }
     // non-penetration: the normal impulse accumulates and stays ≥ 0 (Catto GDC 2006). A
     // manifold with no warm start (a new contact, an impact) runs its points several times in a
     // row: one pass over a face's four points lands the whole impulse on the first and spins the
@@ -846,7 +850,7 @@ bool ContactPipeline::solve(double h, bool bias, bool backwards, double toleranc
             simd::select(active, simd::max(p.normal_impulse + impulse, zero), p.normal_impulse);
         const Lane applied = accumulated - p.normal_impulse;
         p.normal_impulse = accumulated;
-        p.max_normal_impulse = simd::max(p.max_normal_impulse, applied);
+        if (any_bounce) p.max_normal_impulse = simd::max(p.max_normal_impulse, applied);
         changed |= simd::max(applied, zero - applied) > tolerance_lane * p.normal_mass;
         // a point that applies nothing in any lane leaves the velocities as they are: its
         // response is not computed
