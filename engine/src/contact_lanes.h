@@ -17,42 +17,53 @@ using Lane = simd::Pack<float, kBlockLanes>;
 using LaneMask = simd::MaskOf<Lane>;
 
 
-// one block: kBlockLanes manifolds of one colour, one a lane, every number the solve reads (docs/solver.md
-// gives the layout's bytes per point)
+// one block: kBlockLanes manifolds of one colour, one a lane, what every pass reads (docs/solver.md
+// gives the layout's bytes per point); what only some passes read is in its ContactBlockRest
 struct ContactBlock {
   std::array<std::uint32_t, kBlockLanes> body_a, body_b;  // an empty lane holds the body at rest
-  std::array<std::uint32_t, kBlockLanes> contact;         // index into contacts_, or kNoContact
   Lane normal[3], tangent[2][3];
   Lane inverse_mass_a, inverse_mass_b;
-  Lane inverse_inertia_a[6], inverse_inertia_b[6];  // world, symmetric: xx yy zz xy xz yz
-  Lane friction, restitution;
-  // friction at the centre of the manifold's points: its anchors from each body, the effective
-  // masses along the tangents and about the normal, the mean distance of the points from it
-  // (the twist's lever), and the accumulated impulses
+  // each body's world inverse inertia, xx (the rest is in ContactBlockRest; on an isotropic block,
+  // ContactLanes::isotropic, this is the whole of it, c in c·1)
+  Lane inverse_inertia_a, inverse_inertia_b;
+  // friction at the centre of the manifold's points: its anchors from each body, the accumulated
+  // impulses, the effective masses along the tangents and about the normal, and the mean distance
+  // of the points from it (the twist's lever)
   Lane centre_a[3], centre_b[3];
-  Lane tangent_mass[2], twist_mass, twist_arm;
   Lane friction_impulse[2], twist_impulse;
+  Lane friction, tangent_mass[2], twist_mass, twist_arm;
   Lane bias_rate, mass_scale, impulse_scale;  // the soft step's stiffness (Catto, b2MakeSoft)
   LaneMask fresh;  // a point without a warm start, or hitting: the manifold is solved locally
   struct Point {
     Lane anchor_a[3], anchor_b[3];  // the rows are computed from these as read
-    Lane base_separation;  // at the step's start, less n·(anchor_b − anchor_a) (m)
-    Lane separation;       // as the bodies last moved: the base, plus their motion along n since
-                           // the step's start (m); computed again once the positions change
-    Lane normal_mass;  // 1 / the velocity change per unit impulse (kg); 0 for an empty point
     Lane normal_impulse;
+    Lane separation;   // as the bodies last moved: the base (ContactBlockRest), plus their motion
+                       // along n since the step's start (m); computed again once they move
+    Lane normal_mass;  // 1 / the velocity change per unit impulse (kg); 0 for an empty point
+  } points[4];
+};
+// 69 floats a lane: 33 for the manifold, 9 for each of four points (276 bytes a manifold)
+static_assert(sizeof(ContactBlock) == 69 * sizeof(float) * kBlockLanes);
+
+// the rest of a block: what the passes read only now and then (a substep's first separations,
+// a non-isotropic block's inertia, restitution), and what prepare() and store_impulses() read
+struct ContactBlockRest {
+  std::array<std::uint32_t, kBlockLanes> contact;  // index into contacts_, or kNoContact
+  Lane inverse_inertia_a[5], inverse_inertia_b[5];  // yy zz xy xz yz
+  Lane restitution;
+  struct Point {
+    Lane base_separation;     // at the step's start, less n·(anchor_b − anchor_a) (m)
     Lane max_normal_impulse;  // the largest this step (N s; kept where some lane bounces)
     Lane approach_velocity;   // relative normal velocity at impact (m/s), < 0 closing
     LaneMask starts_apart;    // a speculative point at the step's start
   } points[4];
 };
-// 97 floats a lane: 42 for the manifold, 13 for each of four points, 3 for the indices (388
-// bytes a manifold, 97 a point)
-static_assert(sizeof(ContactBlock) == 97 * sizeof(float) * kBlockLanes);
+static_assert(sizeof(ContactBlockRest) == 28 * sizeof(float) * kBlockLanes);
 inline constexpr std::uint32_t kNoContact = ~std::uint32_t{0};
 
 struct ContactLanes {
   std::vector<ContactBlock> blocks;
+  std::vector<ContactBlockRest> rest;  // one a block
   std::vector<std::uint32_t> colour_start;  // colour k: blocks[start[k], start[k + 1])
   // per block, 1 where every lane's two bodies have an inverse inertia c·1 (cubes, spheres,
   // static bodies): the solve then applies it as a number, not a matrix

@@ -61,8 +61,24 @@ V3 times(const Lane (&m)[6], const V3& v) {
           m[4] * v.x + m[5] * v.y + m[2] * v.z};
 }
 
-// the inverse inertia times a vector: a symmetric 3×3 in six lanes, or on an isotropic block
-// (ContactLanes::isotropic: every lane's c·1, c in the first lane) the number c
+// a block's two world inverse inertias as six lanes each (xx yy zz xy xz yz), gathered from the
+// block and its rest; on an isotropic block (ContactLanes::isotropic: every lane's c·1) only the
+// first, c, is read and used
+struct BlockInertia {
+  Lane a[6], b[6];
+};
+template <bool kIsotropic>
+BlockInertia inertia_of(const ContactBlock& c, const ContactBlockRest& r) {
+  BlockInertia m{};
+  m.a[0] = c.inverse_inertia_a, m.b[0] = c.inverse_inertia_b;
+  if constexpr (!kIsotropic)
+    for (int k = 0; k < 5; ++k) {
+      m.a[1 + k] = r.inverse_inertia_a[k];
+      m.b[1 + k] = r.inverse_inertia_b[k];
+    }
+  return m;
+}
+// the inverse inertia times a vector: the matrix, or on an isotropic block the number c
 template <bool kIsotropic>
 V3 inertia_times(const Lane (&m)[6], const V3& v) {
   if constexpr (kIsotropic)
@@ -146,25 +162,27 @@ struct LanePair {
   }
   // an impulse λ n on b at its anchor, and its opposite on a, by the point's row
   template <bool kIsotropic = false>
-  void apply_normal(const ContactBlock& c, const NormalRow& row, const V3& n, Lane impulse) {
+  void apply_normal(const ContactBlock& c, const BlockInertia& m, const NormalRow& row,
+                    const V3& n, Lane impulse) {
     va = va - (c.inverse_mass_a * impulse) * n;
-    wa = wa - impulse * inertia_times<kIsotropic>(c.inverse_inertia_a, row.angular_a);
+    wa = wa - impulse * inertia_times<kIsotropic>(m.a, row.angular_a);
     vb = vb + (c.inverse_mass_b * impulse) * n;
-    wb = wb + impulse * inertia_times<kIsotropic>(c.inverse_inertia_b, row.angular_b);
+    wb = wb + impulse * inertia_times<kIsotropic>(m.b, row.angular_b);
   }
   // an impulse P on b at its anchor rb, and −P on a at ra
   template <bool kIsotropic = false>
-  void apply(const ContactBlock& c, const V3& ra, const V3& rb, const V3& impulse) {
+  void apply(const ContactBlock& c, const BlockInertia& m, const V3& ra, const V3& rb,
+             const V3& impulse) {
     va = va - c.inverse_mass_a * impulse;
-    wa = wa - inertia_times<kIsotropic>(c.inverse_inertia_a, cross(ra, impulse));
+    wa = wa - inertia_times<kIsotropic>(m.a, cross(ra, impulse));
     vb = vb + c.inverse_mass_b * impulse;
-    wb = wb + inertia_times<kIsotropic>(c.inverse_inertia_b, cross(rb, impulse));
+    wb = wb + inertia_times<kIsotropic>(m.b, cross(rb, impulse));
   }
   // an angular impulse L n on b, and its opposite on a
   template <bool kIsotropic = false>
-  void apply_twist(const ContactBlock& c, const V3& n, Lane impulse) {
-    wa = wa - impulse * inertia_times<kIsotropic>(c.inverse_inertia_a, n);
-    wb = wb + impulse * inertia_times<kIsotropic>(c.inverse_inertia_b, n);
+  void apply_twist(const BlockInertia& m, const V3& n, Lane impulse) {
+    wa = wa - impulse * inertia_times<kIsotropic>(m.a, n);
+    wb = wb + impulse * inertia_times<kIsotropic>(m.b, n);
   }
   // the relative velocity at the anchors ra, rb
   V3 relative_velocity(const V3& ra, const V3& rb) const {
@@ -191,8 +209,8 @@ struct NormalMotion {
     turned_a = rotate_back(qa, wa, n);
     turned_b = rotate_back(qb, wb, n);
   }
-  Lane separation(const ContactBlock::Point& p) const {
-    return p.base_separation + translation + dot(turned_b, load3(p.anchor_b)) -
+  Lane separation(const ContactBlock::Point& p, Lane base_separation) const {
+    return base_separation + translation + dot(turned_b, load3(p.anchor_b)) -
            dot(turned_a, load3(p.anchor_a));
   }
 };
@@ -224,14 +242,6 @@ double effective_mass(const Vec3& ra, const Vec3& rb, const Vec3& d, const Solve
   return k > 0.0 ? 1.0 / k : 0.0;
 }
 
-void set3(Lane (&lanes)[3], std::size_t i, const Eigen::Vector3f& v) {
-  for (int k = 0; k < 3; ++k) lanes[k][i] = v[k];
-}
-void set_symmetric(Lane (&lanes)[6], std::size_t i, const Mat3& m) {
-  lanes[0][i] = float(m(0, 0)), lanes[1][i] = float(m(1, 1)), lanes[2][i] = float(m(2, 2));
-  lanes[3][i] = float(m(0, 1)), lanes[4][i] = float(m(0, 2)), lanes[5][i] = float(m(1, 2));
-}
-
 }  // namespace
 
 std::size_t contact_block_lanes() { return W; }
@@ -239,7 +249,7 @@ std::size_t contact_block_lanes() { return W; }
 namespace {
 // The next block's cache lines, asked for a few at a time while this one is solved: a pass
 // streams the blocks in order, and at a large pyramid they come from L3, whose latency the kernel
-// otherwise waits on (docs/solver.md, "Cost"). Asked for all at once, the 97 lines a block fill
+// otherwise waits on (docs/solver.md, "Cost"). Asked for all at once, the 69 lines a block fill
 // the core's line-fill buffers and the prefetches stall the kernel behind them.
 class Prefetch {
  public:
@@ -397,6 +407,7 @@ void ContactPipeline::colour_contacts() {
     block_start[k + 1] = block_start[k] + std::uint32_t(k + 1 < kColours ? (n + W - 1) / W : n);
   }
   lanes_->blocks.resize(block_start[kColours]);
+  lanes_->rest.resize(block_start[kColours]);
   lanes_->isotropic.resize(block_start[kColours]);
 }
 
@@ -412,9 +423,10 @@ void ContactPipeline::for_each_block(Kernel&& kernel, bool backwards) {
     const int c = colour(k);
     return c + 1 < kColours && start[c + 1] - start[c] >= parallel_blocks;
   };
+  std::vector<ContactBlockRest>& rest = lanes_->rest;
   auto run_block = [&](std::size_t i, std::size_t end) {
     Prefetch ahead(i + 1 < end ? &blocks[i + 1] : nullptr);
-    kernel(blocks[i], ahead);
+    kernel(blocks[i], rest[i], ahead);
     ahead.rest();
   };
   auto run_colour = [&](int k) {
@@ -515,7 +527,9 @@ void ContactPipeline::prepare(double dt, const Vec3& gravity) {
 #pragma omp parallel for num_threads(settings_.threads) schedule(static) if (block_count >= 64)
   for (std::size_t bi = 0; bi < block_count; ++bi) {
     ContactBlock& block = blocks[bi];
+    ContactBlockRest& rest = lanes_->rest[bi];
     block = ContactBlock{};
+    rest = ContactBlockRest{};
     // the block's contacts: which colour, and where in it
     const int colour = int(std::upper_bound(block_start.begin(), block_start.end(),
                                             std::uint32_t(bi)) -
@@ -526,7 +540,7 @@ void ContactPipeline::prepare(double dt, const Vec3& gravity) {
     const std::size_t last = std::min<std::size_t>(first + per_block, colour_start_[colour + 1]);
     for (std::size_t i = 0; i < W; ++i) {
       block.body_a[i] = block.body_b[i] = at_rest;
-      block.contact[i] = kNoContact;
+      rest.contact[i] = kNoContact;
     }
     std::array<LaneMask, 4> exists{};  // the lanes where each point is
     std::array<LaneMask, 4> cold{};    // and where it is cold (ContactConstraint::cold)
@@ -555,7 +569,7 @@ void ContactPipeline::prepare(double dt, const Vec3& gravity) {
       if (first + i < last) {
         index = colour_order_[first + i];
         const ContactConstraint& c = contacts_[index];
-        block.contact[i] = index;
+        rest.contact[i] = index;
         block.body_a[i] = c.body_a;
         block.body_b[i] = c.body_b;
         filled[i] = -1;
@@ -582,7 +596,7 @@ void ContactPipeline::prepare(double dt, const Vec3& gravity) {
     block.tangent[1][0] = clear(rows[6]), block.tangent[1][1] = clear(rows[7]);
     simd::gather_records(contact_floats + kNormalFloat + 8, contact_offsets, rows);
     block.tangent[1][2] = clear(rows[0]);
-    block.friction = clear(rows[1]), block.restitution = clear(rows[2]);
+    block.friction = clear(rows[1]), rest.restitution = clear(rows[2]);
     block.friction_impulse[0] = clear(rows[3]), block.friction_impulse[1] = clear(rows[4]);
     block.twist_impulse = clear(rows[5]);
     for (int j = 0; j < 4; ++j) {
@@ -592,23 +606,27 @@ void ContactPipeline::prepare(double dt, const Vec3& gravity) {
         p.anchor_a[k] = clear(rows[k]);
         p.anchor_b[k] = clear(rows[3 + k]);
       }
-      p.base_separation = clear(rows[6]);
+      rest.points[j].base_separation = clear(rows[6]);
       p.normal_impulse = clear(rows[7]);
     }
     // each body's masses (mass_records_: the body at rest's are zero)
     const float* mass_floats = mass_records_.front().data();
+    // (each inertia's xx in the block, the rest in its rest: c·1 where both are isotropic)
+    auto isotropic = [&](const Lane(&m)[8]) {
+      return (m[2] == m[1]) & (m[3] == m[1]) & (m[4] == zero_lane) & (m[5] == zero_lane) &
+             (m[6] == zero_lane);
+    };
     simd::gather_records(mass_floats, mass_a_offsets, rows);
     block.inverse_mass_a = rows[0];
-    for (int k = 0; k < 6; ++k) block.inverse_inertia_a[k] = rows[1 + k];
+    block.inverse_inertia_a = rows[1];
+    for (int k = 0; k < 5; ++k) rest.inverse_inertia_a[k] = rows[2 + k];
+    LaneMask round = isotropic(rows);
     simd::gather_records(mass_floats, mass_b_offsets, rows);
     block.inverse_mass_b = rows[0];
-    for (int k = 0; k < 6; ++k) block.inverse_inertia_b[k] = rows[1 + k];
-    auto isotropic = [&](const Lane (&m)[6]) {
-      return (m[1] == m[0]) & (m[2] == m[0]) & (m[3] == zero_lane) & (m[4] == zero_lane) &
-             (m[5] == zero_lane);
-    };
-    lanes_->isotropic[bi] = simd::all_of(isotropic(block.inverse_inertia_a) &
-                                         isotropic(block.inverse_inertia_b));
+    block.inverse_inertia_b = rows[1];
+    for (int k = 0; k < 5; ++k) rest.inverse_inertia_b[k] = rows[2 + k];
+    round &= isotropic(rows);
+    lanes_->isotropic[bi] = simd::all_of(round);
     // the soft step's stiffness: twice as stiff against a static body
     const LaneMask against_static =
         (block.inverse_mass_a == zero_lane) | (block.inverse_mass_b == zero_lane);
@@ -627,11 +645,12 @@ void ContactPipeline::prepare(double dt, const Vec3& gravity) {
       const Vec3 gravity_b = block.inverse_mass_b[i] > 0.0f ? gravity : Vec3::Zero();
       acceleration[i] = float(normal.dot(gravity_b - gravity_a));
     }
-    prepare_lanes(block, exists, cold, acceleration);
+    prepare_lanes(block, rest, exists, cold, acceleration);
   }
 }
 
-void ContactPipeline::prepare_lanes(ContactBlock& c, const std::array<LaneMask, 4>& exists,
+void ContactPipeline::prepare_lanes(ContactBlock& c, ContactBlockRest& r,
+                                    const std::array<LaneMask, 4>& exists,
                                     const std::array<LaneMask, 4>& cold,
                                     Lane acceleration) const {
   // the rows, effective masses and approach speeds of a block's points, lane by lane
@@ -639,11 +658,12 @@ void ContactPipeline::prepare_lanes(ContactBlock& c, const std::array<LaneMask, 
   const Lane threshold = splat(float(-settings_.restitution_threshold));
   const LanePair pair(bodies_, c);
   const V3 n = load3(c.normal);
+  const BlockInertia m = inertia_of<false>(c, r);
   // 1 / (the velocity change along d at the anchors per unit impulse), 0 for an empty point
   auto effective_mass = [&](const V3& ra, const V3& rb, const V3& d, LaneMask point) {
     const V3 ja = cross(ra, d), jb = cross(rb, d);
-    const Lane k = c.inverse_mass_a + c.inverse_mass_b + dot(ja, times(c.inverse_inertia_a, ja)) +
-                   dot(jb, times(c.inverse_inertia_b, jb));
+    const Lane k = c.inverse_mass_a + c.inverse_mass_b + dot(ja, times(m.a, ja)) +
+                   dot(jb, times(m.b, jb));
     const LaneMask valid = point & (k > zero);
     return simd::select(valid, splat(1.0f) / simd::select(valid, k, splat(1.0f)), zero);
   };
@@ -672,28 +692,29 @@ void ContactPipeline::prepare_lanes(ContactBlock& c, const std::array<LaneMask, 
   c.tangent_mass[0] = effective_mass(centre_a, centre_b, load3(c.tangent[0]), any);
   c.tangent_mass[1] = effective_mass(centre_a, centre_b, load3(c.tangent[1]), any);
   {
-    const Lane k = dot(n, times(c.inverse_inertia_a, n)) + dot(n, times(c.inverse_inertia_b, n));
+    const Lane k = dot(n, times(m.a, n)) + dot(n, times(m.b, n));
     const LaneMask valid = any & (k > zero);
     c.twist_mass = simd::select(valid, splat(1.0f) / simd::select(valid, k, splat(1.0f)), zero);
   }
   for (int j = 0; j < 4; ++j) {
     ContactBlock::Point& p = c.points[j];
+    ContactBlockRest::Point& q = r.points[j];
     const V3 ra = load3(p.anchor_a), rb = load3(p.anchor_b);
-    const Lane separation = p.base_separation;
+    const Lane separation = q.base_separation;
     // the separation is tracked from here: s = base + n·(motion of b's anchor − a's)
-    p.base_separation = separation - dot(n, rb - ra);
+    q.base_separation = separation - dot(n, rb - ra);
     p.normal_mass = effective_mass(ra, rb, n, exists[j]);
     // a point still apart hits, if it hits this step, at the speed free flight gives it over the
     // gap: v² = v₀² − 2 a s₀ with a the relative acceleration gravity gives along n (the speed
     // the solve sees is one a speculative push has already slowed)
     const Lane approach = pair.normal_velocity(n, NormalRow(p, n));
-    p.starts_apart = exists[j] & (separation > zero);
+    q.starts_apart = exists[j] & (separation > zero);
     const Lane squared = approach * approach - splat(2.0f) * acceleration * separation;
-    p.approach_velocity = simd::select(p.starts_apart, zero - simd::sqrt(simd::max(squared, zero)),
+    q.approach_velocity = simd::select(q.starts_apart, zero - simd::sqrt(simd::max(squared, zero)),
                                        approach);
     // no warm start where it may push, or an approach fast enough to bounce: the manifold is
     // solved locally
-    fresh |= cold[j] | (exists[j] & (p.approach_velocity < threshold));
+    fresh |= cold[j] | (exists[j] & (q.approach_velocity < threshold));
   }
   c.fresh = fresh;
 }
@@ -717,18 +738,13 @@ void ContactPipeline::warm_start(bool first_substep) {
   for (std::ptrdiff_t i = 0; i < n; ++i)
     substep_start_[i] = {bodies_[i].linear_velocity, bodies_[i].angular_velocity,
                          masses_[i].inverse_mass > 0.0 ? 1.0f : 0.0f};
-  for_each_block([&](const ContactBlock& c, Prefetch& ahead) {
-    // the warm start reads 62 of a block's 97 lines (the bodies, the directions, the masses,
-    // the friction's centre and impulses, each point's anchors and normal impulse): only those
-    // of the next block are asked for, since at a large pyramid this pass waits on memory more
+  for_each_block([&](const ContactBlock& c, const ContactBlockRest& r, Prefetch& ahead) {
+    // the warm start reads 59 of a block's 69 lines (the bodies, the directions, the masses, the
+    // friction's centre and impulses, each point's anchors and normal impulse): only those of
+    // the next block are asked for, since at a large pyramid this pass waits on memory more
     // than it computes
     ahead.same(c, &c, offsetof(ContactBlock, friction));
-    ahead.same(c, &c.centre_a, 6 * sizeof(Lane));
-    ahead.same(c, &c.friction_impulse, 3 * sizeof(Lane));
-    for (const ContactBlock::Point& p : c.points) {
-      ahead.same(c, &p.anchor_a, 6 * sizeof(Lane));
-      ahead.same(c, &p.normal_impulse, sizeof(Lane));
-    }
+    for (const ContactBlock::Point& p : c.points) ahead.same(c, &p.anchor_a, 7 * sizeof(Lane));
     ahead.done();
     // a block without an impulse to apply (its contacts all carried none: the colouring packs
     // such contacts together) leaves the velocities as they are
@@ -739,11 +755,13 @@ void ContactPipeline::warm_start(bool first_substep) {
     if (!simd::any_of(any)) return;
     LanePair pair(bodies_, c);
     const V3 n = load3(c.normal), t0 = load3(c.tangent[0]), t1 = load3(c.tangent[1]);
+    // (the whole matrix even on an isotropic block: the same numbers, and the same round-off)
+    const BlockInertia m = inertia_of<false>(c, r);
     for (const ContactBlock::Point& p : c.points)
-      pair.apply(c, load3(p.anchor_a), load3(p.anchor_b), p.normal_impulse * n);
-    pair.apply(c, load3(c.centre_a), load3(c.centre_b),
+      pair.apply(c, m, load3(p.anchor_a), load3(p.anchor_b), p.normal_impulse * n);
+    pair.apply(c, m, load3(c.centre_a), load3(c.centre_b),
                c.friction_impulse[0] * t0 + c.friction_impulse[1] * t1);
-    pair.apply_twist(c, n, c.twist_impulse);
+    pair.apply_twist(m, n, c.twist_impulse);
     pair.store(bodies_, c);
   });
 }
@@ -792,7 +810,8 @@ bool ContactPipeline::solve(double h, bool bias, bool backwards, double toleranc
   // a pass
   const bool refresh = separations_stale_;
   separations_stale_ = false;
-  auto solve_block = [&]<bool kIsotropic>(ContactBlock& c, Prefetch& ahead) {
+  auto solve_block = [&]<bool kIsotropic>(ContactBlock& c, ContactBlockRest& r, Prefetch& ahead) {
+    const BlockInertia m = inertia_of<kIsotropic>(c, r);
     LaneMask changed = zero != zero;
     bool wrote = false;  // whether any lane's velocities changed
     LanePair pair(bodies_, c);
@@ -800,7 +819,8 @@ bool ContactPipeline::solve(double h, bool bias, bool backwards, double toleranc
     ahead.ahead(16);
     if (refresh) {
       const NormalMotion motion(bodies_, c);
-      for (ContactBlock::Point& p : c.points) p.separation = motion.separation(p);
+      for (int j = 0; j < 4; ++j)
+        c.points[j].separation = motion.separation(c.points[j], r.points[j].base_separation);
     }
 
     // the approach speed restitution reverses, for points that started the step touching: each
@@ -808,14 +828,15 @@ bool ContactPipeline::solve(double h, bool bias, bool backwards, double toleranc
     // by one, the points after the first would see the first's push, and bounce unequally)
     // (a block where no lane bounces needs neither that speed nor the largest impulse, which
     // only restitution reads)
-    const LaneMask bounces = c.restitution > zero;
+    const LaneMask bounces = r.restitution > zero;
     const bool any_bounce = simd::any_of(bounces);
     if (any_bounce)
-      for (ContactBlock::Point& p : c.points) {
-        const LaneMask unread = (p.max_normal_impulse == zero) & ~p.starts_apart & bounces;
+      for (int j = 0; j < 4; ++j) {
+        ContactBlockRest::Point& q = r.points[j];
+        const LaneMask unread = (q.max_normal_impulse == zero) & ~q.starts_apart & bounces;
         if (simd::any_of(unread))
-          p.approach_velocity = simd::select(unread, pair.normal_velocity(n, NormalRow(p, n)),
-                                             p.approach_velocity);
+          q.approach_velocity = simd::select(
+              unread, pair.normal_velocity(n, NormalRow(c.points[j], n)), q.approach_velocity);
       }
     // non-penetration: the normal impulse accumulates and stays ≥ 0 (Catto GDC 2006). A
     // manifold with no warm start (a new contact, an impact) runs its points several times in a
@@ -824,7 +845,8 @@ bool ContactPipeline::solve(double h, bool bias, bool backwards, double toleranc
     const int rounds = simd::any_of(c.fresh) ? settings_.local_iterations : 1;
     for (int round = 0; round < rounds; ++round) {
       const LaneMask active = round == 0 ? LaneMask(zero == zero) : c.fresh;
-      for (ContactBlock::Point& p : c.points) {
+      for (int j = 0; j < 4; ++j) {
+        ContactBlock::Point& p = c.points[j];
         ahead.ahead(16);
         const Lane s = p.separation;
         const NormalRow row(p, n);
@@ -850,13 +872,14 @@ bool ContactPipeline::solve(double h, bool bias, bool backwards, double toleranc
             simd::select(active, simd::max(p.normal_impulse + impulse, zero), p.normal_impulse);
         const Lane applied = accumulated - p.normal_impulse;
         p.normal_impulse = accumulated;
-        if (any_bounce) p.max_normal_impulse = simd::max(p.max_normal_impulse, applied);
+        if (any_bounce)
+          r.points[j].max_normal_impulse = simd::max(r.points[j].max_normal_impulse, applied);
         changed |= simd::max(applied, zero - applied) > tolerance_lane * p.normal_mass;
         // a point that applies nothing in any lane leaves the velocities as they are: its
         // response is not computed
         const LaneMask pushes = applied != zero;
         if (simd::any_of(pushes)) {
-          pair.apply_normal<kIsotropic>(c, row, n, applied);
+          pair.apply_normal<kIsotropic>(c, m, row, n, applied);
           wrote = true;
         }
       }
@@ -893,13 +916,13 @@ bool ContactPipeline::solve(double h, bool bias, bool backwards, double toleranc
         }
         c.friction_impulse[0] = f0;
         c.friction_impulse[1] = f1;
-        pair.apply<kIsotropic>(c, ra, rb, (f0 - old0) * t0 + (f1 - old1) * t1);
+        pair.apply<kIsotropic>(c, m, ra, rb, (f0 - old0) * t0 + (f1 - old1) * t1);
         const Lane twist_limit = limit * c.twist_arm;
         const Lane twist = simd::max(
             simd::min(old_twist - c.twist_mass * dot(n, pair.wb - pair.wa), twist_limit),
             zero - twist_limit);
         c.twist_impulse = twist;
-        pair.apply_twist<kIsotropic>(c, n, twist - old_twist);
+        pair.apply_twist<kIsotropic>(m, n, twist - old_twist);
         wrote = true;
       }
     }
@@ -912,11 +935,11 @@ bool ContactPipeline::solve(double h, bool bias, bool backwards, double toleranc
   const ContactBlock* const first_block = lanes_->blocks.data();
   const std::uint8_t* const isotropic = lanes_->isotropic.data();
   for_each_block(
-      [&](ContactBlock& c, Prefetch& ahead) {
+      [&](ContactBlock& c, ContactBlockRest& r, Prefetch& ahead) {
         if (isotropic[&c - first_block])
-          solve_block.template operator()<true>(c, ahead);
+          solve_block.template operator()<true>(c, r, ahead);
         else
-          solve_block.template operator()<false>(c, ahead);
+          solve_block.template operator()<false>(c, r, ahead);
       },
       backwards);
   return !moved.load(std::memory_order_relaxed);
@@ -926,24 +949,27 @@ void ContactPipeline::restitution() {
   const Lane threshold = splat(float(-settings_.restitution_threshold));
   const Lane zero = splat(0.0f);
   for (int iteration = 0; iteration < settings_.restitution_iterations; ++iteration)
-    for_each_block([&](ContactBlock& c, Prefetch&) {
-      if (!simd::any_of(c.restitution > zero)) return;
+    for_each_block([&](ContactBlock& c, const ContactBlockRest& r, Prefetch&) {
+      if (!simd::any_of(r.restitution > zero)) return;
       LanePair pair(bodies_, c);
       const V3 n = load3(c.normal);
+      const BlockInertia m = inertia_of<false>(c, r);
       // each manifold's points several times in a row, as for a fresh contact in solve()
       for (int round = 0; round < settings_.local_iterations; ++round)
-        for (ContactBlock::Point& p : c.points) {
+        for (int j = 0; j < 4; ++j) {
+          ContactBlock::Point& p = c.points[j];
+          const ContactBlockRest::Point& q = r.points[j];
           // only points that pushed this step, and hit faster than the threshold: a resting
           // contact does not bounce
-          const LaneMask hit = (p.approach_velocity < threshold) &
-                               (p.max_normal_impulse > zero) & (c.restitution > zero);
+          const LaneMask hit = (q.approach_velocity < threshold) &
+                               (q.max_normal_impulse > zero) & (r.restitution > zero);
           if (!simd::any_of(hit)) continue;
           const NormalRow row(p, n);
           const Lane vn = pair.normal_velocity(n, row);
-          const Lane impulse = zero - p.normal_mass * (vn + c.restitution * p.approach_velocity);
+          const Lane impulse = zero - p.normal_mass * (vn + r.restitution * q.approach_velocity);
           const Lane accumulated =
               simd::select(hit, simd::max(p.normal_impulse + impulse, zero), p.normal_impulse);
-          pair.apply_normal(c, row, n, accumulated - p.normal_impulse);
+          pair.apply_normal(c, m, row, n, accumulated - p.normal_impulse);
           p.normal_impulse = accumulated;
         }
       pair.store(bodies_, c);
@@ -954,20 +980,22 @@ void ContactPipeline::store_impulses() {
   if (settings_.solver == ContactSolver::Seed || !lanes_) return;
   // each contact is one lane of one block: the blocks write disjoint contacts
   const std::vector<ContactBlock>& blocks = lanes_->blocks;
+  const std::vector<ContactBlockRest>& rest = lanes_->rest;
   const std::size_t block_count = blocks.size();
 #pragma omp parallel for num_threads(settings_.threads) schedule(static) if (block_count >= 64)
   for (std::size_t b = 0; b < block_count; ++b) {
     const ContactBlock& block = blocks[b];
+    const auto& contact = rest[b].contact;
     for (std::size_t i = 0; i < W; ++i) {
-      if (block.contact[i] == kNoContact) continue;
+      if (contact[i] == kNoContact) continue;
       // as in prepare(): the contact a few lanes on asked for now
       const std::uint32_t ahead = i + kContactsAhead < W
-                                      ? block.contact[i + kContactsAhead]
+                                      ? contact[i + kContactsAhead]
                                       : b + 1 < block_count
-                                            ? blocks[b + 1].contact[i + kContactsAhead - W]
+                                            ? rest[b + 1].contact[i + kContactsAhead - W]
                                             : kNoContact;
       if (ahead != kNoContact) simd::prefetch(&contacts_[ahead], sizeof(ContactConstraint));
-      ContactConstraint& c = contacts_[block.contact[i]];
+      ContactConstraint& c = contacts_[contact[i]];
       for (std::uint8_t j = 0; j < c.count; ++j)
         c.points[j].normal_impulse = block.points[j].normal_impulse[i];
       c.friction_impulse = {block.friction_impulse[0][i], block.friction_impulse[1][i]};

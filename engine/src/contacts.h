@@ -183,7 +183,8 @@ class ContactPipeline {
   template <class Kernel>
   void for_each_block(Kernel&& kernel, bool backwards = false);
   // a block's rows, effective masses, approach speeds and fresh lanes from its raw points
-  void prepare_lanes(ContactBlock& block, const std::array<LaneMask, 4>& exists,
+  void prepare_lanes(ContactBlock& block, ContactBlockRest& rest,
+                     const std::array<LaneMask, 4>& exists,
                      const std::array<LaneMask, 4>& cold, Lane acceleration) const;
   std::vector<std::uint32_t> colour_order_;  // contact indices, colour by colour
   std::vector<std::uint32_t> colour_start_;  // colour k: colour_order_[start[k], start[k + 1])
