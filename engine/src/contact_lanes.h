@@ -32,7 +32,6 @@ struct ContactBlock {
   Lane centre_a[3], centre_b[3];
   Lane friction_impulse[2], twist_impulse;
   Lane friction, tangent_mass[2], twist_mass, twist_arm;
-  Lane bias_rate, mass_scale, impulse_scale;  // the soft step's stiffness (Catto, b2MakeSoft)
   LaneMask fresh;  // a point without a warm start, or hitting: the manifold is solved locally
   struct Point {
     Lane anchor_a[3], anchor_b[3];  // the rows are computed from these as read
@@ -42,8 +41,9 @@ struct ContactBlock {
     Lane normal_mass;  // 1 / the velocity change per unit impulse (kg); 0 for an empty point
   } points[4];
 };
-// 69 floats a lane: 33 for the manifold, 9 for each of four points (276 bytes a manifold)
-static_assert(sizeof(ContactBlock) == 69 * sizeof(float) * kBlockLanes);
+// 66 floats a lane: 30 for the manifold, 9 for each of four points (264 bytes a manifold; the soft
+// step's stiffness is chosen in the solve, by whether a body is static)
+static_assert(sizeof(ContactBlock) == 66 * sizeof(float) * kBlockLanes);
 
 // the rest of a block: what the passes read only now and then (a substep's first separations,
 // a non-isotropic block's inertia, restitution), and what prepare() and store_impulses() read

@@ -504,18 +504,28 @@ void ContactPipeline::load_bodies(std::span<const BodyState> states,
   }
 }
 
-void ContactPipeline::prepare(double dt, const Vec3& gravity) {
-  const double h = settings_.solver == ContactSolver::SoftStep
-                       ? dt / std::max(1, settings_.substeps)
-                       : dt;
+// the soft step's contact stiffness for a solve of step h, as lanes: between two dynamic bodies,
+// and against a static one
+struct SoftLanes {
+  Lane bias_rate[2], mass_scale[2], impulse_scale[2];
+};
+SoftLanes soft_lanes(const ContactSettings& settings, double h) {
   // stiffer than a quarter of the solve's rate a soft contact is no longer stable (Box2D's cap);
   // a contact with a static body is twice as stiff, since only one body moves, within the same
   // cap (past it, a 10:1 stack on the ground jitters and walks 2 cm in 10 s)
   const double cap = 0.25 / h;
-  const Softness dynamic_soft =
-      make_soft(std::min(settings_.contact_hertz, cap), settings_.damping_ratio, h);
-  const Softness static_soft =
-      make_soft(std::min(2.0 * settings_.contact_hertz, cap), settings_.damping_ratio, h);
+  SoftLanes lanes;
+  for (int against_static = 0; against_static < 2; ++against_static) {
+    const Softness soft = make_soft(std::min((1 + against_static) * settings.contact_hertz, cap),
+                                    settings.damping_ratio, h);
+    lanes.bias_rate[against_static] = splat(float(soft.bias_rate));
+    lanes.mass_scale[against_static] = splat(float(soft.mass_scale));
+    lanes.impulse_scale[against_static] = splat(float(soft.impulse_scale));
+  }
+  return lanes;
+}
+
+void ContactPipeline::prepare(double /*dt*/, const Vec3& gravity) {
   colour_contacts();
   separations_stale_ = true;
   if (settings_.solver == ContactSolver::Seed) return;  // the seed reads the contacts themselves
@@ -627,16 +637,6 @@ void ContactPipeline::prepare(double dt, const Vec3& gravity) {
     for (int k = 0; k < 5; ++k) rest.inverse_inertia_b[k] = rows[2 + k];
     round &= isotropic(rows);
     lanes_->isotropic[bi] = simd::all_of(round);
-    // the soft step's stiffness: twice as stiff against a static body
-    const LaneMask against_static =
-        (block.inverse_mass_a == zero_lane) | (block.inverse_mass_b == zero_lane);
-    block.bias_rate = clear(simd::select(against_static, splat(float(static_soft.bias_rate)),
-                                         splat(float(dynamic_soft.bias_rate))));
-    block.mass_scale = clear(simd::select(against_static, splat(float(static_soft.mass_scale)),
-                                          splat(float(dynamic_soft.mass_scale))));
-    block.impulse_scale =
-        clear(simd::select(against_static, splat(float(static_soft.impulse_scale)),
-                           splat(float(dynamic_soft.impulse_scale))));
     for (std::size_t i = 0; first + i < last; ++i) {
       // the gravity along n that free flight closes a gap with (relative, b's less a's)
       const Vec3 normal(double(block.normal[0][i]), double(block.normal[1][i]),
@@ -803,6 +803,8 @@ bool ContactPipeline::solve(double h, bool bias, bool backwards, double toleranc
   // a point's normal velocity changes by applied / normal_mass: past the tolerance where
   // |applied| > tolerance · normal_mass (an empty point's mass is 0, and it applies nothing)
   const Lane tolerance_lane = splat(float(tolerance));
+  // the soft step's stiffness, chosen in each lane by whether a body is static (soft_lanes)
+  const SoftLanes stiffness = soft_lanes(settings_, h);
   std::atomic<bool> moved{false};
   // each point's separation from the bodies' motion, once after they moved (a substep's biased
   // solve and its relax passes read the same positions), stored in the block for the passes
@@ -855,10 +857,15 @@ bool ContactPipeline::solve(double h, bool bias, bool backwards, double toleranc
         // speculative: the bodies may close the gap in this step, no more
         Lane velocity_bias = s * inverse_h, mass_scale = one, impulse_scale = zero;
         if (bias && soft) {
+          const LaneMask against_static =
+              (c.inverse_mass_a == zero) | (c.inverse_mass_b == zero);
+          auto pick = [&](const Lane(&lanes)[2]) {
+            return simd::select(against_static, lanes[1], lanes[0]);
+          };
           velocity_bias = simd::select(apart, velocity_bias,
-                                       simd::max(c.bias_rate * s, zero - max_push));
-          mass_scale = simd::select(apart, one, c.mass_scale);
-          impulse_scale = simd::select(apart, zero, c.impulse_scale);
+                                       simd::max(pick(stiffness.bias_rate) * s, zero - max_push));
+          mass_scale = simd::select(apart, one, pick(stiffness.mass_scale));
+          impulse_scale = simd::select(apart, zero, pick(stiffness.impulse_scale));
         } else if (bias) {
           velocity_bias = simd::select(
               apart, velocity_bias, zero - baumgarte_rate * simd::max(zero - s - slop, zero));
