@@ -249,7 +249,7 @@ std::size_t contact_block_lanes() { return W; }
 namespace {
 // The next block's cache lines, asked for a few at a time while this one is solved: a pass
 // streams the blocks in order, and at a large pyramid they come from L3, whose latency the kernel
-// otherwise waits on (docs/solver.md, "Cost"). Asked for all at once, the 69 lines a block fill
+// otherwise waits on (docs/solver.md, "Cost"). Asked for all at once, the 66 lines a block fill
 // the core's line-fill buffers and the prefetches stall the kernel behind them.
 class Prefetch {
  public:
@@ -739,7 +739,7 @@ void ContactPipeline::warm_start(bool first_substep) {
     substep_start_[i] = {bodies_[i].linear_velocity, bodies_[i].angular_velocity,
                          masses_[i].inverse_mass > 0.0 ? 1.0f : 0.0f};
   for_each_block([&](const ContactBlock& c, const ContactBlockRest& r, Prefetch& ahead) {
-    // the warm start reads 59 of a block's 69 lines (the bodies, the directions, the masses, the
+    // the warm start reads 52 of a block's 66 lines (the bodies, the directions, the masses, the
     // friction's centre and impulses, each point's anchors and normal impulse): only those of
     // the next block are asked for, since at a large pyramid this pass waits on memory more
     // than it computes
