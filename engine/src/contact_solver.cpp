@@ -525,7 +525,7 @@ SoftLanes soft_lanes(const ContactSettings& settings, double h) {
   return lanes;
 }
 
-void ContactPipeline::prepare(double /*dt*/, const Vec3& gravity) {
+void ContactPipeline::prepare(const Vec3& gravity) {
   colour_contacts();
   separations_stale_ = true;
   if (settings_.solver == ContactSolver::Seed) return;  // the seed reads the contacts themselves

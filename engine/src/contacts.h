@@ -105,7 +105,9 @@ class ContactPipeline {
   void collide_pairs(std::span<const BodyState> states, double dt, const Vec3& gravity);
   // masses and velocities at the step's start
   void load_bodies(std::span<const BodyState> states, std::span<const BodyMass> masses);
-  void prepare(double dt, const Vec3& gravity);
+  // the solver's blocks, each contact in its colour's lanes (gravity gives a point still apart
+  // the speed it closes at)
+  void prepare(const Vec3& gravity);
   // the warm start: each contact's accumulated impulses applied to its bodies. On the first
   // substep of a step (and for a solver without substeps) by a pass over the contacts; on a later
   // one each body takes the velocity change its contacts gave it over the substep before, which

@@ -439,7 +439,7 @@ void World::step_with_contacts(double dt) {
   timed(profile_.bounds, [&] { contacts.update_bounds(states_, dt); });
   timed(profile_.broad_phase, [&] { contacts.find_pairs(); });
   timed(profile_.narrow_phase, [&] { contacts.collide_pairs(states_, dt, gravity_); });
-  timed(profile_.prepare, [&] { contacts.prepare(dt, gravity_); });
+  timed(profile_.prepare, [&] { contacts.prepare(gravity_); });
   switch (settings.solver) {
     case ContactSolver::SoftStep: {
       const double h = dt / settings.substeps;
