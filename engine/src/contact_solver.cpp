@@ -534,20 +534,25 @@ void ContactPipeline::prepare(const Vec3& gravity) {
   std::vector<ContactBlock>& blocks = lanes_->blocks;
   const std::size_t block_count = blocks.size();
   const Lane zero_lane = splat(0.0f);
-#pragma omp parallel for num_threads(settings_.threads) schedule(static) if (block_count >= 64)
-  for (std::size_t bi = 0; bi < block_count; ++bi) {
-    ContactBlock& block = blocks[bi];
-    ContactBlockRest& rest = lanes_->rest[bi];
-    block = ContactBlock{};
-    rest = ContactBlockRest{};
-    // the block's contacts: which colour, and where in it
+  // a block's contacts, [first, last) in colour_order_: which colour it is of, and where in it
+  // (W contacts a block, one in the overflow colour)
+  auto contacts_of = [&](std::size_t bi) {
     const int colour = int(std::upper_bound(block_start.begin(), block_start.end(),
                                             std::uint32_t(bi)) -
                            block_start.begin()) -
                        1;
     const std::size_t per_block = colour + 1 < kColours ? W : 1;
     const std::size_t first = colour_start_[colour] + (bi - block_start[colour]) * per_block;
-    const std::size_t last = std::min<std::size_t>(first + per_block, colour_start_[colour + 1]);
+    return std::pair{first,
+                     std::min<std::size_t>(first + per_block, colour_start_[colour + 1])};
+  };
+#pragma omp parallel for num_threads(settings_.threads) schedule(static) if (block_count >= 64)
+  for (std::size_t bi = 0; bi < block_count; ++bi) {
+    ContactBlock& block = blocks[bi];
+    ContactBlockRest& rest = lanes_->rest[bi];
+    block = ContactBlock{};
+    rest = ContactBlockRest{};
+    const auto [first, last] = contacts_of(bi);
     for (std::size_t i = 0; i < W; ++i) {
       block.body_a[i] = block.body_b[i] = at_rest;
       rest.contact[i] = kNoContact;
@@ -558,15 +563,7 @@ void ContactPipeline::prepare(const Vec3& gravity) {
     // the next block's contacts asked for now (a colour's contacts lie far apart in contacts_, a
     // 5,050-box pyramid's 3.4 MB), so that their lines arrive while this one is packed
     if (bi + 1 < block_count) {
-      const int next_colour = int(std::upper_bound(block_start.begin(), block_start.end(),
-                                                   std::uint32_t(bi + 1)) -
-                                  block_start.begin()) -
-                              1;
-      const std::size_t next_per_block = next_colour + 1 < kColours ? W : 1;
-      const std::size_t next_first =
-          colour_start_[next_colour] + (bi + 1 - block_start[next_colour]) * next_per_block;
-      const std::size_t next_last =
-          std::min<std::size_t>(next_first + next_per_block, colour_start_[next_colour + 1]);
+      const auto [next_first, next_last] = contacts_of(bi + 1);
       for (std::size_t k = next_first; k < next_last; ++k)
         simd::prefetch(&contacts_[colour_order_[k]], sizeof(ContactConstraint));
     }

@@ -52,7 +52,7 @@ struct SolverMass {
 // a point of a manifold as the narrow phase made it and the solver leaves it: what the next
 // step's match needs (the solver's own per-step numbers live in its lanes, contact_solver.cpp).
 // In single precision, as the solver reads them: the narrow phase measures in double and rounds
-// once here, and a contact is 248 bytes (four cache lines), which the narrow phase writes and the
+// once here, and a contact is 228 bytes (four cache lines), which the narrow phase writes and the
 // colouring, prepare() and store_impulses() walk every step
 struct ContactPointConstraint {
   Eigen::Vector3f anchor_a = Eigen::Vector3f::Zero(),  // the point from each centre of mass,
