@@ -66,6 +66,7 @@ void Pyramid(benchmark::State& state) {
   state.counters["contact_pairs"] = double(last.contact_pairs);
   state.counters["contact_points"] = double(last.contact_points);
   state.counters["reused_pairs"] = double(last.reused_pairs);
+  state.counters["reused_manifolds"] = double(last.reused_manifolds);
   state.counters["ms_per_step"] = 1e3 * total / double(steps);
   // the solve's passes over every point in a step: per substep one biased, and the relax passes
   // (as many as the step took: more while a pass still changes a velocity past the tolerance)

@@ -39,8 +39,9 @@ std::string base_variant(const std::string& variant) {
 
 // The contact variants: rtp's default soft step, Box2D v3's own soft-step settings (4 substeps,
 // 30 Hz, damping ratio 10, one relax pass, 3 m/s push-out), sequential impulses, and the seed's
-// lab 5; "soft-step-fresh" is the default with the pair cache off (every candidate through the
-// narrow phase every step); "-2t" runs the narrow phase and each colour of the solve on two threads
+// lab 5; "soft-step-fresh" is the default with the pair cache and the manifolds' reuse off (every
+// candidate through the narrow phase every step); "-2t" runs the narrow phase and each colour of
+// the solve on two threads
 std::optional<rtp::ContactSettings> contact_settings_for(const std::string& variant) {
   const std::string base = base_variant(variant);
   rtp::ContactSettings settings;
@@ -49,6 +50,7 @@ std::optional<rtp::ContactSettings> contact_settings_for(const std::string& vari
   } else if (base == "soft-step-fresh") {
     settings.solver = rtp::ContactSolver::SoftStep;
     settings.pair_cache_distance = 0.0;
+    settings.manifold_reuse_distance = 0.0;
   } else if (base == "soft-step-4") {
     settings.solver = rtp::ContactSolver::SoftStep;
     settings.substeps = 4;
@@ -250,6 +252,10 @@ EngineInfo rtp_engine_info() {
            c.pair_cache_distance > 0.0 ? number(c.pair_cache_distance) + " m" : "off",
            "a pair found apart is not tested again while neither shape has moved this far in "
            "the other's frame since"},
+          {"manifold reuse",
+           c.manifold_reuse_distance > 0.0 ? number(c.manifold_reuse_distance) + " m" : "off",
+           "a box pair's face contact is moved with the boxes, its depths measured again, not "
+           "computed, while neither box has moved this far in the other's frame since"},
       };
       if (c.solver != rtp::ContactSolver::Seed)
         table.push_back({"solver precision", "single, " + std::to_string(rtp::contact_block_lanes()) +

@@ -249,58 +249,109 @@ void ContactPipeline::collide_pairs(std::span<const BodyState> states, double dt
 #pragma omp parallel for num_threads(settings_.threads) schedule(static) if (states.size() >= 2048)
   for (std::size_t i = 0; i < states.size(); ++i)
     if (shapes_[i].kind != BodyShape::None) poses_[i] = pose_of(states[i]);
-  // each candidate's entry in last step's pair cache, which holds the pairs found apart (both
-  // lists sorted by key)
-  cache_index_.assign(n, ~std::uint32_t{0});
-  const bool cache = settings_.pair_cache_distance > 0.0;
-  if (cache)
-    for (std::size_t k = 0, j = 0; k < n && j < pair_cache_.size(); ++k) {
-      while (j < pair_cache_.size() && pair_cache_[j].key < candidates_[k]) ++j;
-      if (j < pair_cache_.size() && pair_cache_[j].key == candidates_[k])
-        cache_index_[k] = std::uint32_t(j);
-    }
-  // per candidate, a byte: what it was found to be (kept apart for the cache, where the threads
-  // write no more than that byte for a touching pair)
-  enum : std::uint8_t { kTouching, kFoundApart, kStillApart };
+  // each candidate's slot in the pair cache: last step's entry for the pair, or a free one for
+  // an entry made this step (both lists sorted by key); last step's pairs that are candidates no
+  // more free theirs
+  const bool cache_apart = settings_.pair_cache_distance > 0.0;
+  const bool cache_touching = settings_.manifold_reuse_distance > 0.0;
+  const bool cache = cache_apart || cache_touching;
+  enum : std::uint8_t { kTouching, kTouchingCached, kMoved, kFoundApart, kStillApart };
   outcome_.resize(n);
-  if (cache && found_apart_.size() < n) found_apart_.resize(n);
-  std::size_t reused = 0;
+  if (cache) {
+    candidate_slot_.resize(n);
+    has_entry_.assign(n, 0);
+    std::size_t j = 0;
+    for (std::size_t k = 0; k < n; ++k) {
+      for (; j < cache_slots_.size() && cache_slots_[j].key < candidates_[k]; ++j)
+        free_slots_.push_back(cache_slots_[j].slot);
+      if (j < cache_slots_.size() && cache_slots_[j].key == candidates_[k]) {
+        candidate_slot_[k] = cache_slots_[j++].slot;
+        has_entry_[k] = 1;
+      } else if (!free_slots_.empty()) {
+        candidate_slot_[k] = free_slots_.back();
+        free_slots_.pop_back();
+      } else {
+        candidate_slot_[k] = std::uint32_t(cache_pool_.size());
+        cache_pool_.emplace_back();
+      }
+    }
+    for (; j < cache_slots_.size(); ++j) free_slots_.push_back(cache_slots_[j].slot);
+  }
+  std::size_t reused = 0, moved = 0;
+  constexpr std::size_t kCacheAhead = 4;
 #pragma omp parallel for num_threads(settings_.threads) schedule(dynamic, 64) \
-    if (n >= 1024) reduction(+ : reused)
+    if (n >= 1024) reduction(+ : reused, moved)
   for (std::size_t k = 0; k < n; ++k) {
     const BodyId a = BodyId(candidates_[k] >> 32), b = BodyId(candidates_[k] & 0xffffffffu);
     Shape grown_a = shapes_[a].shape, grown_b = shapes_[b].shape;
     pair_growth_[k] = grow_pair(shapes_[a], shapes_[b], grown_a, grown_b);
-    const std::uint32_t entry = cache_index_[k];
-    if (cache && entry != ~std::uint32_t{0} &&
-        still_apart(pair_cache_[entry], a, b, pair_growth_[k])) {
-      manifolds_[k].count = 0;
-      outcome_[k] = kStillApart;
-      ++reused;
+    if (cache && k + kCacheAhead < n) {
+      // the entries are in no order the hardware prefetcher follows
+      const auto* ahead =
+          reinterpret_cast<const char*>(&cache_pool_[candidate_slot_[k + kCacheAhead]]);
+      for (std::size_t line = 0; line < sizeof(CachedPair); line += 64)
+        __builtin_prefetch(ahead + line);
+    }
+    if (cache && has_entry_[k]) {
+      // A pair grown since (a body sped up) spends the growth from the same distance
+      const CachedPair& cached = cache_pool_[candidate_slot_[k]];
+      const std::array<double, 2> motion = motion_since(cached, a, b);
+      const double grown = std::max(pair_growth_[k] - double(cached.growth), 0.0);
+      if (cached.count == 0 &&
+          std::min(motion[0], motion[1]) + grown <= settings_.pair_cache_distance) {
+        // the shapes are no closer than when found apart, less the cache distance
+        manifolds_[k].count = 0;
+        outcome_[k] = kStillApart;
+        ++reused;
+        continue;
+      }
+      if (cached.count != 0 &&
+          std::max(motion[0], motion[1]) + grown <= settings_.manifold_reuse_distance) {
+        move_manifold(cached, a, b, pair_growth_[k], manifolds_[k]);
+        outcome_[k] = kMoved;
+        ++moved;
+        continue;
+      }
+    }
+    Manifold& manifold = manifolds_[k];
+    if (!collide(hulls_, grown_a, poses_[a], grown_b, poses_[b], manifold)) manifold.count = 0;
+    if (manifold.count == 0) {
+      outcome_[k] = kFoundApart;
+      if (cache_apart)
+        cache_pool_[candidate_slot_[k]] = cache_pair(a, b, pair_growth_[k], nullptr);
       continue;
     }
-    if (!collide(hulls_, grown_a, poses_[a], grown_b, poses_[b], manifolds_[k]))
-      manifolds_[k].count = 0;
-    // only pairs found apart are cached: a touching pair moved with its bodies keeps points a
-    // sliding contact has left (a 1,275-box pyramid drifted 2.2 cm in 10 s with touching pairs
-    // reused within 1 mm, 0.9 cm without)
-    outcome_[k] = manifolds_[k].count != 0 ? kTouching : kFoundApart;
-    if (cache && outcome_[k] == kFoundApart) found_apart_[k] = cache_apart(a, b, pair_growth_[k]);
+    outcome_[k] = kTouching;
+    // a box pair's face contact (its normal a face's, its points on that face and the other
+    // box's surface); edge contacts and the other shapes are computed every step
+    bool movable = cache_touching && shapes_[a].kind == BodyShape::Box &&
+                   shapes_[b].kind == BodyShape::Box;
+    for (std::uint8_t j = 0; j < manifold.count && movable; ++j)
+      movable = manifold.points[j].feature.type != ContactType::EdgeEdge;
+    if (movable) {
+      cache_pool_[candidate_slot_[k]] = cache_pair(a, b, pair_growth_[k], &manifold);
+      outcome_[k] = kTouchingCached;
+    }
   }
   reused_ = reused;
+  moved_ = moved;
 
-  // the touching candidates in pair order, each to its place in contacts_; the pairs apart into
-  // the next step's cache, those still apart with the pose they were tested at, so that motion
-  // adds up
-  next_pair_cache_.clear();
+  // the touching candidates in pair order, each to its place in contacts_; the cached ones'
+  // slots kept for the next step (an entry kept holds the pose it was computed at, so that
+  // motion adds up), the others' freed
+  next_cache_slots_.clear();
   touching_.clear();
   for (std::size_t k = 0; k < n; ++k) {
-    if (outcome_[k] == kTouching) touching_.push_back(std::uint32_t(k));
-    else if (cache)
-      next_pair_cache_.push_back(outcome_[k] == kFoundApart ? found_apart_[k]
-                                                           : pair_cache_[cache_index_[k]]);
+    const std::uint8_t outcome = outcome_[k];
+    if (outcome <= kMoved) touching_.push_back(std::uint32_t(k));
+    if (!cache) continue;
+    if (outcome == kTouchingCached || outcome == kMoved || outcome == kStillApart ||
+        (outcome == kFoundApart && cache_apart))
+      next_cache_slots_.push_back({candidates_[k], candidate_slot_[k]});
+    else
+      free_slots_.push_back(candidate_slot_[k]);
   }
-  std::swap(pair_cache_, next_pair_cache_);
+  std::swap(cache_slots_, next_cache_slots_);
 
   // every contact built and matched with last step's on the threads (each writes its own; last
   // step's is found by key in its sorted list): the same contacts on any number of threads
@@ -445,37 +496,78 @@ std::size_t ContactPipeline::carry_impulses(const ContactConstraint& old,
   return matched;
 }
 
-ContactPipeline::CachedPair ContactPipeline::cache_apart(BodyId a, BodyId b,
-                                                         double growth) const {
+ContactPipeline::CachedPair ContactPipeline::cache_pair(BodyId a, BodyId b, double growth,
+                                                        const Manifold* manifold) const {
   const Pose& pa = poses_[a];
   const Pose& pb = poses_[b];
   CachedPair out;
-  out.key = pair_key(a, b);
-  out.offset_in_a = pa.rotation.transpose() * (pb.position - pa.position);
-  out.offset_in_b = pb.rotation.transpose() * (pa.position - pb.position);
-  out.relative_rotation = pa.rotation.transpose() * pb.rotation;
-  out.growth = growth;
+  out.offset_in_a = (pa.rotation.transpose() * (pb.position - pa.position)).cast<float>();
+  out.offset_in_b = (pb.rotation.transpose() * (pa.position - pb.position)).cast<float>();
+  out.relative_rotation = (pa.rotation.transpose() * pb.rotation).cast<float>();
+  out.growth = float(growth);
+  if (manifold == nullptr) return out;
+  // a face's normal turns with the body whose face it is; a point is the midpoint of the two
+  // surface points it joins, which are half its depth either side along the normal
+  out.count = manifold->count;
+  out.normal_on_b = manifold->points[0].feature.flipped != 0;
+  const Pose& holder = out.normal_on_b ? pb : pa;
+  out.normal = (holder.rotation.transpose() * manifold->normal).cast<float>();
+  for (std::uint8_t j = 0; j < manifold->count; ++j) {
+    const ContactPoint& p = manifold->points[j];
+    const Vec3 half = 0.5 * p.depth * manifold->normal;
+    out.points[j].on_a = (pa.rotation.transpose() * (p.point + half - pa.position)).cast<float>();
+    out.points[j].on_b = (pb.rotation.transpose() * (p.point - half - pb.position)).cast<float>();
+    out.points[j].feature = p.feature;
+  }
   return out;
 }
 
-bool ContactPipeline::still_apart(const CachedPair& cached, BodyId a, BodyId b,
-                                  double growth) const {
-  // How far b's shape has moved in a's frame since the pair was found apart: by the offset's
-  // change, and by the rotation's change at b's farthest surface point (‖ΔR‖₂ ≤ ‖ΔR‖_F); and a's
-  // in b's frame likewise. Either bound within the cache distance says the shapes are no closer
-  // than then, less that distance (a plane has no bound of its own: its side is the other's).
-  // A pair grown since (a body sped up) spends the growth from the same distance.
+std::array<double, 2> ContactPipeline::motion_since(const CachedPair& cached, BodyId a,
+                                                    BodyId b) const {
+  // How far b's shape has moved in a's frame since the entry was made: by the offset's change,
+  // and by the rotation's change at b's farthest surface point (‖ΔR‖₂ ≤ ‖ΔR‖_F); and a's in b's
+  // frame likewise (a plane has no bound of its own: its side is the other's)
   const Pose& pa = poses_[a];
   const Pose& pb = poses_[b];
-  const double turned = (pa.rotation.transpose() * pb.rotation - cached.relative_rotation).norm();
-  const double moved_b =
-      (pa.rotation.transpose() * (pb.position - pa.position) - cached.offset_in_a).norm() +
-      turned * shapes_[b].reach;
-  const double moved_a =
-      (pb.rotation.transpose() * (pa.position - pb.position) - cached.offset_in_b).norm() +
-      turned * shapes_[a].reach;
-  return std::min(moved_a, moved_b) + std::max(growth - cached.growth, 0.0) <=
-         settings_.pair_cache_distance;
+  const double turned =
+      (pa.rotation.transpose() * pb.rotation - cached.relative_rotation.cast<double>()).norm();
+  const double moved_b = (pa.rotation.transpose() * (pb.position - pa.position) -
+                          cached.offset_in_a.cast<double>())
+                             .norm() +
+                         turned * shapes_[b].reach;
+  const double moved_a = (pb.rotation.transpose() * (pa.position - pb.position) -
+                          cached.offset_in_b.cast<double>())
+                             .norm() +
+                         turned * shapes_[a].reach;
+  return {moved_a, moved_b};
+}
+
+void ContactPipeline::move_manifold(const CachedPair& cached, BodyId a, BodyId b, double growth,
+                                    Manifold& out) const {
+  // Each point's two surface points go with their bodies, and its depth is measured between
+  // them along the normal, which goes with its face. A face's point that is a corner of the
+  // other box (most of a resting pair's) keeps its exact depth however the boxes slide: the
+  // face point stays in the face's plane. A point where an edge crosses the face's side is off
+  // by the relative motion, which the reuse distance bounds. The depth is of the shapes grown as
+  // when computed; the pair's growth since shifts it, so the separation the contact takes is
+  // the geometry's own
+  const Pose& pa = poses_[a];
+  const Pose& pb = poses_[b];
+  const Pose& holder = cached.normal_on_b ? pb : pa;
+  out.normal = (holder.rotation * cached.normal.cast<double>()).normalized();
+  out.count = cached.count;
+  double deepest = -std::numeric_limits<double>::infinity();
+  for (std::uint8_t j = 0; j < cached.count; ++j) {
+    const Vec3 on_a = pa.position + pa.rotation * cached.points[j].on_a.cast<double>();
+    const Vec3 on_b = pb.position + pb.rotation * cached.points[j].on_b.cast<double>();
+    ContactPoint& p = out.points[j];
+    p.point = 0.5 * (on_a + on_b);
+    p.depth = out.normal.dot(on_a - on_b) + (growth - double(cached.growth));
+    p.feature = cached.points[j].feature;
+    deepest = std::max(deepest, p.depth);
+  }
+  out.depth = deepest;
+  out.axes_tested = 0;
 }
 
 double ContactPipeline::grow_pair(const BodyShapeData& a, const BodyShapeData& b, Shape& grown_a,

@@ -146,6 +146,7 @@ class ContactPipeline {
   double deepest_penetration() const;
   std::size_t matched_points() const { return matched_; }
   std::size_t reused_pairs() const { return reused_; }
+  std::size_t reused_manifolds() const { return moved_; }
 
  private:
   struct BodyShapeData;
@@ -197,25 +198,54 @@ class ContactPipeline {
   std::vector<std::uint32_t> colour_scratch_order_;  // the contacts by colour, in pair order
   // the narrow phase's results per candidate, filled in parallel
   std::vector<Manifold> manifolds_;
-  // the pair cache (as Jolt's body pair cache, for pairs found apart): each candidate's result
-  // with the two bodies' relative pose when it was computed; while neither body's shape has
-  // moved more than ContactSettings::pair_cache_distance in the other's frame since, a pair
-  // found apart is taken to be apart still instead of tested again (docs/solver.md)
+  // the pair cache (as Jolt's body pair cache): each candidate's result with the two bodies'
+  // relative pose when it was computed. While neither body's shape has moved more than
+  // ContactSettings::pair_cache_distance in the other's frame since, a pair found apart is taken
+  // to be apart still instead of tested again; while they have moved less than
+  // ContactSettings::manifold_reuse_distance, a box pair found touching keeps its manifold, its
+  // points carried with the bodies and their depths measured again (docs/solver.md)
+  // (In single precision, 208 bytes: a part in 10⁷ of a metre is far inside either distance,
+  // and the narrow phase walks 15,000 of them a step at base 100)
   struct CachedPair {
-    std::uint64_t key = ~std::uint64_t{0};
-    Vec3 offset_in_a = Vec3::Zero(), offset_in_b = Vec3::Zero();  // Raᵀ(xb − xa), Rbᵀ(xa − xb)
-    Mat3 relative_rotation = Mat3::Identity();                    // Raᵀ Rb
-    double growth = 0.0;  // the pair's growth then (m)
+    // Raᵀ(xb − xa), Rbᵀ(xa − xb) and Raᵀ Rb when the entry was made; the pair's growth then (m)
+    Eigen::Vector3f offset_in_a = Eigen::Vector3f::Zero(), offset_in_b = Eigen::Vector3f::Zero();
+    Eigen::Matrix3f relative_rotation = Eigen::Matrix3f::Identity();
+    float growth = 0.0f;
+    // a touching pair's manifold in the bodies' frames (count 0: a pair found apart): the
+    // normal in the frame of the body whose face it is, each point as the two surface points
+    // it joins, each in its own body's frame
+    std::uint8_t count = 0;
+    bool normal_on_b = false;
+    Eigen::Vector3f normal = Eigen::Vector3f::Zero();
+    struct Point {
+      Eigen::Vector3f on_a = Eigen::Vector3f::Zero(), on_b = Eigen::Vector3f::Zero();
+      ContactFeature feature;
+    };
+    std::array<Point, 4> points;
   };
-  bool still_apart(const CachedPair& cached, BodyId a, BodyId b, double growth) const;
-  CachedPair cache_apart(BodyId a, BodyId b, double growth) const;
-  // the pairs found apart, sorted by key (a touching pair is always computed again)
-  std::vector<CachedPair> pair_cache_, next_pair_cache_;
-  std::vector<CachedPair> found_apart_;  // per candidate, written where it was found apart
-  std::vector<std::uint8_t> outcome_;    // per candidate: touching, found apart, still apart
+  static_assert(sizeof(CachedPair) == 208);
+  // how far each body's shape has moved in the other's frame since the entry's pose (m)
+  std::array<double, 2> motion_since(const CachedPair& cached, BodyId a, BodyId b) const;
+  // the pair's pose now; with the manifold in the bodies' frames if one is given
+  CachedPair cache_pair(BodyId a, BodyId b, double growth, const Manifold* manifold) const;
+  // a cached manifold at the bodies' poses now, its depths for the pair's growth now
+  void move_manifold(const CachedPair& cached, BodyId a, BodyId b, double growth,
+                     Manifold& out) const;
+  // the entries, each in a slot that keeps it from step to step (an entry recomputed is
+  // written over its old self, one kept is not copied); the slots of last step's entries by
+  // pair, sorted by key; the slots free
+  std::vector<CachedPair> cache_pool_;
+  struct CacheSlot {
+    std::uint64_t key;
+    std::uint32_t slot;
+  };
+  std::vector<CacheSlot> cache_slots_, next_cache_slots_;
+  std::vector<std::uint32_t> free_slots_;
+  std::vector<std::uint32_t> candidate_slot_;  // per candidate: its slot this step
+  std::vector<std::uint8_t> has_entry_;        // per candidate: 1 if its slot holds last step's
+  std::vector<std::uint8_t> outcome_;  // per candidate: touching, found apart, still apart...
   std::vector<std::uint32_t> touching_;     // the candidates whose manifold has points
-  std::vector<std::uint32_t> cache_index_;  // per candidate: its entry in pair_cache_, or ~0
-  std::size_t reused_ = 0;
+  std::size_t reused_ = 0, moved_ = 0;
   std::vector<Pose> poses_;  // per body, this step
   std::vector<double> pair_growth_;
   std::vector<SolverBody> bodies_;  // per body, and one at rest past the last, for empty lanes

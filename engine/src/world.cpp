@@ -499,6 +499,7 @@ void World::step_with_contacts(double dt) {
   profile_.contact_points = contacts.point_count();
   profile_.matched_points = contacts.matched_points();
   profile_.reused_pairs = contacts.reused_pairs();
+  profile_.reused_manifolds = contacts.reused_manifolds();
   profile_.total = seconds_since(start);
 }
 

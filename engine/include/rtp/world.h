@@ -147,6 +147,11 @@ struct ContactSettings {
   double pair_cache_distance = 1e-3;  // m: a pair found apart is not tested again while
                                       // neither shape has moved more than this in the other's
                                       // frame since (0: off)
+  double manifold_reuse_distance = 1e-4;  // m: a box pair found touching keeps its manifold, its
+                                         // points moved with the bodies and their separations
+                                         // measured again, while neither box has moved more
+                                         // than this in the other's frame since it was
+                                         // computed (0: every touching pair tested each step)
   int threads = 1;  // the narrow phase and each colour of the solve (identical results at any
                     // count: a colour's contacts share no dynamic body)
 };
@@ -173,6 +178,7 @@ struct StepProfile {
   std::size_t contact_points = 0;
   std::size_t matched_points = 0;  // points that carried last step's impulses
   std::size_t reused_pairs = 0;    // candidate pairs the pair cache found still apart
+  std::size_t reused_manifolds = 0;  // touching pairs whose manifold was moved, not computed
   std::size_t swept_stops = 0;     // fast bodies the continuous stage stopped short
   std::size_t relax_passes = 0;    // relax solves this step, over its substeps
 
