@@ -303,8 +303,6 @@ static_assert(offsetof(ContactPointConstraint, anchor_b) == 12 &&
 static_assert((kNormalFloat + 16) * sizeof(float) <= sizeof(ContactConstraint) &&
               kPointFloat + 3 * kPointFloats + 8 <= kContactFloats);
 
-// how many contacts ahead prepare() and store_impulses() ask for a contact's lines
-constexpr std::size_t kContactsAhead = 4;
 // a colour's blocks go to threads only past this many contacts: below it the barrier costs more
 constexpr std::size_t kParallelColour = 256;
 
@@ -981,7 +979,18 @@ void ContactPipeline::restitution() {
 }
 
 void ContactPipeline::store_impulses() {
-  if (settings_.solver == ContactSolver::Seed || !lanes_) return;
+  impulses_.resize(contacts_.size());
+  if (settings_.solver == ContactSolver::Seed) {  // the seed solves the contacts themselves
+    for (std::size_t i = 0; i < contacts_.size(); ++i) {
+      const ContactConstraint& c = contacts_[i];
+      StoredImpulses& stored = impulses_[i];
+      for (std::uint8_t j = 0; j < c.count; ++j) stored.normal[j] = c.points[j].normal_impulse;
+      stored.friction = c.friction_impulse;
+      stored.twist = c.twist_impulse;
+    }
+    return;
+  }
+  if (!lanes_) return;
   // each contact is one lane of one block: the blocks write disjoint contacts
   const std::vector<ContactBlock>& blocks = lanes_->blocks;
   const std::vector<ContactBlockRest>& rest = lanes_->rest;
@@ -992,18 +1001,10 @@ void ContactPipeline::store_impulses() {
     const auto& contact = rest[b].contact;
     for (std::size_t i = 0; i < W; ++i) {
       if (contact[i] == kNoContact) continue;
-      // as in prepare(): the contact a few lanes on asked for now
-      const std::uint32_t ahead = i + kContactsAhead < W
-                                      ? contact[i + kContactsAhead]
-                                      : b + 1 < block_count
-                                            ? rest[b + 1].contact[i + kContactsAhead - W]
-                                            : kNoContact;
-      if (ahead != kNoContact) simd::prefetch(&contacts_[ahead], sizeof(ContactConstraint));
-      ContactConstraint& c = contacts_[contact[i]];
-      for (std::uint8_t j = 0; j < c.count; ++j)
-        c.points[j].normal_impulse = block.points[j].normal_impulse[i];
-      c.friction_impulse = {block.friction_impulse[0][i], block.friction_impulse[1][i]};
-      c.twist_impulse = block.twist_impulse[i];
+      StoredImpulses& stored = impulses_[contact[i]];
+      for (int j = 0; j < 4; ++j) stored.normal[j] = block.points[j].normal_impulse[i];
+      stored.friction = {block.friction_impulse[0][i], block.friction_impulse[1][i]};
+      stored.twist = block.twist_impulse[i];
     }
   }
 }

@@ -356,6 +356,7 @@ void ContactPipeline::collide_pairs(std::span<const BodyState> states, double dt
   // every contact built and matched with last step's on the threads (each writes its own; last
   // step's is found by key in its sorted list): the same contacts on any number of threads
   std::swap(contacts_, previous_);
+  std::swap(impulses_, previous_impulses_);
   std::swap(contact_keys_, previous_keys_);
   const std::size_t m = touching_.size();
   contacts_.resize(m);
@@ -408,7 +409,7 @@ void ContactPipeline::collide_pairs(std::span<const BodyState> states, double dt
       // then which points start cold
       while (old < previous_keys_.size() && previous_keys_[old] < c.key()) ++old;
       if (settings_.warm_start && old < previous_keys_.size() && previous_keys_[old] == c.key())
-        matched += carry_impulses(previous_[old], c);
+        matched += carry_impulses(previous_[old], previous_impulses_[old], c);
       c.cold = cold_points(c, dt, gravity);
       bool quiet = c.cold == 0 && c.friction_impulse[0] == 0.0f &&
                    c.friction_impulse[1] == 0.0f && c.twist_impulse == 0.0f;
@@ -452,6 +453,7 @@ std::uint8_t ContactPipeline::cold_points(const ContactConstraint& c, double dt,
 }
 
 std::size_t ContactPipeline::carry_impulses(const ContactConstraint& old,
+                                            const StoredImpulses& impulses,
                                             ContactConstraint& c) const {
   // each point takes the impulses of last step's point with the same features; failing that, of
   // the nearest unclaimed one within the match distance. Two equal boxes stacked face to face
@@ -483,16 +485,16 @@ std::size_t ContactPipeline::carry_impulses(const ContactConstraint& old,
   for (std::uint8_t i = 0; i < c.count; ++i) {
     if (source[i] < 0) continue;
     ++matched;
-    c.points[i].normal_impulse = old.points[source[i]].normal_impulse;
+    c.points[i].normal_impulse = impulses.normal[source[i]];
   }
   if (matched == 0) return 0;
   // the manifold's friction impulse as a world vector, onto this step's basis (the normal turns
   // a little between steps, and the basis with it), and its twist
-  const Vec3 friction = double(old.friction_impulse[0]) * old.tangent[0].cast<double>() +
-                        double(old.friction_impulse[1]) * old.tangent[1].cast<double>();
+  const Vec3 friction = double(impulses.friction[0]) * old.tangent[0].cast<double>() +
+                        double(impulses.friction[1]) * old.tangent[1].cast<double>();
   c.friction_impulse[0] = float(friction.dot(c.tangent[0].cast<double>()));
   c.friction_impulse[1] = float(friction.dot(c.tangent[1].cast<double>()));
-  c.twist_impulse = old.twist_impulse;
+  c.twist_impulse = impulses.twist;
   return matched;
 }
 

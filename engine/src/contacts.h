@@ -152,8 +152,17 @@ class ContactPipeline {
   struct BodyShapeData;
   // ContactConstraint::cold for c, its impulses carried; velocities from load_bodies
   std::uint8_t cold_points(const ContactConstraint& c, double dt, const Vec3& gravity) const;
-  // the number of c's points that took an old point's impulses
-  std::size_t carry_impulses(const ContactConstraint& old, ContactConstraint& c) const;
+  // each contact's accumulated impulses as the step's solve left them, by its index in contacts_
+  // (store_impulses(); 28 bytes a contact, 420 KB at base 100, where writing them into the
+  // contacts touched 3.4 MB at random)
+  struct StoredImpulses {
+    std::array<float, 4> normal{};    // a point's (N s)
+    std::array<float, 2> friction{};  // along the contact's tangents (N s)
+    float twist = 0.0f;               // about its normal (N m s)
+  };
+  // the number of c's points that took an old point's impulses (old's stored)
+  std::size_t carry_impulses(const ContactConstraint& old, const StoredImpulses& impulses,
+                             ContactConstraint& c) const;
   // the two shapes of a pair grown by the bodies' growth this step; returns the total (m)
   double grow_pair(const BodyShapeData& a, const BodyShapeData& b, Shape& grown_a,
                    Shape& grown_b) const;
@@ -176,6 +185,7 @@ class ContactPipeline {
   std::vector<FastBody> fast_;  // this step's bodies that move beyond their bounds' growth
   std::vector<std::uint64_t> candidates_;  // pair keys, sorted
   std::vector<ContactConstraint> contacts_, previous_;
+  std::vector<StoredImpulses> impulses_, previous_impulses_;  // contacts_' and previous_'s
   std::vector<std::uint64_t> contact_keys_, previous_keys_;  // each contact's key(), in order
   // contacts by colour (graph colouring, as Box2D v3's constraint graph): no two contacts of a
   // colour share a dynamic body, so a colour's contacts are solved at once, on any number of
