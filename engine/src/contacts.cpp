@@ -283,8 +283,7 @@ void ContactPipeline::collide_pairs(std::span<const BodyState> states, double dt
     if (n >= 1024) reduction(+ : reused, moved)
   for (std::size_t k = 0; k < n; ++k) {
     const BodyId a = BodyId(candidates_[k] >> 32), b = BodyId(candidates_[k] & 0xffffffffu);
-    Shape grown_a = shapes_[a].shape, grown_b = shapes_[b].shape;
-    pair_growth_[k] = grow_pair(shapes_[a], shapes_[b], grown_a, grown_b);
+    pair_growth_[k] = pair_growth(shapes_[a], shapes_[b]);
     if (cache && k + kCacheAhead < n) {
       // the entries are in no order the hardware prefetcher follows
       const auto* ahead =
@@ -313,6 +312,8 @@ void ContactPipeline::collide_pairs(std::span<const BodyState> states, double dt
         continue;
       }
     }
+    Shape grown_a = shapes_[a].shape, grown_b = shapes_[b].shape;
+    grow_pair(shapes_[a], shapes_[b], grown_a, grown_b);
     Manifold& manifold = manifolds_[k];
     if (!collide(hulls_, grown_a, poses_[a], grown_b, poses_[b], manifold)) manifold.count = 0;
     if (manifold.count == 0) {
@@ -576,8 +577,15 @@ void ContactPipeline::move_manifold(const CachedPair& cached, BodyId a, BodyId b
   out.axes_tested = 0;
 }
 
-double ContactPipeline::grow_pair(const BodyShapeData& a, const BodyShapeData& b, Shape& grown_a,
-                                  Shape& grown_b) const {
+double ContactPipeline::pair_growth(const BodyShapeData& a, const BodyShapeData& b) const {
+  // a pair with a hull keeps the fixed growth (grow_pair)
+  if (a.kind == BodyShape::Hull || b.kind == BodyShape::Hull)
+    return settings_.speculative_distance;
+  return a.growth + b.growth;
+}
+
+void ContactPipeline::grow_pair(const BodyShapeData& a, const BodyShapeData& b, Shape& grown_a,
+                                Shape& grown_b) const {
   // Both shapes hold the fixed growth already. The growth beyond it goes where the collision
   // function reads a size: to a sphere's radius or a plane's offset (the other shape's share
   // too), or to each of two boxes' half extents (the box path reads those, the hull paths the
@@ -589,7 +597,7 @@ double ContactPipeline::grow_pair(const BodyShapeData& a, const BodyShapeData& b
     else if (kind == BodyShape::Plane) shape.plane_offset += extra;
     else shape.half_extents.array() += extra;
   };
-  if (a.kind == BodyShape::Hull || b.kind == BodyShape::Hull) return 2.0 * fixed;
+  if (a.kind == BodyShape::Hull || b.kind == BodyShape::Hull) return;
   if (a.kind == BodyShape::Box && b.kind == BodyShape::Box) {
     widen(a.kind, grown_a, extra_a);
     widen(b.kind, grown_b, extra_b);
@@ -598,7 +606,6 @@ double ContactPipeline::grow_pair(const BodyShapeData& a, const BodyShapeData& b
   } else {
     widen(b.kind, grown_b, extra_a + extra_b);
   }
-  return a.growth + b.growth;
 }
 
 std::size_t ContactPipeline::sweep_fast_bodies(std::span<BodyState> states) {

@@ -163,9 +163,10 @@ class ContactPipeline {
   // the number of c's points that took an old point's impulses (old's stored)
   std::size_t carry_impulses(const ContactConstraint& old, const StoredImpulses& impulses,
                              ContactConstraint& c) const;
-  // the two shapes of a pair grown by the bodies' growth this step; returns the total (m)
-  double grow_pair(const BodyShapeData& a, const BodyShapeData& b, Shape& grown_a,
-                   Shape& grown_b) const;
+  // a pair's growth this step, the two bodies' together (m); and the two shapes grown by it
+  double pair_growth(const BodyShapeData& a, const BodyShapeData& b) const;
+  void grow_pair(const BodyShapeData& a, const BodyShapeData& b, Shape& grown_a,
+                 Shape& grown_b) const;
   const ContactSettings settings_;
   std::vector<BodyShapeData> shapes_;  // per body
   std::vector<ConvexHull> hulls_;      // the grown hulls: the pool Shape::hull indexes
