@@ -331,14 +331,10 @@ int team_index() {
 // colours beyond the 63rd are one last group, solved one contact a block, in order
 constexpr int kColours = 64;
 
-void ContactPipeline::colour_contacts() {
+void ContactPipeline::colour_greedily() {
   // greedy, in pair order: each contact takes the first colour neither dynamic body holds
   body_colours_.assign(bodies_.size(), 0);
   std::array<std::uint32_t, kColours + 1> counts{};
-  // each contact's colour, and its class (contact_class_) in the top bits; read from the keys
-  // and the classes alone, not the contacts (a 5,050-box pyramid's are 3.4 MB)
-  constexpr std::uint8_t kCold = kColdContact, kQuiet = kQuietContact;
-  static_assert(kColours <= kQuiet && (kCold & kQuiet) == 0);
   std::vector<std::uint8_t>& colour_of = colour_scratch_;
   colour_of.resize(contacts_.size());
   for (std::size_t i = 0; i < contacts_.size(); ++i) {
@@ -358,6 +354,31 @@ void ContactPipeline::colour_contacts() {
   }
   colour_start_.assign(counts.begin(), counts.end());
   for (int k = 0; k < kColours; ++k) colour_start_[k + 1] += colour_start_[k];
+  // each colour's contacts in pair order
+  std::vector<std::uint32_t>& by_colour = colour_scratch_order_;
+  by_colour.resize(contacts_.size());
+  std::array<std::uint32_t, kColours> next{};
+  for (int k = 0; k < kColours; ++k) next[k] = colour_start_[k];
+  for (std::size_t i = 0; i < contacts_.size(); ++i)
+    by_colour[next[colour_of[i] & ~(kColdContact | kQuietContact)]++] = std::uint32_t(i);
+}
+
+void ContactPipeline::colour_contacts() {
+  // each contact's colour, and its class (contact_class_) in the top bits; read from the keys
+  // and the classes alone, not the contacts (a 5,050-box pyramid's are 3.4 MB)
+  constexpr std::uint8_t kCold = kColdContact, kQuiet = kQuietContact;
+  static_assert(kColours <= kQuiet && (kCold & kQuiet) == 0);
+  constexpr std::uint8_t kClass = kCold | kQuiet;
+  std::vector<std::uint8_t>& colour_of = colour_scratch_;
+  if (lanes_ && contact_keys_ == coloured_keys_) {
+    // the same touching pairs as the last colouring's (a resting scene's every step) take the
+    // same colours: only the classes are new
+    for (std::size_t i = 0; i < contacts_.size(); ++i)
+      colour_of[i] = std::uint8_t((colour_of[i] & ~kClass) | contact_class_[i]);
+  } else {
+    coloured_keys_ = contact_keys_;
+    colour_greedily();
+  }
   // within a colour, the cold contacts (a point that may push with no warm start) first: a block
   // holding one solves its points several times in a row (solve()), and spread by pair order
   // they put one in most blocks. The quiet ones last: a block of them alone has no warm start
@@ -368,14 +389,8 @@ void ContactPipeline::colour_contacts() {
   // threads took 10 % longer a step at base 100). A colour's contacts share no dynamic body, so
   // their order in it, and which block each lands in, changes no result
   // (each colour in pair order first, then each share packed from there into colour_order_)
-  constexpr std::uint8_t kClass = kCold | kQuiet;
-  std::vector<std::uint32_t>& by_colour = colour_scratch_order_;
-  by_colour.resize(contacts_.size());
+  const std::vector<std::uint32_t>& by_colour = colour_scratch_order_;
   colour_order_.resize(contacts_.size());
-  std::array<std::uint32_t, kColours> next{};
-  for (int k = 0; k < kColours; ++k) next[k] = colour_start_[k];
-  for (std::size_t i = 0; i < contacts_.size(); ++i)
-    by_colour[next[colour_of[i] & ~kClass]++] = std::uint32_t(i);
   const int threads = std::max(1, settings_.threads);
   for (int k = 0; k < kColours; ++k) {
     const std::size_t first = colour_start_[k], n = colour_start_[k + 1] - first;

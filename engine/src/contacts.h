@@ -192,6 +192,10 @@ class ContactPipeline {
   // colour share a dynamic body, so a colour's contacts are solved at once, on any number of
   // threads, with the same result as on one; every solve visits contacts in this order
   void colour_contacts();
+  // each contact's colour in colour_scratch_ (its class in the top bits), each colour's
+  // contacts from colour_start_, and each colour's contacts in pair order in
+  // colour_scratch_order_, greedily in pair order
+  void colour_greedily();
   // a kernel on every block of lanes_, colour by colour, each colour's blocks on the threads
   // backwards: the colours in reverse order (the soft step alternates, docs/solver.md)
   template <class Kernel>
@@ -206,6 +210,8 @@ class ContactPipeline {
   // each contact's class for the colouring, set as it is built: kColdContact, kQuietContact or 0
   std::vector<std::uint8_t> contact_class_;
   std::vector<std::uint8_t> colour_scratch_;
+  // the keys the colours were last chosen for
+  std::vector<std::uint64_t> coloured_keys_;
   std::vector<std::uint32_t> colour_scratch_order_;  // the contacts by colour, in pair order
   // the narrow phase's results per candidate, filled in parallel
   std::vector<Manifold> manifolds_;
