@@ -18,7 +18,6 @@ struct ContactPipeline::BodyShapeData {
   bool is_static = false;
   double friction = 0.0, restitution = 0.0;
   ProxyId proxy = 0;
-  Aabb bounds;  // this step's, grown (not for planes)
   Vec3 plane_normal = Vec3::UnitY();  // a plane's, in the world, this step
   double plane_offset = 0.0;          // (m), grown by half the speculative distance
 };
@@ -123,12 +122,17 @@ void ContactPipeline::add_body(BodyId id, const ShapeDef& def, double friction,
     planes_.push_back(id);
   } else if (def.kind != BodyShape::None) {
     data.proxy = broad_phase_->add(Aabb{});
-    if (data.proxy >= proxy_body_.size()) proxy_body_.resize(data.proxy + 1);
+    if (data.proxy >= proxy_body_.size()) {
+      proxy_body_.resize(data.proxy + 1);
+      proxy_static_.resize(data.proxy + 1);
+    }
     proxy_body_[data.proxy] = id;
+    proxy_static_[data.proxy] = is_static;
     if (!is_static) dynamic_shaped_.push_back(id);
   }
   if (is_static && def.kind != BodyShape::None) static_shaped_.push_back(id);
   shapes_.push_back(data);
+  bounds_.emplace_back();
   bodies_.emplace_back();
   masses_.emplace_back();
 }
@@ -179,7 +183,7 @@ void ContactPipeline::update_bounds(std::span<const BodyState> states, double dt
         box = bounds_of_points(hull_of(data.shape, hulls_).vertices, s.position, s.orientation);
         break;
     }
-    data.bounds = box;
+    bounds_[i] = box;
     broad_phase_->move(data.proxy, box);
   }
   fast_.clear();
@@ -193,7 +197,7 @@ void ContactPipeline::find_pairs() {
   candidates_.clear();
   for (const ProxyPair& pair : broad_phase_->pairs()) {
     const BodyId a = proxy_body_[pair.a], b = proxy_body_[pair.b];
-    if (shapes_[a].is_static && shapes_[b].is_static) continue;
+    if (proxy_static_[pair.a] && proxy_static_[pair.b]) continue;
     candidates_.push_back(pair_key(a, b));
   }
   // every dynamic body whose bounds reach a plane (its lowest corner along the normal at or below
@@ -204,7 +208,7 @@ void ContactPipeline::find_pairs() {
     const Vec3& n = shapes_[plane].plane_normal;
     const double surface = shapes_[plane].plane_offset + kSlack;
     for (BodyId body : dynamic_shaped_) {
-      const Aabb& box = shapes_[body].bounds;
+      const Aabb& box = bounds_[body];
       double lowest = 0.0;
       for (int k = 0; k < 3; ++k)
         lowest += n[k] * (n[k] >= 0.0 ? double(box.min[k]) : double(box.max[k]));
@@ -642,7 +646,7 @@ std::size_t ContactPipeline::sweep_fast_bodies(std::span<BodyState> states) {
     bool touched = false;
     for (BodyId other : static_shaped_) {
       const BodyShapeData& wall = shapes_[other];
-      if (wall.kind != BodyShape::Plane && !overlaps(swept, wall.bounds)) continue;
+      if (wall.kind != BodyShape::Plane && !overlaps(swept, bounds_[other])) continue;
       const Pose wall_pose = pose_of(states[other]);
       auto touches = [&](double t) {
         return collide(hulls_, data.shape, pose_at(t), wall.shape, wall_pose, manifold);

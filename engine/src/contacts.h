@@ -172,6 +172,10 @@ class ContactPipeline {
   std::vector<ConvexHull> hulls_;      // the grown hulls: the pool Shape::hull indexes
   std::unique_ptr<BroadPhase> broad_phase_;
   std::vector<BodyId> proxy_body_;     // proxy id → body
+  std::vector<std::uint8_t> proxy_static_;  // proxy id → 1 for a static body's
+  // per body, this step's bounds, grown (not for planes); apart from the shapes, so the passes
+  // over every body's bounds read 24 bytes a body
+  std::vector<Aabb> bounds_;
   std::vector<BodyId> planes_;
   std::vector<BodyId> dynamic_shaped_;  // bodies that meet the planes
   std::vector<BodyId> static_shaped_;   // what a fast body is swept against
