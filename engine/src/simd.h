@@ -147,6 +147,19 @@ inline constexpr std::size_t kLanesOf = sizeof(V) / sizeof(LaneOf<V>);
 template <typename V>
 using MaskOf = decltype(std::declval<V>() < std::declval<V>());
 
+// each lane converted to another lane type of the same count (float ↔ double, rounded to
+// nearest as a scalar conversion is)
+template <typename To, typename From>
+To convert(const From& from) {
+#ifdef RTP_SIMD_VECTORS
+  return __builtin_convertvector(from, To);
+#else
+  To to;
+  for (std::size_t i = 0; i < kLanesOf<To>; ++i) to[i] = LaneOf<To>(from[i]);
+  return to;
+#endif
+}
+
 // ---- the lane types ----
 
 using Double4 = Pack<double, 4>;
