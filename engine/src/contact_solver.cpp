@@ -370,13 +370,12 @@ void ContactPipeline::colour_contacts() {
   static_assert(kColours <= kQuiet && (kCold & kQuiet) == 0);
   constexpr std::uint8_t kClass = kCold | kQuiet;
   std::vector<std::uint8_t>& colour_of = colour_scratch_;
-  if (lanes_ && contact_keys_ == coloured_keys_) {
-    // the same touching pairs as the last colouring's (a resting scene's every step) take the
-    // same colours: only the classes are new
+  if (lanes_ && contact_keys_ == previous_keys_) {
+    // the same touching pairs as last step's (a resting scene's every step), which were coloured
+    // then, take the same colours: only the classes are new
     for (std::size_t i = 0; i < contacts_.size(); ++i)
       colour_of[i] = std::uint8_t((colour_of[i] & ~kClass) | contact_class_[i]);
   } else {
-    coloured_keys_ = contact_keys_;
     colour_greedily();
   }
   // within a colour, the cold contacts (a point that may push with no warm start) first: a block

@@ -49,16 +49,17 @@ struct SolverMass {
   Mat3 inverse_inertia = Mat3::Zero();       // world, at the step's start (1/(kg m²))
 };
 
-// a point of a manifold as the narrow phase made it and the solver leaves it: what the next
-// step's match needs (the solver's own per-step numbers live in its lanes, contact_solver.cpp).
-// In single precision, as the solver reads them: the narrow phase measures in double and rounds
-// once here, and a contact is 228 bytes (four cache lines), which the narrow phase writes and the
-// colouring, prepare() and store_impulses() walk every step
+// a point of a manifold as the narrow phase made it, with the impulse it starts the step with:
+// what prepare() packs and the next step's match needs (the solver's own per-step numbers live
+// in its lanes, contact_solver.cpp; the impulses it ends the step with, in the pipeline's
+// StoredImpulses). In single precision, as the solver reads them: the narrow phase measures in
+// double and rounds once here, and a contact is 228 bytes (four cache lines), which the narrow
+// phase writes and prepare() reads every step
 struct ContactPointConstraint {
   Eigen::Vector3f anchor_a = Eigen::Vector3f::Zero(),  // the point from each centre of mass,
       anchor_b = Eigen::Vector3f::Zero();              // world (m)
   float base_separation = 0.0f;  // separation at the step's start (m); < 0 penetrating
-  float normal_impulse = 0.0f;   // accumulated, carried to the next step (N s)
+  float normal_impulse = 0.0f;   // accumulated, carried from last step's (N s)
   ContactFeature feature;
 };
 
@@ -70,7 +71,7 @@ struct ContactConstraint {
   float friction = 0.0f;
   float restitution = 0.0f;
   // the manifold's friction, at the centre of its points: accumulated along the two tangents
-  // (N s), and about the normal (N m s), carried to the next step
+  // (N s), and about the normal (N m s), carried from last step's
   std::array<float, 2> friction_impulse{};
   float twist_impulse = 0.0f;
   std::uint8_t count = 0;
@@ -136,7 +137,8 @@ class ContactPipeline {
   // first comes within the speculative distance of one (its velocity kept: the next step's
   // contact meets it). Returns the bodies stopped.
   std::size_t sweep_fast_bodies(std::span<BodyState> states);
-  // the accumulated impulses back into the contacts, for the next step's warm start
+  // the accumulated impulses, by contact, for the next step's warm start (the seed's solve
+  // accumulates them in the contacts themselves: copied from there)
   void store_impulses();
 
   std::vector<SolverBody>& bodies() { return bodies_; }
@@ -214,8 +216,6 @@ class ContactPipeline {
   // each contact's class for the colouring, set as it is built: kColdContact, kQuietContact or 0
   std::vector<std::uint8_t> contact_class_;
   std::vector<std::uint8_t> colour_scratch_;
-  // the keys the colours were last chosen for
-  std::vector<std::uint64_t> coloured_keys_;
   std::vector<std::uint32_t> colour_scratch_order_;  // the contacts by colour, in pair order
   // the narrow phase's results per candidate, filled in parallel
   std::vector<Manifold> manifolds_;
