@@ -399,9 +399,10 @@ bool all_of(M m) {
 // rows[0..7] (rows[k][i] = base[offset[i] + k]), and the first 6 written back where a lane is set.
 // With AVX-512 (16 lanes), each record's 32 bytes are loaded whole and transposed, and written
 // back by masked 32-byte stores: a gather or scatter instruction costs one load or store a lane,
-// and a pass over a block's bodies would take six of each a body. Elsewhere a gather or scatter a
-// row (an 8 × 8 transpose for AVX2 is not written: it could not be timed on these machines). The
-// same floats move either way.
+// and a pass over a block's bodies would take six of each a body. With AVX2 (8 lanes), which has
+// no scatter instruction, each record is loaded as two 16-byte halves, transposed 8 × 8, and
+// written back by a 16-byte and an 8-byte store. Elsewhere a gather or scatter a row. The same
+// floats move either way.
 // Always inlined: called, the kernels pass their lanes through memory (measured: the solve's ns
 // per point and pass 7.80 against 7.28 at base 20, minima of ten alternating runs).
 #if defined(RTP_SIMD_VECTORS) && defined(__AVX512F__)
@@ -429,6 +430,27 @@ bool all_of(M m) {
 }
 #endif
 
+#if defined(RTP_SIMD_VECTORS) && defined(__AVX__)
+// rows[i] holding floats 0–3 of records i and i + 4 (i < 4), rows[i + 4] their floats 4–7, becomes
+// rows[k] holding float k of every record, lane i (two rounds of shuffles: the 128-bit halves are
+// placed by the loads)
+[[gnu::always_inline]] inline void transpose_record_halves8(__m256 (&rows)[8]) {
+  __m256 t[8];
+  for (int h = 0; h < 8; h += 4) {
+    t[h] = _mm256_unpacklo_ps(rows[h], rows[h + 1]);
+    t[h + 1] = _mm256_unpackhi_ps(rows[h], rows[h + 1]);
+    t[h + 2] = _mm256_unpacklo_ps(rows[h + 2], rows[h + 3]);
+    t[h + 3] = _mm256_unpackhi_ps(rows[h + 2], rows[h + 3]);
+  }
+  for (int h = 0; h < 8; h += 4) {
+    rows[h] = _mm256_shuffle_ps(t[h], t[h + 2], 0x44);
+    rows[h + 1] = _mm256_shuffle_ps(t[h], t[h + 2], 0xEE);
+    rows[h + 2] = _mm256_shuffle_ps(t[h + 1], t[h + 3], 0x44);
+    rows[h + 3] = _mm256_shuffle_ps(t[h + 1], t[h + 3], 0xEE);
+  }
+}
+#endif
+
 template <typename V>
 [[gnu::always_inline]] inline void gather_records(const LaneOf<V>* base, MaskOf<V> offset,
                                                   V (&rows)[8]) {
@@ -444,6 +466,21 @@ template <typename V>
           _mm512_castpd256_pd512(_mm256_castps_pd(_mm256_loadu_ps(base + at[i]))),
           _mm256_castps_pd(_mm256_loadu_ps(base + at[i + 8])), 1));
     transpose_records16(r);
+    for (int k = 0; k < 8; ++k) rows[k] = r[k];
+    return;
+  }
+#endif
+#if defined(RTP_SIMD_VECTORS) && defined(__AVX__)
+  if constexpr (std::is_same_v<V, Pack<float, 8>>) {
+    alignas(32) std::int32_t at[8];
+    std::memcpy(at, &offset, sizeof at);
+    __m256 r[8];
+    for (int i = 0; i < 4; ++i)
+      for (int h = 0; h < 2; ++h)
+        r[i + 4 * h] = _mm256_insertf128_ps(
+            _mm256_castps128_ps256(_mm_loadu_ps(base + at[i] + 4 * h)),
+            _mm_loadu_ps(base + at[i + 4] + 4 * h), 1);
+    transpose_record_halves8(r);
     for (int k = 0; k < 8; ++k) rows[k] = r[k];
     return;
   }
@@ -471,6 +508,38 @@ template <typename V>
         _mm256_mask_storeu_ps(base + at[i + 8], 0x3F,
                               _mm256_castpd_ps(_mm512_extractf64x4_pd(_mm512_castps_pd(r[i]), 1)));
     }
+    return;
+  }
+#endif
+#if defined(RTP_SIMD_VECTORS) && defined(__AVX__)
+  if constexpr (std::is_same_v<V, Pack<float, 8>>) {
+    alignas(32) std::int32_t at[8];
+    std::memcpy(at, &offset, sizeof at);
+    const unsigned set = lane_bits(where);
+    // floats 0–3 of records i and i + 4 in q[i]; floats 4 and 5 of records 0, 1 | 4, 5 in p[0],
+    // of records 2, 3 | 6, 7 in p[1]
+    const __m256 t0 = _mm256_unpacklo_ps(rows[0], rows[1]);
+    const __m256 t1 = _mm256_unpackhi_ps(rows[0], rows[1]);
+    const __m256 t2 = _mm256_unpacklo_ps(rows[2], rows[3]);
+    const __m256 t3 = _mm256_unpackhi_ps(rows[2], rows[3]);
+    const __m256 q[4] = {_mm256_shuffle_ps(t0, t2, 0x44), _mm256_shuffle_ps(t0, t2, 0xEE),
+                         _mm256_shuffle_ps(t1, t3, 0x44), _mm256_shuffle_ps(t1, t3, 0xEE)};
+    const __m256 p[2] = {_mm256_unpacklo_ps(rows[4], rows[5]),
+                         _mm256_unpackhi_ps(rows[4], rows[5])};
+    for (int h = 0; h < 2; ++h)
+      for (int i = 0; i < 4; ++i) {
+        const int lane = i + 4 * h;
+        if (!(set >> lane & 1u)) continue;
+        const __m128 first =
+            h == 0 ? _mm256_castps256_ps128(q[i]) : _mm256_extractf128_ps(q[i], 1);
+        const __m128 last = h == 0 ? _mm256_castps256_ps128(p[i / 2])
+                                   : _mm256_extractf128_ps(p[i / 2], 1);
+        _mm_storeu_ps(base + at[lane], first);
+        if (i % 2 == 0)
+          _mm_storel_pi(reinterpret_cast<__m64*>(base + at[lane] + 4), last);
+        else
+          _mm_storeh_pi(reinterpret_cast<__m64*>(base + at[lane] + 4), last);
+      }
     return;
   }
 #endif
