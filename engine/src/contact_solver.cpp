@@ -190,6 +190,63 @@ struct LanePair {
   }
 };
 
+// The normal rows of an isotropic block, in the manifold's frame (n, t0, t1 with t0 × t1 = n). A
+// point's row reads the velocities only as the centres' relative speed along n, u = n·(v_b − v_a),
+// and the angular velocities' tangent components: w·(r × n) = β (w·t0) − α (w·t1), with α = r·t0
+// and β = r·t1. An impulse λ along n changes those by numbers: u by (m_a⁻¹ + m_b⁻¹) λ, and with
+// an inverse inertia c·1, w_a's components by −c_a λ (β_a, −α_a) and w_b's by c_b λ (β_b, −α_b)
+// (r × n = β t0 − α t1). Five lanes then carry the four rows where twelve did, and each row's
+// speed and response are a few multiply-adds; the velocities are written back once, after the
+// rows. The same sums as the rows in world axes, in another order (results move at round-off).
+struct FrameRow {
+  Lane alpha_a, beta_a, alpha_b, beta_b;
+
+  FrameRow(const ContactBlock::Point& p, const V3& t0, const V3& t1) {
+    const V3 ra = load3(p.anchor_a), rb = load3(p.anchor_b);
+    alpha_a = dot(ra, t0), beta_a = dot(ra, t1), alpha_b = dot(rb, t0), beta_b = dot(rb, t1);
+  }
+};
+struct NormalFrame {
+  Lane u, pa, qa, pb, qb;        // n·(v_b − v_a); w_a·t0, w_a·t1; w_b·t0, w_b·t1
+  Lane pa0, qa0, pb0, qb0;       // the components as read
+  Lane total;                    // Σλ, for the linear velocities
+  Lane inverse_mass_sum;
+
+  NormalFrame(const LanePair& pair, const ContactBlock& c, const V3& n, const V3& t0,
+              const V3& t1)
+      : u(dot(n, pair.vb - pair.va)),
+        pa(dot(pair.wa, t0)),
+        qa(dot(pair.wa, t1)),
+        pb(dot(pair.wb, t0)),
+        qb(dot(pair.wb, t1)),
+        pa0(pa),
+        qa0(qa),
+        pb0(pb),
+        qb0(qb),
+        total(splat(0.0f)),
+        inverse_mass_sum(c.inverse_mass_a + c.inverse_mass_b) {}
+  Lane normal_velocity(const FrameRow& row) const {
+    return u + (row.beta_b * pb - row.alpha_b * qb) - (row.beta_a * pa - row.alpha_a * qa);
+  }
+  void apply(const BlockInertia& m, const FrameRow& row, Lane impulse) {
+    u = u + inverse_mass_sum * impulse;
+    total = total + impulse;
+    const Lane turn_a = m.a[0] * impulse, turn_b = m.b[0] * impulse;
+    pa = pa - turn_a * row.beta_a;
+    qa = qa + turn_a * row.alpha_a;
+    pb = pb + turn_b * row.beta_b;
+    qb = qb - turn_b * row.alpha_b;
+  }
+  // the rows' impulses on the velocities themselves
+  void store(LanePair& pair, const ContactBlock& c, const V3& n, const V3& t0,
+             const V3& t1) const {
+    pair.va = pair.va - (c.inverse_mass_a * total) * n;
+    pair.vb = pair.vb + (c.inverse_mass_b * total) * n;
+    pair.wa = pair.wa + ((pa - pa0) * t0 + (qa - qa0) * t1);
+    pair.wb = pair.wb + ((pb - pb0) * t0 + (qb - qb0) * t1);
+  }
+};
+
 // how far each lane's bodies have moved along its normal since the step's start, as what the
 // points need: s = s₀' + n·(Δx_b − Δx_a) + (ΔR_bᵀ n)·r_b − (ΔR_aᵀ n)·r_a, the two turned normals
 // once per manifold rather than two rotations per point
@@ -854,14 +911,32 @@ bool ContactPipeline::solve(double h, bool bias, bool backwards, double toleranc
     // row: one pass over a face's four points lands the whole impulse on the first and spins the
     // body, where the converged answer pushes all four alike
     const int rounds = simd::any_of(c.fresh) ? settings_.local_iterations : 1;
+    // an isotropic block's rows in the manifold's frame (NormalFrame), written back after them
+    [[maybe_unused]] auto frame = [&] {
+      if constexpr (kIsotropic)
+        return NormalFrame(pair, c, n, t0, t1);
+      else
+        return 0;
+    }();
+    LaneMask pushed = zero != zero;
     for (int round = 0; round < rounds; ++round) {
       const LaneMask active = round == 0 ? LaneMask(zero == zero) : c.fresh;
       for (int j = 0; j < 4; ++j) {
         ContactBlock::Point& p = c.points[j];
         ahead.ahead(16);
         const Lane s = p.separation;
-        const NormalRow row(p, n);
-        const Lane vn = pair.normal_velocity(n, row);
+        const auto row = [&] {
+          if constexpr (kIsotropic)
+            return FrameRow(p, t0, t1);
+          else
+            return NormalRow(p, n);
+        }();
+        const Lane vn = [&] {
+          if constexpr (kIsotropic)
+            return frame.normal_velocity(row);
+          else
+            return pair.normal_velocity(n, row);
+        }();
         const LaneMask apart = s > zero;
         // speculative: the bodies may close the gap in this step, no more
         Lane velocity_bias = s * inverse_h, mass_scale = one, impulse_scale = zero;
@@ -891,15 +966,26 @@ bool ContactPipeline::solve(double h, bool bias, bool backwards, double toleranc
         if (any_bounce)
           r.points[j].max_normal_impulse = simd::max(r.points[j].max_normal_impulse, applied);
         changed |= simd::max(applied, zero - applied) > tolerance_lane * p.normal_mass;
-        // a point that applies nothing in any lane leaves the velocities as they are: its
-        // response is not computed
-        const LaneMask pushes = applied != zero;
-        if (simd::any_of(pushes)) {
-          pair.apply_normal<kIsotropic>(c, m, row, n, applied);
-          wrote = true;
+        if constexpr (kIsotropic) {
+          // a few multiply-adds: applied whatever the lanes hold
+          frame.apply(m, row, applied);
+          pushed |= applied != zero;
+        } else {
+          // a point that applies nothing in any lane leaves the velocities as they are: its
+          // response is not computed
+          const LaneMask pushes = applied != zero;
+          if (simd::any_of(pushes)) {
+            pair.apply_normal<kIsotropic>(c, m, row, n, applied);
+            wrote = true;
+          }
         }
       }
     }
+    if constexpr (kIsotropic)
+      if (simd::any_of(pushed)) {
+        frame.store(pair, c, n, t0, t1);
+        wrote = true;
+      }
     // Coulomb friction at the manifold's centre: the friction impulse accumulates on the two
     // tangents and its length stays within μ times the manifold's normal impulse (the friction
     // cone as a circle); about the normal, the twist stays within that times the points' mean
