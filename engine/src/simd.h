@@ -193,6 +193,11 @@ V load(const LaneOf<V>* p) {
   std::memcpy(&x, p, sizeof x);
   return x;
 }
+// the lanes to p (any alignment)
+template <typename V>
+void store(LaneOf<V>* p, const V& x) {
+  std::memcpy(p, &x, sizeof x);
+}
 inline Double4 load4(const double* p) { return load<Double4>(p); }
 inline Double8 load8(const double* p) { return load<Double8>(p); }
 
@@ -396,12 +401,13 @@ bool all_of(M m) {
 }
 
 // Records of floats, one a lane: the first 8 floats of the record at base + offset[i] as lane i of
-// rows[0..7] (rows[k][i] = base[offset[i] + k]), and the first 6 written back where a lane is set.
+// rows[0..7] (rows[k][i] = base[offset[i] + k]), and the first 6 or all 8 written back where a
+// lane is set.
 // With AVX-512 (16 lanes), each record's 32 bytes are loaded whole and transposed, and written
 // back by masked 32-byte stores: a gather or scatter instruction costs one load or store a lane,
 // and a pass over a block's bodies would take six of each a body. With AVX2 (8 lanes), which has
 // no scatter instruction, each record is loaded as two 16-byte halves, transposed 8 × 8, and
-// written back by a 16-byte and an 8-byte store. Elsewhere a gather or scatter a row. The same
+// written back by 16-byte stores (and an 8-byte one for six floats). Elsewhere a gather or scatter a row. The same
 // floats move either way.
 // Always inlined: called, the kernels pass their lanes through memory (measured: the solve's ns
 // per point and pass 7.80 against 7.28 at base 20, minima of ten alternating runs).
@@ -488,24 +494,27 @@ template <typename V>
   for (int k = 0; k < 8; ++k) rows[k] = gather<V>(base + k, offset);
 }
 
-template <typename V>
+template <typename V, std::size_t R>
 [[gnu::always_inline]] inline void scatter_records(LaneOf<V>* base, MaskOf<V> offset,
-                                                   const V (&rows)[6], MaskOf<V> where) {
+                                                   const V (&rows)[R], MaskOf<V> where) {
   static_assert(std::is_same_v<LaneOf<V>, float>);
+  static_assert(R == 6 || R == 8, "a record's first six floats, or all eight");
 #if defined(RTP_SIMD_VECTORS) && defined(__AVX512F__) && defined(__AVX512VL__)
   if constexpr (std::is_same_v<V, Pack<float, 16>>) {
     alignas(64) std::int32_t at[16];
     std::memcpy(at, &offset, sizeof at);
     const unsigned set = lane_bits(where);
+    constexpr __mmask8 kFloats = R == 8 ? 0xFF : 0x3F;
     __m512 r[8];
-    for (int k = 0; k < 6; ++k) r[k] = rows[k];
-    r[6] = r[7] = _mm512_setzero_ps();
+    for (std::size_t k = 0; k < R; ++k) r[k] = rows[k];
+    for (std::size_t k = R; k < 8; ++k) r[k] = _mm512_setzero_ps();
     transpose_records16(r);
     for (int i = 0; i < 8; ++i) {
-      // the record's first six floats, and only where the lane is set
-      if (set >> i & 1u) _mm256_mask_storeu_ps(base + at[i], 0x3F, _mm512_castps512_ps256(r[i]));
+      // the record's first R floats, and only where the lane is set
+      if (set >> i & 1u)
+        _mm256_mask_storeu_ps(base + at[i], kFloats, _mm512_castps512_ps256(r[i]));
       if (set >> (i + 8) & 1u)
-        _mm256_mask_storeu_ps(base + at[i + 8], 0x3F,
+        _mm256_mask_storeu_ps(base + at[i + 8], kFloats,
                               _mm256_castpd_ps(_mm512_extractf64x4_pd(_mm512_castps_pd(r[i]), 1)));
     }
     return;
@@ -516,34 +525,49 @@ template <typename V>
     alignas(32) std::int32_t at[8];
     std::memcpy(at, &offset, sizeof at);
     const unsigned set = lane_bits(where);
-    // floats 0–3 of records i and i + 4 in q[i]; floats 4 and 5 of records 0, 1 | 4, 5 in p[0],
-    // of records 2, 3 | 6, 7 in p[1]
-    const __m256 t0 = _mm256_unpacklo_ps(rows[0], rows[1]);
-    const __m256 t1 = _mm256_unpackhi_ps(rows[0], rows[1]);
-    const __m256 t2 = _mm256_unpacklo_ps(rows[2], rows[3]);
-    const __m256 t3 = _mm256_unpackhi_ps(rows[2], rows[3]);
-    const __m256 q[4] = {_mm256_shuffle_ps(t0, t2, 0x44), _mm256_shuffle_ps(t0, t2, 0xEE),
-                         _mm256_shuffle_ps(t1, t3, 0x44), _mm256_shuffle_ps(t1, t3, 0xEE)};
-    const __m256 p[2] = {_mm256_unpacklo_ps(rows[4], rows[5]),
-                         _mm256_unpackhi_ps(rows[4], rows[5])};
-    for (int h = 0; h < 2; ++h)
-      for (int i = 0; i < 4; ++i) {
-        const int lane = i + 4 * h;
-        if (!(set >> lane & 1u)) continue;
-        const __m128 first =
-            h == 0 ? _mm256_castps256_ps128(q[i]) : _mm256_extractf128_ps(q[i], 1);
-        const __m128 last = h == 0 ? _mm256_castps256_ps128(p[i / 2])
-                                   : _mm256_extractf128_ps(p[i / 2], 1);
-        _mm_storeu_ps(base + at[lane], first);
-        if (i % 2 == 0)
-          _mm_storel_pi(reinterpret_cast<__m64*>(base + at[lane] + 4), last);
-        else
-          _mm_storeh_pi(reinterpret_cast<__m64*>(base + at[lane] + 4), last);
-      }
+    // floats 4h–4h+3 of records i and i + 4 in q[h][i] (two rounds of shuffles); with six rows,
+    // floats 4 and 5 of records 0, 1 | 4, 5 in p[0], of records 2, 3 | 6, 7 in p[1]
+    auto quads = [&](int first, __m256 (&q)[4]) {
+      const __m256 t0 = _mm256_unpacklo_ps(rows[first], rows[first + 1]);
+      const __m256 t1 = _mm256_unpackhi_ps(rows[first], rows[first + 1]);
+      const __m256 t2 = _mm256_unpacklo_ps(rows[first + 2], rows[first + 3]);
+      const __m256 t3 = _mm256_unpackhi_ps(rows[first + 2], rows[first + 3]);
+      q[0] = _mm256_shuffle_ps(t0, t2, 0x44), q[1] = _mm256_shuffle_ps(t0, t2, 0xEE);
+      q[2] = _mm256_shuffle_ps(t1, t3, 0x44), q[3] = _mm256_shuffle_ps(t1, t3, 0xEE);
+    };
+    auto half = [](__m256 x, int h) {
+      return h == 0 ? _mm256_castps256_ps128(x) : _mm256_extractf128_ps(x, 1);
+    };
+    __m256 q[2][4];
+    quads(0, q[0]);
+    if constexpr (R == 8) {
+      quads(4, q[1]);
+      for (int h = 0; h < 2; ++h)
+        for (int i = 0; i < 4; ++i) {
+          const int lane = i + 4 * h;
+          if (!(set >> lane & 1u)) continue;
+          _mm_storeu_ps(base + at[lane], half(q[0][i], h));
+          _mm_storeu_ps(base + at[lane] + 4, half(q[1][i], h));
+        }
+    } else {
+      const __m256 p[2] = {_mm256_unpacklo_ps(rows[4], rows[5]),
+                           _mm256_unpackhi_ps(rows[4], rows[5])};
+      for (int h = 0; h < 2; ++h)
+        for (int i = 0; i < 4; ++i) {
+          const int lane = i + 4 * h;
+          if (!(set >> lane & 1u)) continue;
+          const __m128 last = half(p[i / 2], h);
+          _mm_storeu_ps(base + at[lane], half(q[0][i], h));
+          if (i % 2 == 0)
+            _mm_storel_pi(reinterpret_cast<__m64*>(base + at[lane] + 4), last);
+          else
+            _mm_storeh_pi(reinterpret_cast<__m64*>(base + at[lane] + 4), last);
+        }
+    }
     return;
   }
 #endif
-  for (int k = 0; k < 6; ++k) scatter(base + k, offset, rows[k], where);
+  for (std::size_t k = 0; k < R; ++k) scatter(base + k, offset, rows[k], where);
 }
 
 // ---- the broad phase's floats ----

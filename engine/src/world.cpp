@@ -3,6 +3,7 @@
 #include <cassert>
 #include <cmath>
 #include <chrono>
+#include <cstring>
 #include <stdexcept>
 
 #include "contacts.h"
@@ -390,71 +391,147 @@ void turn_quaternion(const D (&t)[4], D (&q)[4]) {
 
 }  // namespace
 
+namespace {
+// a group's lanes in pose_lanes_: position (3 × 8 doubles), then orientation w, x, y, z
+constexpr std::ptrdiff_t kPoseGroup = 8, kPoseDoubles = 7 * kPoseGroup;
+}  // namespace
+
+void World::load_pose_lanes() {
+  const std::size_t n = states_.size();
+  const std::size_t groups = (n + kPoseGroup - 1) / kPoseGroup;
+  pose_lanes_.resize(groups * kPoseDoubles);  // allocates only when the body count grows
+  for (std::size_t i = 0; i < n; ++i) {
+    double* lanes = pose_lanes_.data() + (i / kPoseGroup) * kPoseDoubles + i % kPoseGroup;
+    const BodyState& s = states_[i];
+    for (int k = 0; k < 3; ++k) lanes[k * kPoseGroup] = s.position[k];
+    lanes[3 * kPoseGroup] = s.orientation.w(), lanes[4 * kPoseGroup] = s.orientation.x();
+    lanes[5 * kPoseGroup] = s.orientation.y(), lanes[6 * kPoseGroup] = s.orientation.z();
+  }
+  poses_in_lanes_ = true;
+}
+
+void World::store_pose_lanes() {
+  for (std::size_t i = 0; i < states_.size(); ++i) {
+    const double* lanes = pose_lanes_.data() + (i / kPoseGroup) * kPoseDoubles + i % kPoseGroup;
+    BodyState& s = states_[i];
+    for (int k = 0; k < 3; ++k) s.position[k] = lanes[k * kPoseGroup];
+    s.orientation = Quat(lanes[3 * kPoseGroup], lanes[4 * kPoseGroup], lanes[5 * kPoseGroup],
+                         lanes[6 * kPoseGroup]);
+  }
+  poses_in_lanes_ = false;
+}
+
 void World::integrate_positions(double h) {
   // positions by the new velocities, orientations by the exponential map; the motion since the
   // step's start is kept too, for the contacts' separations
   std::vector<SolverBody>& bodies = pipeline_->bodies();
-  // Eight bodies at a time, each in a lane (a short last group's empty lanes computed and not
-  // written): a body's result is its lane's, whatever the others hold, so it is the same on any
-  // number of threads. A body at rest is not written (a static body is always at rest in the
-  // solver: nothing writes its velocities), and one that does not turn keeps its orientation
-  using D = simd::Double8;
+  if (!poses_in_lanes_) load_pose_lanes();
+  // Eight bodies at a time, each in a lane: their poses are the group's lanes in pose_lanes_, and
+  // their velocities and motion since the step's start eight consecutive solver records, read and
+  // written as records transposed (a short last group through a copy, its empty lanes computed
+  // and not written). A body's result is its lane's, whatever the others hold, so it is the same
+  // on any number of threads. A body at rest keeps its position and motion bit for bit (a static
+  // body is always at rest in the solver: nothing writes its velocities), and one that does not
+  // turn keeps its orientation
+  using D = simd::Double4;
+  using H = simd::Pack<float, 4>;
   using F = simd::Pack<float, 8>;
-  constexpr std::ptrdiff_t G = 8;
+  using FM = simd::MaskOf<F>;
+  constexpr std::ptrdiff_t G = kPoseGroup;
+  constexpr int kRecordFloats = int(sizeof(SolverBody) / sizeof(float));
+  static_assert(offsetof(SolverBody, linear_velocity) == 0 &&
+                offsetof(SolverBody, angular_velocity) == 3 * sizeof(float) &&
+                offsetof(SolverBody, delta_position) == 6 * sizeof(float) &&
+                offsetof(SolverBody, delta_rotation) == 12 * sizeof(float) &&
+                kRecordFloats == 16);
   const std::ptrdiff_t n = std::ptrdiff_t(states_.size());
   const std::ptrdiff_t groups = (n + G - 1) / G;
+  FM offsets;
+  for (std::ptrdiff_t i = 0; i < G; ++i) offsets[i] = std::int32_t(i * kRecordFloats);
 #pragma omp parallel for num_threads(contact_settings_.threads) schedule(static) \
     if (groups >= 256)
   for (std::ptrdiff_t g = 0; g < groups; ++g) {
     const std::ptrdiff_t first = g * G;
-    const int count = int(std::min(G, n - first));
-    D w[3]{}, v[3]{}, x[3]{}, q[4]{}, turn[4];
-    F dx[3]{}, dq[4]{};
-    for (int i = 0; i < count; ++i) {
-      const BodyState& s = states_[first + i];
-      const SolverBody& body = bodies[first + i];
+    const std::ptrdiff_t count = std::min(G, n - first);
+    // (the short group's copy is raw bytes: SolverBody's initialisers cost a pass over 512
+    // bytes a group)
+    alignas(64) std::byte tail[sizeof(SolverBody) * G];
+    float* base = reinterpret_cast<float*>(bodies.data() + first);
+    if (count < G) {
+      std::memset(tail, 0, sizeof tail);
+      std::memcpy(tail, base, sizeof(SolverBody) * std::size_t(count));
+      base = reinterpret_cast<float*>(tail);
+    }
+    // floats 0–7 of each record (v, ω, Δx, Δy) and 8–15 (Δz, padding, Δq as x, y, z, w)
+    F low[8], high[8];
+    simd::gather_records(base, offsets, low);
+    simd::gather_records(base + 8, offsets, high);
+    double* lanes = pose_lanes_.data() + g * kPoseDoubles;
+    F dx[3] = {low[6], low[7], high[0]}, dq[4] = {high[7], high[4], high[5], high[6]};
+    const F zero_f = simd::splat<F>(0.0f);
+    const FM turns_f = (low[3] != zero_f) | (low[4] != zero_f) | (low[5] != zero_f);
+    const FM moves_f = turns_f | (low[0] != zero_f) | (low[1] != zero_f) | (low[2] != zero_f);
+    // the doubles four lanes at a time (a register's worth where the widest is 256 bits), the
+    // moves and turns gathered back into eight float lanes for the motion since the step's start
+    float moved_f[3][G], turn_f[4][G];
+    for (int half = 0; half < 2; ++half) {
+      const std::ptrdiff_t at = 4 * half;
+      auto widen = [&](const F& x) {
+        H four;
+        std::memcpy(&four, reinterpret_cast<const float*>(&x) + at, sizeof four);
+        return simd::convert<D>(four);
+      };
+      D v[3], w[3], x[3], q[4], turn[4];
       for (int k = 0; k < 3; ++k) {
-        v[k][i] = double(body.linear_velocity[k]);
-        w[k][i] = double(body.angular_velocity[k]);
-        x[k][i] = s.position[k];
-        dx[k][i] = body.delta_position[k];
+        v[k] = widen(low[k]);
+        w[k] = widen(low[3 + k]);
+        x[k] = simd::load<D>(lanes + k * G + at);
       }
-      q[0][i] = s.orientation.w(), q[1][i] = s.orientation.x(), q[2][i] = s.orientation.y(),
-      q[3][i] = s.orientation.z();
-      dq[0][i] = body.delta_rotation.w(), dq[1][i] = body.delta_rotation.x(),
-      dq[2][i] = body.delta_rotation.y(), dq[3][i] = body.delta_rotation.z();
-    }
-    for (int k = 0; k < 3; ++k) {
-      const D moved = h * v[k];
-      x[k] = x[k] + moved;
-      dx[k] = dx[k] + simd::convert<F>(moved);
-    }
-    const D x2 = half_angle_squared(w, h);
-    series_turn(w, x2, h, turn);
-    for (int i = 0; i < count; ++i)
-      if (!(x2[i] < 0.01)) {  // past the series: the library's sine and cosine
-        const double angle = std::sqrt(x2[i]), k = std::sin(angle) / angle * (0.5 * h);
-        turn[0][i] = std::cos(angle);
-        for (int j = 0; j < 3; ++j) turn[1 + j][i] = k * w[j][i];
-      }
-    turn_quaternion(turn, q);
-    const F turn_float[4] = {simd::convert<F>(turn[0]), simd::convert<F>(turn[1]),
-                             simd::convert<F>(turn[2]), simd::convert<F>(turn[3])};
-    turn_quaternion(turn_float, dq);
-    for (int i = 0; i < count; ++i) {
-      const bool turns = w[0][i] != 0.0 || w[1][i] != 0.0 || w[2][i] != 0.0;
-      if (!turns && v[0][i] == 0.0 && v[1][i] == 0.0 && v[2][i] == 0.0) continue;  // at rest
-      BodyState& s = states_[first + i];
-      SolverBody& body = bodies[first + i];
+      for (int k = 0; k < 4; ++k) q[k] = simd::load<D>(lanes + (3 + k) * G + at);
+      const D zero = simd::splat<D>(0.0);
+      const auto turns = (w[0] != zero) | (w[1] != zero) | (w[2] != zero);
+      const auto moves = turns | (v[0] != zero) | (v[1] != zero) | (v[2] != zero);
       for (int k = 0; k < 3; ++k) {
-        s.position[k] = x[k][i];
-        body.delta_position[k] = dx[k][i];
+        const D moved = h * v[k];
+        x[k] = simd::select(moves, x[k] + moved, x[k]);
+        simd::store(moved_f[k] + at, simd::convert<H>(moved));
       }
-      if (!turns) continue;
-      s.orientation = Quat(q[0][i], q[1][i], q[2][i], q[3][i]);
-      body.delta_rotation = Eigen::Quaternionf(dq[0][i], dq[1][i], dq[2][i], dq[3][i]);
+      const D x2 = half_angle_squared(w, h);
+      series_turn(w, x2, h, turn);
+      if (simd::any_of(!(x2 < simd::splat<D>(0.01))))
+        for (int i = 0; i < 4 && at + i < count; ++i)
+          if (!(x2[i] < 0.01)) {  // past the series: the library's sine and cosine
+            const double angle = std::sqrt(x2[i]), k = std::sin(angle) / angle * (0.5 * h);
+            turn[0][i] = std::cos(angle);
+            for (int j = 0; j < 3; ++j) turn[1 + j][i] = k * w[j][i];
+          }
+      D turned[4] = {q[0], q[1], q[2], q[3]};
+      turn_quaternion(turn, turned);
+      for (int k = 0; k < 4; ++k) {
+        q[k] = simd::select(turns, turned[k], q[k]);
+        simd::store(turn_f[k] + at, simd::convert<H>(turn[k]));
+      }
+      for (int k = 0; k < 3; ++k) simd::store(lanes + k * G + at, x[k]);
+      for (int k = 0; k < 4; ++k) simd::store(lanes + (3 + k) * G + at, q[k]);
     }
+    for (int k = 0; k < 3; ++k)
+      dx[k] = simd::select(moves_f, dx[k] + simd::load<F>(moved_f[k]), dx[k]);
+    const F turn_float[4] = {simd::load<F>(turn_f[0]), simd::load<F>(turn_f[1]),
+                             simd::load<F>(turn_f[2]), simd::load<F>(turn_f[3])};
+    F turned_float[4] = {dq[0], dq[1], dq[2], dq[3]};
+    turn_quaternion(turn_float, turned_float);
+    for (int k = 0; k < 4; ++k) dq[k] = simd::select(turns_f, turned_float[k], dq[k]);
+    low[6] = dx[0], low[7] = dx[1], high[0] = dx[2];
+    high[4] = dq[1], high[5] = dq[2], high[6] = dq[3], high[7] = dq[0];
+    const FM all = simd::splat<F>(0.0f) == simd::splat<F>(0.0f);
+    simd::scatter_records(base, offsets, low, all);
+    simd::scatter_records(base + 8, offsets, high, all);
+    if (count < G)
+      std::memcpy(static_cast<void*>(bodies.data() + first), tail,
+                  sizeof(SolverBody) * std::size_t(count));
   }
+  // the springs read this substep's poses from the states
+  if (!springs_.empty()) store_pose_lanes();
   pipeline_->positions_moved();
 }
 
@@ -537,6 +614,7 @@ void World::step_with_contacts(double dt) {
       timed(profile_.integrate_positions, [&] { integrate_positions(dt); });
       break;
   }
+  if (poses_in_lanes_) store_pose_lanes();
   // the seed's lab 5 has no continuous collision: its variant keeps that weakness, measured
   if (settings.solver != ContactSolver::Seed)
     timed(profile_.continuous,

@@ -31,6 +31,27 @@ bool machine_runs_this_build() {
 #endif
 }
 
+// a record's first R floats written where a lane is set, and nothing else
+template <typename V, std::size_t R>
+void scatters_as_a_loop_would(std::vector<float>& memory, simd::MaskOf<V> offset) {
+  constexpr std::size_t N = simd::kLanesOf<V>;
+  V values[R];
+  simd::MaskOf<V> where;
+  for (std::size_t i = 0; i < N; ++i) {
+    for (std::size_t k = 0; k < R; ++k) values[k][i] = -float(100 * R * k + i);
+    where[i] = i % 3 != 0 ? -1 : 0;
+  }
+  const std::vector<float> before = memory;
+  simd::scatter_records(memory.data(), offset, values, where);
+  std::vector<float> expected = before;
+  for (std::size_t i = 0; i < N; ++i)
+    if (where[i])
+      for (std::size_t k = 0; k < R; ++k) expected[std::size_t(offset[i]) + k] = values[k][i];
+  for (std::size_t j = 0; j < memory.size(); ++j)
+    EXPECT_EQ(memory[j], expected[j])
+        << R << " floats: record " << j / 16 << ", float " << j % 16;
+}
+
 template <typename V>
 void records_move_as_a_loop_would() {
   constexpr std::size_t N = simd::kLanesOf<V>;
@@ -44,20 +65,8 @@ void records_move_as_a_loop_would() {
     for (std::size_t i = 0; i < N; ++i)
       EXPECT_EQ(rows[k][i], memory[std::size_t(offset[i]) + k]) << "float " << k << ", lane " << i;
 
-  V values[6];
-  simd::MaskOf<V> where;
-  for (std::size_t i = 0; i < N; ++i) {
-    for (int k = 0; k < 6; ++k) values[k][i] = -float(100 * k + int(i));
-    where[i] = i % 3 != 0 ? -1 : 0;
-  }
-  const std::vector<float> before = memory;
-  simd::scatter_records(memory.data(), offset, values, where);
-  std::vector<float> expected = before;
-  for (std::size_t i = 0; i < N; ++i)
-    if (where[i])
-      for (int k = 0; k < 6; ++k) expected[std::size_t(offset[i]) + k] = values[k][i];
-  for (std::size_t j = 0; j < memory.size(); ++j)
-    EXPECT_EQ(memory[j], expected[j]) << "record " << j / 16 << ", float " << j % 16;
+  scatters_as_a_loop_would<V, 6>(memory, offset);
+  scatters_as_a_loop_would<V, 8>(memory, offset);
 }
 
 TEST(Simd, RecordsGatherAndScatterAsALoopWould) {

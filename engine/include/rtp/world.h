@@ -250,6 +250,9 @@ class World {
   void step_with_contacts(double dt);
   void integrate_velocities(double h);
   void integrate_positions(double h);
+  // the substeps' poses in lanes (pose_lanes_), from and back to states_
+  void load_pose_lanes();
+  void store_pose_lanes();
   void store_momenta();
 
   Vec3 gravity_;
@@ -263,6 +266,11 @@ class World {
   std::vector<BodyRate> k1_, k2_, k3_, k4_;
   ContactSettings contact_settings_;
   std::unique_ptr<ContactPipeline> pipeline_;  // made by the first body with a shape
+  // a step with contacts integrates positions in lanes: eight bodies a group, each group 56
+  // doubles (position x, y, z, then orientation w, x, y, z, eight lanes each), loaded from
+  // states_ at the step's first substep and stored back once the solver is done
+  std::vector<double> pose_lanes_;
+  bool poses_in_lanes_ = false;
 };
 
 }  // namespace rtp
