@@ -26,9 +26,10 @@ struct ContactBlock {
   // each body's world inverse inertia, xx (the rest is in ContactBlockRest; on an isotropic block,
   // ContactLanes::isotropic, this is the whole of it, c in c·1)
   Lane inverse_inertia_a, inverse_inertia_b;
-  // friction at the centre of the manifold's points: its anchors from each body, the accumulated
-  // impulses, the effective masses along the tangents and about the normal, and the mean distance
-  // of the points from it (the twist's lever)
+  // friction at the centre of the manifold's points: its anchors from each body, as coordinates
+  // along tangent[0], tangent[1] and the normal; the accumulated impulses, the effective masses
+  // along the tangents and about the normal, and the mean distance of the points from it (the
+  // twist's lever)
   Lane centre_a[3], centre_b[3];
   Lane friction_impulse[2], twist_impulse;
   Lane friction, tangent_mass[2], twist_mass, twist_arm;

@@ -196,8 +196,10 @@ struct LanePair {
 // and β = r·t1. An impulse λ along n changes those by numbers: u by (m_a⁻¹ + m_b⁻¹) λ, and with
 // an inverse inertia c·1, w_a's components by −c_a λ (β_a, −α_a) and w_b's by c_b λ (β_b, −α_b)
 // (r × n = β t0 − α t1). Five lanes then carry the four rows where twelve did, and each row's
-// speed and response are a few multiply-adds; the velocities are written back once, after the
-// rows. The same sums as the rows in world axes, in another order (results move at round-off).
+// speed and response are a few multiply-adds. The friction at the centre and the twist go the
+// same way (BlockFrame: the centres kept in the frame by prepare()), and the velocities are
+// written back once, after them all. The same sums as in world axes, in another order (results
+// move at round-off).
 struct FrameRow {
   Lane alpha_a, beta_a, alpha_b, beta_b;
 
@@ -206,24 +208,32 @@ struct FrameRow {
     alpha_a = dot(ra, t0), beta_a = dot(ra, t1), alpha_b = dot(rb, t0), beta_b = dot(rb, t1);
   }
 };
-struct NormalFrame {
+struct BlockFrame {
   Lane u, pa, qa, pb, qb;        // n·(v_b − v_a); w_a·t0, w_a·t1; w_b·t0, w_b·t1
-  Lane pa0, qa0, pb0, qb0;       // the components as read
-  Lane total;                    // Σλ, for the linear velocities
+  Lane sa, sb;                   // w_a·n, w_b·n: the friction's and twist's (no normal row's)
+  Lane pa0, qa0, pb0, qb0, sa0, sb0;  // the components as read
+  Lane total;                    // Σλ along n, for the linear velocities
+  Lane friction0, friction1;     // the friction impulse applied along t0, t1
   Lane inverse_mass_sum;
 
-  NormalFrame(const LanePair& pair, const ContactBlock& c, const V3& n, const V3& t0,
-              const V3& t1)
+  BlockFrame(const LanePair& pair, const ContactBlock& c, const V3& n, const V3& t0,
+             const V3& t1)
       : u(dot(n, pair.vb - pair.va)),
         pa(dot(pair.wa, t0)),
         qa(dot(pair.wa, t1)),
         pb(dot(pair.wb, t0)),
         qb(dot(pair.wb, t1)),
+        sa(dot(pair.wa, n)),
+        sb(dot(pair.wb, n)),
         pa0(pa),
         qa0(qa),
         pb0(pb),
         qb0(qb),
+        sa0(sa),
+        sb0(sb),
         total(splat(0.0f)),
+        friction0(splat(0.0f)),
+        friction1(splat(0.0f)),
         inverse_mass_sum(c.inverse_mass_a + c.inverse_mass_b) {}
   Lane normal_velocity(const FrameRow& row) const {
     return u + (row.beta_b * pb - row.alpha_b * qb) - (row.beta_a * pa - row.alpha_a * qa);
@@ -237,15 +247,48 @@ struct NormalFrame {
     pb = pb + turn_b * row.beta_b;
     qb = qb - turn_b * row.alpha_b;
   }
+  // The relative velocity at the centres (α, β, γ in the frame, from each body) along t0 and
+  // t1, the centres' own relative velocity along them given (the normal rows leave it as read):
+  // (w × r)·t0 = γ (w·t1) − β (w·n), (w × r)·t1 = α (w·n) − γ (w·t0)
+  Lane tangent_velocity0(Lane linear, const Lane (&ca)[3], const Lane (&cb)[3]) const {
+    return linear + (cb[2] * qb - cb[1] * sb) - (ca[2] * qa - ca[1] * sa);
+  }
+  Lane tangent_velocity1(Lane linear, const Lane (&ca)[3], const Lane (&cb)[3]) const {
+    return linear + (cb[0] * sb - cb[2] * pb) - (ca[0] * sa - ca[2] * pa);
+  }
+  // the friction impulse P = f0 t0 + f1 t1 on b at its centre, −P on a at its: r × P is
+  // f0 (γ t1 − β n) + f1 (α n − γ t0)
+  void apply_friction(const BlockInertia& m, const Lane (&ca)[3], const Lane (&cb)[3], Lane f0,
+                      Lane f1) {
+    friction0 = friction0 + f0;
+    friction1 = friction1 + f1;
+    const Lane ia = m.a[0], ib = m.b[0];
+    pa = pa + ia * (ca[2] * f1);
+    qa = qa - ia * (ca[2] * f0);
+    sa = sa - ia * (ca[0] * f1 - ca[1] * f0);
+    pb = pb - ib * (cb[2] * f1);
+    qb = qb + ib * (cb[2] * f0);
+    sb = sb + ib * (cb[0] * f1 - cb[1] * f0);
+  }
+  void apply_twist(const BlockInertia& m, Lane impulse) {
+    sa = sa - m.a[0] * impulse;
+    sb = sb + m.b[0] * impulse;
+  }
   // the rows' impulses on the velocities themselves
   void store(LanePair& pair, const ContactBlock& c, const V3& n, const V3& t0,
              const V3& t1) const {
-    pair.va = pair.va - (c.inverse_mass_a * total) * n;
-    pair.vb = pair.vb + (c.inverse_mass_b * total) * n;
-    pair.wa = pair.wa + ((pa - pa0) * t0 + (qa - qa0) * t1);
-    pair.wb = pair.wb + ((pb - pb0) * t0 + (qb - qb0) * t1);
+    const V3 impulse = total * n + friction0 * t0 + friction1 * t1;
+    pair.va = pair.va - c.inverse_mass_a * impulse;
+    pair.vb = pair.vb + c.inverse_mass_b * impulse;
+    pair.wa = pair.wa + ((pa - pa0) * t0 + (qa - qa0) * t1 + (sa - sa0) * n);
+    pair.wb = pair.wb + ((pb - pb0) * t0 + (qb - qb0) * t1 + (sb - sb0) * n);
   }
 };
+
+// a manifold centre's world vector from its coordinates along t0, t1 and n
+V3 centre_in_world(const Lane (&centre)[3], const V3& n, const V3& t0, const V3& t1) {
+  return centre[0] * t0 + centre[1] * t1 + centre[2] * n;
+}
 
 // how far each lane's bodies have moved along its normal since the step's start, as what the
 // points need: s = s₀' + n·(Δx_b − Δx_a) + (ΔR_bᵀ n)·r_b − (ΔR_aᵀ n)·r_a, the two turned normals
@@ -752,8 +795,13 @@ void ContactPipeline::prepare_lanes(ContactBlock& c, ContactBlockRest& r,
     const V3 d = load3(c.points[j].anchor_a) - centre_a;
     arm = arm + simd::select(exists[j], simd::sqrt(dot(d, d)), zero);
   }
-  c.centre_a[0] = centre_a.x, c.centre_a[1] = centre_a.y, c.centre_a[2] = centre_a.z;
-  c.centre_b[0] = centre_b.x, c.centre_b[1] = centre_b.y, c.centre_b[2] = centre_b.z;
+  {
+    const V3 t0 = load3(c.tangent[0]), t1 = load3(c.tangent[1]);
+    c.centre_a[0] = dot(centre_a, t0), c.centre_a[1] = dot(centre_a, t1);
+    c.centre_a[2] = dot(centre_a, n);
+    c.centre_b[0] = dot(centre_b, t0), c.centre_b[1] = dot(centre_b, t1);
+    c.centre_b[2] = dot(centre_b, n);
+  }
   c.twist_arm = inverse_count * arm;
   c.tangent_mass[0] = effective_mass(centre_a, centre_b, load3(c.tangent[0]), any);
   c.tangent_mass[1] = effective_mass(centre_a, centre_b, load3(c.tangent[1]), any);
@@ -825,7 +873,8 @@ void ContactPipeline::warm_start(bool first_substep) {
     const BlockInertia m = inertia_of<false>(c, r);
     for (const ContactBlock::Point& p : c.points)
       pair.apply(c, m, load3(p.anchor_a), load3(p.anchor_b), p.normal_impulse * n);
-    pair.apply(c, m, load3(c.centre_a), load3(c.centre_b),
+    pair.apply(c, m, centre_in_world(c.centre_a, n, t0, t1),
+               centre_in_world(c.centre_b, n, t0, t1),
                c.friction_impulse[0] * t0 + c.friction_impulse[1] * t1);
     pair.apply_twist(m, n, c.twist_impulse);
     pair.store(bodies_, c);
@@ -911,10 +960,10 @@ bool ContactPipeline::solve(double h, bool bias, bool backwards, double toleranc
     // row: one pass over a face's four points lands the whole impulse on the first and spins the
     // body, where the converged answer pushes all four alike
     const int rounds = simd::any_of(c.fresh) ? settings_.local_iterations : 1;
-    // an isotropic block's rows in the manifold's frame (NormalFrame), written back after them
+    // an isotropic block's rows in the manifold's frame (BlockFrame), written back after them
     [[maybe_unused]] auto frame = [&] {
       if constexpr (kIsotropic)
-        return NormalFrame(pair, c, n, t0, t1);
+        return BlockFrame(pair, c, n, t0, t1);
       else
         return 0;
     }();
@@ -981,11 +1030,7 @@ bool ContactPipeline::solve(double h, bool bias, bool backwards, double toleranc
         }
       }
     }
-    if constexpr (kIsotropic)
-      if (simd::any_of(pushed)) {
-        frame.store(pair, c, n, t0, t1);
-        wrote = true;
-      }
+    if constexpr (kIsotropic) wrote = simd::any_of(pushed);
     // Coulomb friction at the manifold's centre: the friction impulse accumulates on the two
     // tangents and its length stays within μ times the manifold's normal impulse (the friction
     // cone as a circle); about the normal, the twist stays within that times the points' mean
@@ -1001,10 +1046,19 @@ bool ContactPipeline::solve(double h, bool bias, bool backwards, double toleranc
       if (simd::any_of((total != zero) | (old0 != zero) | (old1 != zero) |
                        (old_twist != zero))) {
         const Lane limit = c.friction * total;
-        const V3 ra = load3(c.centre_a), rb = load3(c.centre_b);
-        const V3 dv = pair.relative_velocity(ra, rb);
-        Lane f0 = old0 - c.tangent_mass[0] * dot(t0, dv);
-        Lane f1 = old1 - c.tangent_mass[1] * dot(t1, dv);
+        Lane f0, f1;
+        if constexpr (kIsotropic) {
+          const V3 linear = pair.vb - pair.va;
+          f0 = old0 - c.tangent_mass[0] *
+                          frame.tangent_velocity0(dot(t0, linear), c.centre_a, c.centre_b);
+          f1 = old1 - c.tangent_mass[1] *
+                          frame.tangent_velocity1(dot(t1, linear), c.centre_a, c.centre_b);
+        } else {
+          const V3 dv = pair.relative_velocity(centre_in_world(c.centre_a, n, t0, t1),
+                                               centre_in_world(c.centre_b, n, t0, t1));
+          f0 = old0 - c.tangent_mass[0] * dot(t0, dv);
+          f1 = old1 - c.tangent_mass[1] * dot(t1, dv);
+        }
         const Lane length_squared = f0 * f0 + f1 * f1;
         // (where the limit is zero the cone is a point: an impulse whose square underflows to
         // zero is outside it too)
@@ -1018,16 +1072,29 @@ bool ContactPipeline::solve(double h, bool bias, bool backwards, double toleranc
         }
         c.friction_impulse[0] = f0;
         c.friction_impulse[1] = f1;
-        pair.apply<kIsotropic>(c, m, ra, rb, (f0 - old0) * t0 + (f1 - old1) * t1);
         const Lane twist_limit = limit * c.twist_arm;
-        const Lane twist = simd::max(
-            simd::min(old_twist - c.twist_mass * dot(n, pair.wb - pair.wa), twist_limit),
-            zero - twist_limit);
-        c.twist_impulse = twist;
-        pair.apply_twist<kIsotropic>(m, n, twist - old_twist);
+        if constexpr (kIsotropic) {
+          frame.apply_friction(m, c.centre_a, c.centre_b, f0 - old0, f1 - old1);
+          const Lane twist = simd::max(
+              simd::min(old_twist - c.twist_mass * (frame.sb - frame.sa), twist_limit),
+              zero - twist_limit);
+          c.twist_impulse = twist;
+          frame.apply_twist(m, twist - old_twist);
+        } else {
+          pair.apply<kIsotropic>(c, m, centre_in_world(c.centre_a, n, t0, t1),
+                                 centre_in_world(c.centre_b, n, t0, t1),
+                                 (f0 - old0) * t0 + (f1 - old1) * t1);
+          const Lane twist = simd::max(
+              simd::min(old_twist - c.twist_mass * dot(n, pair.wb - pair.wa), twist_limit),
+              zero - twist_limit);
+          c.twist_impulse = twist;
+          pair.apply_twist<kIsotropic>(m, n, twist - old_twist);
+        }
         wrote = true;
       }
     }
+    if constexpr (kIsotropic)
+      if (wrote) frame.store(pair, c, n, t0, t1);
     if (wrote) pair.store(bodies_, c);
     // written once a pass at most: the biased passes (no tolerance) and a settling pass would
     // otherwise have both threads write the flag's cache line after every block
