@@ -112,10 +112,12 @@ LaneIndex body_offsets(const std::array<std::uint32_t, W>& bodies) {
   for (std::size_t i = 0; i < W; ++i) index[i] = std::int32_t(bodies[i] * kBodyFloats);
   return index;
 }
+#if defined(__AVX512F__)
 V3 gather3(const float* base, LaneIndex index) {
   return {simd::gather<Lane>(base, index), simd::gather<Lane>(base + 1, index),
           simd::gather<Lane>(base + 2, index)};
 }
+#endif
 
 // a point's normal row: the angular parts r × n on each body (their response I⁻¹ (r × n) is
 // computed where an impulse is applied). Computed where read rather than kept in the block: the
@@ -300,10 +302,26 @@ struct NormalMotion {
   NormalMotion(const std::vector<SolverBody>& bodies, const ContactBlock& block) {
     const float* base = reinterpret_cast<const float*>(bodies.data());
     const LaneIndex a = body_offsets(block.body_a), b = body_offsets(block.body_b);
+#if defined(__AVX512F__)
+    // a float at a time: with AVX-512's gathers, faster than the records (docs/solver.md)
     const V3 dpa = gather3(base + kDeltaPosition, a), dpb = gather3(base + kDeltaPosition, b);
     const V3 qa = gather3(base + kDeltaRotation, a), qb = gather3(base + kDeltaRotation, b);
     const Lane wa = simd::gather<Lane>(base + kDeltaRotation + 3, a);
     const Lane wb = simd::gather<Lane>(base + kDeltaRotation + 3, b);
+#else
+    // each body's floats 0–7 and 8–15 as records transposed (AVX2 has no fast gather: the
+    // fourteen gathers were a tenth of the kernel on a Zen 3)
+    static_assert(kDeltaPosition == 6 && kDeltaRotation == 12);
+    Lane low[8], high[8];
+    simd::gather_records(base, a, low);
+    simd::gather_records(base + 8, a, high);
+    const V3 dpa = {low[6], low[7], high[0]}, qa = {high[4], high[5], high[6]};
+    const Lane wa = high[7];
+    simd::gather_records(base, b, low);
+    simd::gather_records(base + 8, b, high);
+    const V3 dpb = {low[6], low[7], high[0]}, qb = {high[4], high[5], high[6]};
+    const Lane wb = high[7];
+#endif
     const V3 n = load3(block.normal);
     translation = dot(n, dpb - dpa);
     turned_a = rotate_back(qa, wa, n);
