@@ -498,7 +498,7 @@ void World::integrate_positions(double h) {
       }
       const D x2 = half_angle_squared(w, h);
       series_turn(w, x2, h, turn);
-      if (simd::any_of(!(x2 < simd::splat<D>(0.01))))
+      if (!simd::all_of(x2 < simd::splat<D>(0.01)))
         for (int i = 0; i < 4 && at + i < count; ++i)
           if (!(x2[i] < 0.01)) {  // past the series: the library's sine and cosine
             const double angle = std::sqrt(x2[i]), k = std::sin(angle) / angle * (0.5 * h);
