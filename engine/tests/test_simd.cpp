@@ -1,6 +1,6 @@
 // The SIMD vocabulary's record moves (engine/src/simd.h): whichever way a build moves them —
 // loads and transposes, gathers, or lane by lane — the same floats land in the same places. Built
-// three times: portable, for AVX2 and for AVX-512 (engine/tests/CMakeLists.txt).
+// portable, and for AVX2 and for AVX-512 where the machine runs them (engine/tests/CMakeLists.txt).
 #include <gtest/gtest.h>
 
 #include <cstdint>
@@ -19,8 +19,8 @@ std::vector<float> numbered_records() {
   return memory;
 }
 
-// true where this machine runs what the file was compiled for (engine/tests/CMakeLists.txt builds
-// it for AVX2 and for AVX-512 besides the portable build)
+// true where this machine runs what the file was compiled for: CMake builds the AVX2 and AVX-512
+// forms only on a machine that does, and this guards a build directory moved to another
 bool machine_runs_this_build() {
 #if defined(__AVX512F__)
   return __builtin_cpu_supports("avx512f") && __builtin_cpu_supports("avx512vl");
