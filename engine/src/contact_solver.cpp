@@ -78,14 +78,6 @@ BlockInertia inertia_of(const ContactBlock& c, const ContactBlockRest& r) {
     }
   return m;
 }
-// the inverse inertia times a vector: the matrix, or on an isotropic block the number c
-template <bool kIsotropic>
-V3 inertia_times(const Lane (&m)[6], const V3& v) {
-  if constexpr (kIsotropic)
-    return m[0] * v;
-  else
-    return times(m, v);
-}
 
 // v turned by the inverse of the unit quaternion (x, y, z, w): Rᵀ v
 V3 rotate_back(const V3& q, Lane w, const V3& v) {
@@ -163,28 +155,25 @@ struct LanePair {
     return dot(n, vb - va) + dot(wb, row.angular_b) - dot(wa, row.angular_a);
   }
   // an impulse λ n on b at its anchor, and its opposite on a, by the point's row
-  template <bool kIsotropic = false>
   void apply_normal(const ContactBlock& c, const BlockInertia& m, const NormalRow& row,
                     const V3& n, Lane impulse) {
     va = va - (c.inverse_mass_a * impulse) * n;
-    wa = wa - impulse * inertia_times<kIsotropic>(m.a, row.angular_a);
+    wa = wa - impulse * times(m.a, row.angular_a);
     vb = vb + (c.inverse_mass_b * impulse) * n;
-    wb = wb + impulse * inertia_times<kIsotropic>(m.b, row.angular_b);
+    wb = wb + impulse * times(m.b, row.angular_b);
   }
   // an impulse P on b at its anchor rb, and −P on a at ra
-  template <bool kIsotropic = false>
   void apply(const ContactBlock& c, const BlockInertia& m, const V3& ra, const V3& rb,
              const V3& impulse) {
     va = va - c.inverse_mass_a * impulse;
-    wa = wa - inertia_times<kIsotropic>(m.a, cross(ra, impulse));
+    wa = wa - times(m.a, cross(ra, impulse));
     vb = vb + c.inverse_mass_b * impulse;
-    wb = wb + inertia_times<kIsotropic>(m.b, cross(rb, impulse));
+    wb = wb + times(m.b, cross(rb, impulse));
   }
   // an angular impulse L n on b, and its opposite on a
-  template <bool kIsotropic = false>
   void apply_twist(const BlockInertia& m, const V3& n, Lane impulse) {
-    wa = wa - impulse * inertia_times<kIsotropic>(m.a, n);
-    wb = wb + impulse * inertia_times<kIsotropic>(m.b, n);
+    wa = wa - impulse * times(m.a, n);
+    wb = wb + impulse * times(m.b, n);
   }
   // the relative velocity at the anchors ra, rb
   V3 relative_velocity(const V3& ra, const V3& rb) const {
@@ -1042,7 +1031,7 @@ bool ContactPipeline::solve(double h, bool bias, bool backwards, double toleranc
           // response is not computed
           const LaneMask pushes = applied != zero;
           if (simd::any_of(pushes)) {
-            pair.apply_normal<kIsotropic>(c, m, row, n, applied);
+            pair.apply_normal(c, m, row, n, applied);
             wrote = true;
           }
         }
@@ -1099,14 +1088,13 @@ bool ContactPipeline::solve(double h, bool bias, bool backwards, double toleranc
           c.twist_impulse = twist;
           frame.apply_twist(m, twist - old_twist);
         } else {
-          pair.apply<kIsotropic>(c, m, centre_in_world(c.centre_a, n, t0, t1),
-                                 centre_in_world(c.centre_b, n, t0, t1),
-                                 (f0 - old0) * t0 + (f1 - old1) * t1);
+          pair.apply(c, m, centre_in_world(c.centre_a, n, t0, t1),
+                     centre_in_world(c.centre_b, n, t0, t1), (f0 - old0) * t0 + (f1 - old1) * t1);
           const Lane twist = simd::max(
               simd::min(old_twist - c.twist_mass * dot(n, pair.wb - pair.wa), twist_limit),
               zero - twist_limit);
           c.twist_impulse = twist;
-          pair.apply_twist<kIsotropic>(m, n, twist - old_twist);
+          pair.apply_twist(m, n, twist - old_twist);
         }
         wrote = true;
       }
