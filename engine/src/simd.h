@@ -407,8 +407,8 @@ bool all_of(M m) {
 // back by masked 32-byte stores: a gather or scatter instruction costs one load or store a lane,
 // and a pass over a block's bodies would take six of each a body. With AVX2 (8 lanes), which has
 // no scatter instruction, each record is loaded as two 16-byte halves, transposed 8 × 8, and
-// written back by 16-byte stores (and an 8-byte one for six floats). Elsewhere a gather or scatter a row. The same
-// floats move either way.
+// written back by 16-byte stores (and an 8-byte one for six floats). Elsewhere a gather or
+// scatter a row. The same floats move either way.
 // Always inlined: called, the kernels pass their lanes through memory (measured: the solve's ns
 // per point and pass 7.80 against 7.28 at base 20, minima of ten alternating runs).
 #if defined(RTP_SIMD_VECTORS) && defined(__AVX512F__)
@@ -437,23 +437,14 @@ bool all_of(M m) {
 #endif
 
 #if defined(RTP_SIMD_VECTORS) && defined(__AVX__)
-// rows[i] holding floats 0–3 of records i and i + 4 (i < 4), rows[i + 4] their floats 4–7, becomes
-// rows[k] holding float k of every record, lane i (two rounds of shuffles: the 128-bit halves are
-// placed by the loads)
-[[gnu::always_inline]] inline void transpose_record_halves8(__m256 (&rows)[8]) {
-  __m256 t[8];
-  for (int h = 0; h < 8; h += 4) {
-    t[h] = _mm256_unpacklo_ps(rows[h], rows[h + 1]);
-    t[h + 1] = _mm256_unpackhi_ps(rows[h], rows[h + 1]);
-    t[h + 2] = _mm256_unpacklo_ps(rows[h + 2], rows[h + 3]);
-    t[h + 3] = _mm256_unpackhi_ps(rows[h + 2], rows[h + 3]);
-  }
-  for (int h = 0; h < 8; h += 4) {
-    rows[h] = _mm256_shuffle_ps(t[h], t[h + 2], 0x44);
-    rows[h + 1] = _mm256_shuffle_ps(t[h], t[h + 2], 0xEE);
-    rows[h + 2] = _mm256_shuffle_ps(t[h + 1], t[h + 3], 0x44);
-    rows[h + 3] = _mm256_shuffle_ps(t[h + 1], t[h + 3], 0xEE);
-  }
+// four rows transposed 4 × 4 within each 128-bit half (two rounds of shuffles); its own inverse.
+// Rows holding floats f..f+3 of records i (low half) and i + 4 (high half), i < 4, become rows
+// holding float f + k of every record (lane i); and back
+[[gnu::always_inline]] inline void transpose_quads8(const __m256* in, __m256 (&out)[4]) {
+  const __m256 t0 = _mm256_unpacklo_ps(in[0], in[1]), t1 = _mm256_unpackhi_ps(in[0], in[1]);
+  const __m256 t2 = _mm256_unpacklo_ps(in[2], in[3]), t3 = _mm256_unpackhi_ps(in[2], in[3]);
+  out[0] = _mm256_shuffle_ps(t0, t2, 0x44), out[1] = _mm256_shuffle_ps(t0, t2, 0xEE);
+  out[2] = _mm256_shuffle_ps(t1, t3, 0x44), out[3] = _mm256_shuffle_ps(t1, t3, 0xEE);
 }
 #endif
 
@@ -480,14 +471,15 @@ template <typename V>
   if constexpr (std::is_same_v<V, Pack<float, 8>>) {
     alignas(32) std::int32_t at[8];
     std::memcpy(at, &offset, sizeof at);
-    __m256 r[8];
-    for (int i = 0; i < 4; ++i)
-      for (int h = 0; h < 2; ++h)
-        r[i + 4 * h] = _mm256_insertf128_ps(
-            _mm256_castps128_ps256(_mm_loadu_ps(base + at[i] + 4 * h)),
-            _mm_loadu_ps(base + at[i + 4] + 4 * h), 1);
-    transpose_record_halves8(r);
-    for (int k = 0; k < 8; ++k) rows[k] = r[k];
+    // floats 4h–4h+3 of records i and i + 4 in r[h][i], the halves placed by the loads
+    __m256 r[2][4], t[4];
+    for (int h = 0; h < 2; ++h) {
+      for (int i = 0; i < 4; ++i)
+        r[h][i] = _mm256_insertf128_ps(_mm256_castps128_ps256(_mm_loadu_ps(base + at[i] + 4 * h)),
+                                       _mm_loadu_ps(base + at[i + 4] + 4 * h), 1);
+      transpose_quads8(r[h], t);
+      for (int k = 0; k < 4; ++k) rows[4 * h + k] = t[k];
+    }
     return;
   }
 #endif
@@ -525,23 +517,15 @@ template <typename V, std::size_t R>
     alignas(32) std::int32_t at[8];
     std::memcpy(at, &offset, sizeof at);
     const unsigned set = lane_bits(where);
-    // floats 4h–4h+3 of records i and i + 4 in q[h][i] (two rounds of shuffles); with six rows,
-    // floats 4 and 5 of records 0, 1 | 4, 5 in p[0], of records 2, 3 | 6, 7 in p[1]
-    auto quads = [&](int first, __m256 (&q)[4]) {
-      const __m256 t0 = _mm256_unpacklo_ps(rows[first], rows[first + 1]);
-      const __m256 t1 = _mm256_unpackhi_ps(rows[first], rows[first + 1]);
-      const __m256 t2 = _mm256_unpacklo_ps(rows[first + 2], rows[first + 3]);
-      const __m256 t3 = _mm256_unpackhi_ps(rows[first + 2], rows[first + 3]);
-      q[0] = _mm256_shuffle_ps(t0, t2, 0x44), q[1] = _mm256_shuffle_ps(t0, t2, 0xEE);
-      q[2] = _mm256_shuffle_ps(t1, t3, 0x44), q[3] = _mm256_shuffle_ps(t1, t3, 0xEE);
-    };
+    // floats 4h–4h+3 of records i and i + 4 in q[h][i]; with six rows, floats 4 and 5 of
+    // records 0, 1 | 4, 5 in p[0], of records 2, 3 | 6, 7 in p[1]
     auto half = [](__m256 x, int h) {
       return h == 0 ? _mm256_castps256_ps128(x) : _mm256_extractf128_ps(x, 1);
     };
     __m256 q[2][4];
-    quads(0, q[0]);
+    transpose_quads8(rows, q[0]);
     if constexpr (R == 8) {
-      quads(4, q[1]);
+      transpose_quads8(rows + 4, q[1]);
       for (int h = 0; h < 2; ++h)
         for (int i = 0; i < 4; ++i) {
           const int lane = i + 4 * h;
