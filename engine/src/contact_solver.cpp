@@ -669,8 +669,12 @@ void ContactPipeline::prepare(const Vec3& gravity) {
   for (std::size_t bi = 0; bi < block_count; ++bi) {
     ContactBlock& block = blocks[bi];
     ContactBlockRest& rest = lanes_->rest[bi];
-    block = ContactBlock{};
-    rest = ContactBlockRest{};
+    // every lane of the block and its rest is written below (not cleared first: 3 KB a block,
+    // a base-100 step's 5.7 MB written twice); these two are not, until the solve
+    for (int j = 0; j < 4; ++j) {
+      block.points[j].separation = zero_lane;
+      rest.points[j].max_normal_impulse = zero_lane;
+    }
     const auto [first, last] = contacts_of(bi);
     for (std::size_t i = 0; i < W; ++i) {
       block.body_a[i] = block.body_b[i] = at_rest;
