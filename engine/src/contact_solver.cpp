@@ -378,16 +378,6 @@ class Prefetch {
                    bytes);
   }
   void done() { next_ = nullptr; }
-  // the next block's bodies' records (a line each), read at its start: the body array is
-  // random access, and the blocks streamed between a body's reads push it out to L3
-  void bodies(const std::vector<SolverBody>& all) const {
-    if (!next_) return;
-    const auto* next = reinterpret_cast<const ContactBlock*>(next_);
-    for (std::size_t i = 0; i < kBlockLanes; ++i) {
-      __builtin_prefetch(&all[next->body_a[i]]);
-      __builtin_prefetch(&all[next->body_b[i]]);
-    }
-  }
 
  private:
   static constexpr std::size_t kLines = sizeof(ContactBlock) / 64;
@@ -1052,7 +1042,6 @@ bool ContactPipeline::solve(double h, bool bias, bool backwards, double toleranc
       }
     }
     if constexpr (kIsotropic) wrote = simd::any_of(pushed);
-    ahead.bodies(bodies_);
     // Coulomb friction at the manifold's centre: the friction impulse accumulates on the two
     // tangents and its length stays within μ times the manifold's normal impulse (the friction
     // cone as a circle); about the normal, the twist stays within that times the points' mean
