@@ -217,6 +217,7 @@ class ContactPipeline {
   std::vector<std::uint8_t> contact_class_;
   std::vector<std::uint8_t> colour_scratch_;
   std::vector<std::uint32_t> colour_scratch_order_;  // the contacts by colour, in pair order
+  std::vector<std::uint64_t> colour_visit_;  // the colouring's order: each key's hash, and index
   // the narrow phase's results per candidate, filled in parallel
   std::vector<Manifold> manifolds_;
   // the pair cache (as Jolt's body pair cache): each candidate's result with the two bodies'
