@@ -439,41 +439,57 @@ int team_index() {
 constexpr int kColours = 64;
 
 void ContactPipeline::colour_greedily() {
-  // greedy: each contact takes the first colour neither dynamic body holds
-  body_colours_.assign(bodies_.size(), 0);
+  // Greedy, in pair order: each contact takes a colour neither dynamic body holds. Taking the
+  // first such colour, a colour's contacts run across the scene from the low body indices to the
+  // high (a pyramid's rows, left to right), and the passes, colour by colour, lean a stack that
+  // way: a 5,050-box pyramid swayed toward its low indices and drifted 9–12 mm in 10 s as the
+  // settings moved at round-off. So a first pass finds how many colours the first free one
+  // needs, and the second starts each contact's search at a colour drawn from a hash of its key
+  // among those, wrapping round (beyond them only where none is free): the same number of
+  // colours, as evenly filled, and no direction in them (6–7 mm; docs/solver.md, "The lean")
   std::array<std::uint32_t, kColours + 1> counts{};
   std::vector<std::uint8_t>& colour_of = colour_scratch_;
   colour_of.resize(contacts_.size());
-  // The contacts are visited in an order scrambled by a hash of their keys, not in pair order:
-  // greedy in pair order, a colour's contacts run across the scene from the low body indices to
-  // the high (a pyramid's rows, left to right), and the passes, colour by colour, push it that
-  // way. A 5,050-box pyramid swayed toward its low indices and drifted 9–12 mm in 10 s (the
-  // settings moved at round-off); visited by hash, 6–7 mm (docs/solver.md, "The lean"). The hash
-  // is of the key, so a pair that comes or goes changes no other pair's place in the order
-  colour_visit_.resize(contacts_.size());
-  for (std::size_t i = 0; i < contacts_.size(); ++i) {
-    std::uint64_t h = contact_keys_[i] + 0x9e3779b97f4a7c15ull;  // splitmix64's finalizer
-    h = (h ^ (h >> 30)) * 0xbf58476d1ce4e5b9ull;
-    h = (h ^ (h >> 27)) * 0x94d049bb133111ebull;
-    h ^= h >> 31;
-    colour_visit_[i] = (h & ~std::uint64_t{0xffffffff}) | i;  // the hash's top half, the index
-  }
-  std::sort(colour_visit_.begin(), colour_visit_.end());
-  for (std::size_t ii = 0; ii < contacts_.size(); ++ii) {
-    const std::size_t i = std::size_t(colour_visit_[ii] & 0xffffffffu);
-    const BodyId a = BodyId(contact_keys_[i] >> 32), b = BodyId(contact_keys_[i] & 0xffffffffu);
-    const bool dynamic_a = masses_[a].inverse_mass > 0.0;
-    const bool dynamic_b = masses_[b].inverse_mass > 0.0;
-    const std::uint64_t taken =
-        (dynamic_a ? body_colours_[a] : 0) | (dynamic_b ? body_colours_[b] : 0);
-    // the last colour is the overflow group and takes anything
-    const int colour = std::min(std::countr_one(taken), kColours - 1);
-    if (colour < kColours - 1) {
-      if (dynamic_a) body_colours_[a] |= std::uint64_t{1} << colour;
-      if (dynamic_b) body_colours_[b] |= std::uint64_t{1} << colour;
+  int spread = 0;  // the colours the first pass used
+  for (const bool scrambled : {false, true}) {
+    body_colours_.assign(bodies_.size(), 0);
+    const std::uint64_t in_spread =
+        spread >= 64 ? ~std::uint64_t{0} : (std::uint64_t{1} << spread) - 1;
+    for (std::size_t i = 0; i < contacts_.size(); ++i) {
+      const std::uint64_t key = contact_keys_[i];
+      const BodyId a = BodyId(key >> 32), b = BodyId(key & 0xffffffffu);
+      const bool dynamic_a = masses_[a].inverse_mass > 0.0;
+      const bool dynamic_b = masses_[b].inverse_mass > 0.0;
+      const std::uint64_t taken =
+          (dynamic_a ? body_colours_[a] : 0) | (dynamic_b ? body_colours_[b] : 0);
+      int colour = std::countr_one(taken);
+      if (scrambled && spread > 1) {
+        // splitmix64's finalizer: a colour to start from, in [0, spread)
+        std::uint64_t h = key + 0x9e3779b97f4a7c15ull;
+        h = (h ^ (h >> 30)) * 0xbf58476d1ce4e5b9ull;
+        h = (h ^ (h >> 27)) * 0x94d049bb133111ebull;
+        h ^= h >> 31;
+        const int first = int(h % std::uint64_t(spread));
+        const std::uint64_t free = ~taken & in_spread;
+        const std::uint64_t from_first = free & (~std::uint64_t{0} << first);
+        if (from_first != 0)
+          colour = std::countr_zero(from_first);
+        else if (free != 0)
+          colour = std::countr_zero(free);
+      }
+      // the last colour is the overflow group and takes anything
+      colour = std::min(colour, kColours - 1);
+      if (colour < kColours - 1) {
+        if (dynamic_a) body_colours_[a] |= std::uint64_t{1} << colour;
+        if (dynamic_b) body_colours_[b] |= std::uint64_t{1} << colour;
+      }
+      if (!scrambled) {
+        spread = std::max(spread, std::min(colour + 1, kColours - 1));
+        continue;
+      }
+      colour_of[i] = std::uint8_t(colour | contact_class_[i]);
+      ++counts[colour + 1];
     }
-    colour_of[i] = std::uint8_t(colour | contact_class_[i]);
-    ++counts[colour + 1];
   }
   colour_start_.assign(counts.begin(), counts.end());
   for (int k = 0; k < kColours; ++k) colour_start_[k + 1] += colour_start_[k];

@@ -200,7 +200,8 @@ class ContactPipeline {
   void colour_contacts();
   // each contact's colour in colour_scratch_ (its class in the top bits), each colour's
   // contacts from colour_start_, and each colour's contacts in pair order in
-  // colour_scratch_order_, greedily in pair order
+  // colour_scratch_order_: greedily in pair order, each contact's search for a free colour
+  // starting at one drawn from a hash of its key
   void colour_greedily();
   // a kernel on every block of lanes_, colour by colour, each colour's blocks on the threads
   // backwards: the colours in reverse order (the soft step alternates, docs/solver.md)
@@ -217,7 +218,6 @@ class ContactPipeline {
   std::vector<std::uint8_t> contact_class_;
   std::vector<std::uint8_t> colour_scratch_;
   std::vector<std::uint32_t> colour_scratch_order_;  // the contacts by colour, in pair order
-  std::vector<std::uint64_t> colour_visit_;  // the colouring's order: each key's hash, and index
   // the narrow phase's results per candidate, filled in parallel
   std::vector<Manifold> manifolds_;
   // the pair cache (as Jolt's body pair cache): each candidate's result with the two bodies'
