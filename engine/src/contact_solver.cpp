@@ -33,6 +33,7 @@
 #endif
 
 #include "contacts.h"
+#include "hash.h"
 
 namespace rtp {
 
@@ -453,8 +454,7 @@ void ContactPipeline::colour_greedily() {
   int spread = 0;  // the colours the first pass used
   for (const bool scrambled : {false, true}) {
     body_colours_.assign(bodies_.size(), 0);
-    const std::uint64_t in_spread =
-        spread >= 64 ? ~std::uint64_t{0} : (std::uint64_t{1} << spread) - 1;
+    const std::uint64_t in_spread = (std::uint64_t{1} << spread) - 1;  // spread < kColours
     for (std::size_t i = 0; i < contacts_.size(); ++i) {
       const std::uint64_t key = contact_keys_[i];
       const BodyId a = BodyId(key >> 32), b = BodyId(key & 0xffffffffu);
@@ -464,12 +464,8 @@ void ContactPipeline::colour_greedily() {
           (dynamic_a ? body_colours_[a] : 0) | (dynamic_b ? body_colours_[b] : 0);
       int colour = std::countr_one(taken);
       if (scrambled && spread > 1) {
-        // splitmix64's finalizer: a colour to start from, in [0, spread)
-        std::uint64_t h = key + 0x9e3779b97f4a7c15ull;
-        h = (h ^ (h >> 30)) * 0xbf58476d1ce4e5b9ull;
-        h = (h ^ (h >> 27)) * 0x94d049bb133111ebull;
-        h ^= h >> 31;
-        const int first = int(h % std::uint64_t(spread));
+        // a colour to start from, in [0, spread)
+        const int first = int(detail::mix64(key + 0x9e3779b97f4a7c15ull) % std::uint64_t(spread));
         const std::uint64_t free = ~taken & in_spread;
         const std::uint64_t from_first = free & (~std::uint64_t{0} << first);
         if (from_first != 0)

@@ -4,6 +4,7 @@
 #include <cmath>
 #include <stdexcept>
 
+#include "hash.h"
 #include "simd.h"
 
 namespace rtp {
@@ -13,10 +14,8 @@ namespace {
 // a counter-based random number in [0, 1) (splitmix64): the same particle index and generation
 // give the same number on any thread, so emission needs no shared generator
 double unit_random(std::uint64_t seed, std::uint64_t index, std::uint64_t salt) {
-  std::uint64_t z = seed + 0x9E3779B97F4A7C15ull * (index + 1) + 0xBF58476D1CE4E5B9ull * (salt + 1);
-  z = (z ^ (z >> 30)) * 0xBF58476D1CE4E5B9ull;
-  z = (z ^ (z >> 27)) * 0x94D049BB133111EBull;
-  z ^= z >> 31;
+  const std::uint64_t z = detail::mix64(seed + 0x9E3779B97F4A7C15ull * (index + 1) +
+                                        0xBF58476D1CE4E5B9ull * (salt + 1));
   return static_cast<double>(z >> 11) * (1.0 / 9007199254740992.0);
 }
 
