@@ -966,8 +966,23 @@ bool ContactPipeline::solve(double h, bool bias, bool backwards, double toleranc
   // a pass
   const bool refresh = separations_stale_;
   separations_stale_ = false;
-  auto solve_block = [&]<bool kIsotropic>(ContactBlock& c, ContactBlockRest& r, Prefetch& ahead) {
+  // the pass's rows, known before its blocks, each kind its own kernel: a relax pass computes no
+  // soft scales, a soft one picks its stiffness once a block, and only a relax pass with a
+  // tolerance tracks the velocities' change
+  enum class Rows { kSoft, kBaumgarte, kRelax, kRelaxTracked };
+  auto solve_block = [&]<bool kIsotropic, Rows kRows>(ContactBlock& c, ContactBlockRest& r,
+                                                       Prefetch& ahead) {
     const BlockInertia m = inertia_of<kIsotropic>(c, r);
+    // the soft step's stiffness of each lane, by whether a body is static (soft_lanes)
+    [[maybe_unused]] Lane soft_bias_rate, soft_mass_scale, soft_impulse_scale;
+    if constexpr (kRows == Rows::kSoft) {
+      const LaneMask against_static = (c.inverse_mass_a == zero) | (c.inverse_mass_b == zero);
+      soft_bias_rate = simd::select(against_static, stiffness.bias_rate[1], stiffness.bias_rate[0]);
+      soft_mass_scale =
+          simd::select(against_static, stiffness.mass_scale[1], stiffness.mass_scale[0]);
+      soft_impulse_scale =
+          simd::select(against_static, stiffness.impulse_scale[1], stiffness.impulse_scale[0]);
+    }
     LaneMask changed = zero != zero;
     bool wrote = false;  // whether any lane's velocities changed
     LanePair pair(bodies_, c);
@@ -1027,33 +1042,32 @@ bool ContactPipeline::solve(double h, bool bias, bool backwards, double toleranc
         }();
         const LaneMask apart = s > zero;
         // speculative: the bodies may close the gap in this step, no more
-        Lane velocity_bias = s * inverse_h, mass_scale = one, impulse_scale = zero;
-        if (bias && soft) {
-          const LaneMask against_static =
-              (c.inverse_mass_a == zero) | (c.inverse_mass_b == zero);
-          auto pick = [&](const Lane(&lanes)[2]) {
-            return simd::select(against_static, lanes[1], lanes[0]);
-          };
-          velocity_bias = simd::select(apart, velocity_bias,
-                                       simd::max(pick(stiffness.bias_rate) * s, zero - max_push));
-          mass_scale = simd::select(apart, one, pick(stiffness.mass_scale));
-          impulse_scale = simd::select(apart, zero, pick(stiffness.impulse_scale));
-        } else if (bias) {
-          velocity_bias = simd::select(
-              apart, velocity_bias, zero - baumgarte_rate * simd::max(zero - s - slop, zero));
+        const Lane closing = s * inverse_h;
+        Lane impulse;
+        if constexpr (kRows == Rows::kSoft) {
+          // soft: a share of the effective mass, and of the accumulated impulse taken back
+          // (apart, the speculative rows below)
+          const Lane velocity_bias =
+              simd::select(apart, closing, simd::max(soft_bias_rate * s, zero - max_push));
+          impulse = zero - p.normal_mass * simd::select(apart, one, soft_mass_scale) *
+                               (vn + velocity_bias) -
+                    simd::select(apart, zero, soft_impulse_scale) * p.normal_impulse;
+        } else if constexpr (kRows == Rows::kBaumgarte) {
+          const Lane velocity_bias = simd::select(
+              apart, closing, zero - baumgarte_rate * simd::max(zero - s - slop, zero));
+          impulse = zero - p.normal_mass * (vn + velocity_bias);
         } else {
-          velocity_bias = simd::select(apart, velocity_bias, zero);
+          // no bias: only a gap's closing is allowed, no push out
+          impulse = zero - p.normal_mass * (vn + simd::select(apart, closing, zero));
         }
-        const Lane impulse =
-            zero - p.normal_mass * mass_scale * (vn + velocity_bias) -
-            impulse_scale * p.normal_impulse;
         const Lane accumulated =
             simd::select(active, simd::max(p.normal_impulse + impulse, zero), p.normal_impulse);
         const Lane applied = accumulated - p.normal_impulse;
         p.normal_impulse = accumulated;
         if (any_bounce)
           r.points[j].max_normal_impulse = simd::max(r.points[j].max_normal_impulse, applied);
-        changed |= simd::max(applied, zero - applied) > tolerance_lane * p.normal_mass;
+        if constexpr (kRows == Rows::kRelaxTracked)
+          changed |= simd::max(applied, zero - applied) > tolerance_lane * p.normal_mass;
         if constexpr (kIsotropic) {
           // a few multiply-adds: applied whatever the lanes hold
           frame.apply(m, row, applied);
@@ -1141,14 +1155,24 @@ bool ContactPipeline::solve(double h, bool bias, bool backwards, double toleranc
   };
   const ContactBlock* const first_block = lanes_->blocks.data();
   const std::uint8_t* const isotropic = lanes_->isotropic.data();
-  for_each_block(
-      [&](ContactBlock& c, ContactBlockRest& r, Prefetch& ahead) {
-        if (isotropic[&c - first_block])
-          solve_block.template operator()<true>(c, r, ahead);
-        else
-          solve_block.template operator()<false>(c, r, ahead);
-      },
-      backwards);
+  auto pass = [&]<Rows kRows>() {
+    for_each_block(
+        [&](ContactBlock& c, ContactBlockRest& r, Prefetch& ahead) {
+          if (isotropic[&c - first_block])
+            solve_block.template operator()<true, kRows>(c, r, ahead);
+          else
+            solve_block.template operator()<false, kRows>(c, r, ahead);
+        },
+        backwards);
+  };
+  if (bias && soft)
+    pass.template operator()<Rows::kSoft>();
+  else if (bias)
+    pass.template operator()<Rows::kBaumgarte>();
+  else if (tolerance > 0.0)
+    pass.template operator()<Rows::kRelaxTracked>();
+  else
+    pass.template operator()<Rows::kRelax>();
   return !moved.load(std::memory_order_relaxed);
 }
 
