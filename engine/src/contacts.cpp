@@ -283,7 +283,12 @@ void ContactPipeline::collide_pairs(std::span<const BodyState> states, double dt
   }
   std::size_t reused = 0, moved = 0;
   constexpr std::size_t kCacheAhead = 4;
-#pragma omp parallel for num_threads(settings_.threads) schedule(dynamic, 64) \
+  // in halves of the pair order, as the contacts are built below and the colours' shares solved:
+  // each thread then reads back the manifolds it wrote. Handed out 64 pairs at a time, the two
+  // threads wrote each other's cache lines (a pair's outcome is a byte) and read half the
+  // manifolds from the other core: at base 100 this loop took 0.85 ms on two threads against
+  // 1.15 on one, 0.55 in halves
+#pragma omp parallel for num_threads(settings_.threads) schedule(static) \
     if (n >= 1024) reduction(+ : reused, moved)
   for (std::size_t k = 0; k < n; ++k) {
     const BodyId a = BodyId(candidates_[k] >> 32), b = BodyId(candidates_[k] & 0xffffffffu);
