@@ -794,11 +794,12 @@ void ContactPipeline::prepare(const Vec3& gravity) {
     }
     prepare_lanes(block, rest, exists, cold, acceleration);
   };
-  // each thread the blocks it solves: of each colour its share (for_each_block), so that the
-  // contacts it reads are mostly those it built (collide_pairs: a share of the pair order, as a
-  // colour's share is) and the blocks it writes are in its own cache when it solves them. Spread
-  // over the blocks in order, each thread read half its contacts from the other core's cache,
-  // and two threads took longer over this stage than one
+  // each thread the blocks it solves: of each colour its share (for_each_block; a colour too
+  // small to share is split here too, and solved on one thread there), so that the contacts it
+  // reads are mostly those it built (collide_pairs: a share of the pair order, as a colour's
+  // share is) and the blocks it writes are in its own cache when it solves them. Spread over the
+  // blocks in order, each thread read half its contacts from the other core's cache, and two
+  // threads took longer over this stage than one
   const int colours = int(block_start.size()) - 1;
 #pragma omp parallel num_threads(settings_.threads) if (block_count >= 64)
   for (int k = 0; k < colours; ++k) {
@@ -989,7 +990,8 @@ bool ContactPipeline::solve(double h, bool bias, bool backwards, double toleranc
     [[maybe_unused]] Lane soft_bias_rate, soft_mass_scale, soft_impulse_scale;
     if constexpr (kRows == Rows::kSoft) {
       const LaneMask against_static = (c.inverse_mass_a == zero) | (c.inverse_mass_b == zero);
-      soft_bias_rate = simd::select(against_static, stiffness.bias_rate[1], stiffness.bias_rate[0]);
+      soft_bias_rate =
+          simd::select(against_static, stiffness.bias_rate[1], stiffness.bias_rate[0]);
       soft_mass_scale =
           simd::select(against_static, stiffness.mass_scale[1], stiffness.mass_scale[0]);
       soft_impulse_scale =
@@ -1057,8 +1059,8 @@ bool ContactPipeline::solve(double h, bool bias, bool backwards, double toleranc
         const Lane closing = s * inverse_h;
         Lane impulse;
         if constexpr (kRows == Rows::kSoft) {
-          // soft: a share of the effective mass, and of the accumulated impulse taken back
-          // (apart, the speculative rows below)
+          // touching, a soft push out: a share of the effective mass, and of the accumulated
+          // impulse taken back; apart, only the gap's closing is allowed (speculative)
           const Lane velocity_bias =
               simd::select(apart, closing, simd::max(soft_bias_rate * s, zero - max_push));
           impulse = zero - p.normal_mass * simd::select(apart, one, soft_mass_scale) *

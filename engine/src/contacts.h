@@ -125,7 +125,8 @@ class ContactPipeline {
   // one pass of the velocity solve; bias: push out penetration (soft step, sequential impulse);
   // backwards: the colours in reverse order
   // returns whether every point's normal velocity changed by under `tolerance` (m/s) in the pass
-  // (true without a tolerance: nothing is tracked then)
+  // (a relax pass's, bias false; true for a biased pass or without a tolerance: nothing is
+  // tracked then)
   bool solve(double h, bool bias, bool backwards = false, double tolerance = 0.0);
   void solve_seed(double dt);
   // the bodies' positions changed (the world integrated them): the next solve computes each
