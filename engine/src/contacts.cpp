@@ -4,6 +4,7 @@
 
 #include <algorithm>
 #include <cmath>
+#include <cstddef>
 #include <limits>
 #include <stdexcept>
 
@@ -249,10 +250,16 @@ void ContactPipeline::collide_pairs(std::span<const BodyState> states, double dt
     pair_growth_.resize(n);
   }
   // each body's pose (its rotation matrix) once a step, not once for each of its pairs
+  // (and the rotation in single precision, as a record the pair cache's test reads in lanes)
   poses_.resize(states.size());
+  rotations_.resize(states.size());
 #pragma omp parallel for num_threads(settings_.threads) schedule(static) if (states.size() >= 2048)
-  for (std::size_t i = 0; i < states.size(); ++i)
-    if (shapes_[i].kind != BodyShape::None) poses_[i] = pose_of(states[i]);
+  for (std::size_t i = 0; i < states.size(); ++i) {
+    if (shapes_[i].kind == BodyShape::None) continue;
+    poses_[i] = pose_of(states[i]);
+    for (int r = 0; r < 3; ++r)
+      for (int c = 0; c < 3; ++c) rotations_[i][3 * r + c] = float(poses_[i].rotation(r, c));
+  }
   // each candidate's slot in the pair cache: last step's entry for the pair, or a free one for
   // an entry made this step (both lists sorted by key); last step's pairs that are candidates no
   // more free theirs
@@ -282,7 +289,9 @@ void ContactPipeline::collide_pairs(std::span<const BodyState> states, double dt
     for (; j < cache_slots_.size(); ++j) free_slots_.push_back(cache_slots_[j].slot);
   }
   std::size_t reused = 0, moved = 0;
-  constexpr std::size_t kCacheAhead = 4;
+  // the entries of the next group's pairs (kMotionLanes at a time, motion_in_lanes)
+  constexpr std::size_t kCacheAhead = kMotionLanes;
+  const std::size_t groups = (n + kMotionLanes - 1) / kMotionLanes;
   // in halves of the pair order, as the contacts are built below and the colours' shares solved:
   // each thread then reads back the manifolds it wrote. Handed out 64 pairs at a time, the two
   // threads wrote each other's cache lines (a pair's outcome is a byte) and read half the
@@ -290,57 +299,64 @@ void ContactPipeline::collide_pairs(std::span<const BodyState> states, double dt
   // 1.15 on one, 0.55 in halves
 #pragma omp parallel for num_threads(settings_.threads) schedule(static) \
     if (n >= 1024) reduction(+ : reused, moved)
-  for (std::size_t k = 0; k < n; ++k) {
-    const BodyId a = BodyId(candidates_[k] >> 32), b = BodyId(candidates_[k] & 0xffffffffu);
-    pair_growth_[k] = pair_growth(shapes_[a], shapes_[b]);
-    if (cache && k + kCacheAhead < n) {
-      // the entries are in no order the hardware prefetcher follows
-      const auto* ahead =
-          reinterpret_cast<const char*>(&cache_pool_[candidate_slot_[k + kCacheAhead]]);
-      for (std::size_t line = 0; line < sizeof(CachedPair); line += 64)
-        __builtin_prefetch(ahead + line);
-    }
-    if (cache && has_entry_[k]) {
-      // A pair grown since (a body sped up) spends the growth from the same distance
-      const CachedPair& cached = cache_pool_[candidate_slot_[k]];
-      const std::array<double, 2> motion = motion_since(cached, a, b);
-      const double grown = std::max(pair_growth_[k] - double(cached.growth), 0.0);
-      if (cached.count == 0 &&
-          std::min(motion[0], motion[1]) + grown <= settings_.pair_cache_distance) {
-        // the shapes are no closer than when found apart, less the cache distance
-        manifolds_[k].count = 0;
-        outcome_[k] = kStillApart;
-        ++reused;
+  for (std::size_t group = 0; group < groups; ++group) {
+    const std::size_t group_first = group * kMotionLanes;
+    const std::size_t group_last = std::min(n, group_first + kMotionLanes);
+    std::array<std::array<float, 2>, kMotionLanes> motion_of;
+    if (cache) motion_in_lanes(group_first, group_last, motion_of);
+    for (std::size_t k = group_first; k < group_last; ++k) {
+      const BodyId a = BodyId(candidates_[k] >> 32), b = BodyId(candidates_[k] & 0xffffffffu);
+      pair_growth_[k] = pair_growth(shapes_[a], shapes_[b]);
+      if (cache && k + kCacheAhead < n) {
+        // the entries are in no order the hardware prefetcher follows
+        const auto* ahead =
+            reinterpret_cast<const char*>(&cache_pool_[candidate_slot_[k + kCacheAhead]]);
+        for (std::size_t line = 0; line < sizeof(CachedPair); line += 64)
+          __builtin_prefetch(ahead + line);
+      }
+      if (cache && has_entry_[k]) {
+        // A pair grown since (a body sped up) spends the growth from the same distance
+        const CachedPair& cached = cache_pool_[candidate_slot_[k]];
+        const std::array<double, 2> motion = {motion_of[k - group_first][0],
+                                               motion_of[k - group_first][1]};
+        const double grown = std::max(pair_growth_[k] - double(cached.growth), 0.0);
+        if (cached.count == 0 &&
+            std::min(motion[0], motion[1]) + grown <= settings_.pair_cache_distance) {
+          // the shapes are no closer than when found apart, less the cache distance
+          manifolds_[k].count = 0;
+          outcome_[k] = kStillApart;
+          ++reused;
+          continue;
+        }
+        if (cached.count != 0 &&
+            std::max(motion[0], motion[1]) + grown <= settings_.manifold_reuse_distance) {
+          move_manifold(cached, a, b, pair_growth_[k], manifolds_[k]);
+          outcome_[k] = kMoved;
+          ++moved;
+          continue;
+        }
+      }
+      Shape grown_a = shapes_[a].shape, grown_b = shapes_[b].shape;
+      grow_pair(shapes_[a], shapes_[b], grown_a, grown_b);
+      Manifold& manifold = manifolds_[k];
+      if (!collide(hulls_, grown_a, poses_[a], grown_b, poses_[b], manifold)) manifold.count = 0;
+      if (manifold.count == 0) {
+        outcome_[k] = kFoundApart;
+        if (cache_apart)
+          cache_pool_[candidate_slot_[k]] = cache_pair(a, b, pair_growth_[k], nullptr);
         continue;
       }
-      if (cached.count != 0 &&
-          std::max(motion[0], motion[1]) + grown <= settings_.manifold_reuse_distance) {
-        move_manifold(cached, a, b, pair_growth_[k], manifolds_[k]);
-        outcome_[k] = kMoved;
-        ++moved;
-        continue;
+      outcome_[k] = kTouching;
+      // a box pair's face contact (its normal a face's, its points on that face and the other
+      // box's surface); edge contacts and the other shapes are computed every step
+      bool movable = cache_touching && shapes_[a].kind == BodyShape::Box &&
+                     shapes_[b].kind == BodyShape::Box;
+      for (std::uint8_t j = 0; j < manifold.count && movable; ++j)
+        movable = manifold.points[j].feature.type != ContactType::EdgeEdge;
+      if (movable) {
+        cache_pool_[candidate_slot_[k]] = cache_pair(a, b, pair_growth_[k], &manifold);
+        outcome_[k] = kTouchingCached;
       }
-    }
-    Shape grown_a = shapes_[a].shape, grown_b = shapes_[b].shape;
-    grow_pair(shapes_[a], shapes_[b], grown_a, grown_b);
-    Manifold& manifold = manifolds_[k];
-    if (!collide(hulls_, grown_a, poses_[a], grown_b, poses_[b], manifold)) manifold.count = 0;
-    if (manifold.count == 0) {
-      outcome_[k] = kFoundApart;
-      if (cache_apart)
-        cache_pool_[candidate_slot_[k]] = cache_pair(a, b, pair_growth_[k], nullptr);
-      continue;
-    }
-    outcome_[k] = kTouching;
-    // a box pair's face contact (its normal a face's, its points on that face and the other
-    // box's surface); edge contacts and the other shapes are computed every step
-    bool movable = cache_touching && shapes_[a].kind == BodyShape::Box &&
-                   shapes_[b].kind == BodyShape::Box;
-    for (std::uint8_t j = 0; j < manifold.count && movable; ++j)
-      movable = manifold.points[j].feature.type != ContactType::EdgeEdge;
-    if (movable) {
-      cache_pool_[candidate_slot_[k]] = cache_pair(a, b, pair_growth_[k], &manifold);
-      outcome_[k] = kTouchingCached;
     }
   }
   reused_ = reused;
@@ -538,24 +554,73 @@ ContactPipeline::CachedPair ContactPipeline::cache_pair(BodyId a, BodyId b, doub
   return out;
 }
 
-std::array<double, 2> ContactPipeline::motion_since(const CachedPair& cached, BodyId a,
-                                                    BodyId b) const {
+void ContactPipeline::motion_in_lanes(std::size_t first, std::size_t last,
+                                      std::array<std::array<float, 2>, kMotionLanes>& out) const {
   // How far b's shape has moved in a's frame since the entry was made: by the offset's change,
   // and by the rotation's change at b's farthest surface point (‖ΔR‖₂ ≤ ‖ΔR‖_F); and a's in b's
-  // frame likewise (a plane has no bound of its own: its side is the other's)
-  const Pose& pa = poses_[a];
-  const Pose& pb = poses_[b];
-  const double turned =
-      (pa.rotation.transpose() * pb.rotation - cached.relative_rotation.cast<double>()).norm();
-  const double moved_b = (pa.rotation.transpose() * (pb.position - pa.position) -
-                          cached.offset_in_a.cast<double>())
-                             .norm() +
-                         turned * shapes_[b].reach;
-  const double moved_a = (pb.rotation.transpose() * (pa.position - pb.position) -
-                          cached.offset_in_b.cast<double>())
-                             .norm() +
-                         turned * shapes_[a].reach;
-  return {moved_a, moved_b};
+  // frame likewise (a plane has no bound of its own: its side is the other's). In single
+  // precision, a pair a lane: the rotations and the entries' poses read as records and
+  // transposed, the offset between the centres taken in double first (m; each pair's a, b)
+  using L = simd::Pack<float, kMotionLanes>;
+  using Index = simd::MaskOf<L>;
+  constexpr int kEntryFloats = int(sizeof(CachedPair) / sizeof(float));
+  static_assert(sizeof(CachedPair) % sizeof(float) == 0 &&
+                offsetof(CachedPair, offset_in_b) == 3 * sizeof(float) &&
+                offsetof(CachedPair, relative_rotation) == 6 * sizeof(float));
+  alignas(64) float offset[3][kMotionLanes] = {}, reach_a[kMotionLanes] = {},
+                    reach_b[kMotionLanes] = {};
+  Index at_a{}, at_b{}, at_entry{};
+  bool any = false;
+  for (std::size_t i = 0; i < kMotionLanes; ++i) {
+    const std::size_t k = first + i;
+    // a lane without an entry reads body 0 and slot 0 (there is one: some lane has an entry)
+    at_a[i] = at_b[i] = at_entry[i] = 0;
+    if (k >= last || !has_entry_[k]) continue;
+    any = true;
+    const BodyId a = BodyId(candidates_[k] >> 32), b = BodyId(candidates_[k] & 0xffffffffu);
+    const Vec3 d = poses_[b].position - poses_[a].position;
+    for (int j = 0; j < 3; ++j) offset[j][i] = float(d[j]);
+    reach_a[i] = float(shapes_[a].reach);
+    reach_b[i] = float(shapes_[b].reach);
+    at_a[i] = std::int32_t(a * kRotationFloats);
+    at_b[i] = std::int32_t(b * kRotationFloats);
+    at_entry[i] = std::int32_t(candidate_slot_[k]) * kEntryFloats;
+  }
+  if (!any) return;
+  const float* rotations = rotations_.front().data();
+  const float* entries = reinterpret_cast<const float*>(cache_pool_.data());
+  L a_low[8], a_high[8], b_low[8], b_high[8], e_low[8], e_high[8];
+  simd::gather_records(rotations, at_a, a_low);
+  simd::gather_records(rotations + 8, at_a, a_high);
+  simd::gather_records(rotations, at_b, b_low);
+  simd::gather_records(rotations + 8, at_b, b_high);
+  simd::gather_records(entries, at_entry, e_low);
+  simd::gather_records(entries + 8, at_entry, e_high);
+  // R(r, c) of each body row by row; the entry's offsets, then Raᵀ Rb column by column
+  auto ra = [&](int r, int c) { return 3 * r + c < 8 ? a_low[3 * r + c] : a_high[0]; };
+  auto rb = [&](int r, int c) { return 3 * r + c < 8 ? b_low[3 * r + c] : b_high[0]; };
+  auto entry = [&](int f) { return f < 8 ? e_low[f] : e_high[f - 8]; };
+  const L d[3] = {simd::load<L>(offset[0]), simd::load<L>(offset[1]), simd::load<L>(offset[2])};
+  L turned_squared = simd::splat<L>(0.0f), moved_b_squared = turned_squared,
+    moved_a_squared = turned_squared;
+  for (int i = 0; i < 3; ++i) {
+    for (int j = 0; j < 3; ++j) {
+      const L m = ra(0, i) * rb(0, j) + ra(1, i) * rb(1, j) + ra(2, i) * rb(2, j);
+      const L change = m - entry(6 + i + 3 * j);
+      turned_squared = turned_squared + change * change;
+    }
+    // Raᵀ (xb − xa) and Rbᵀ (xa − xb) against the entry's
+    const L in_a = ra(0, i) * d[0] + ra(1, i) * d[1] + ra(2, i) * d[2] - entry(i);
+    const L in_b = simd::splat<L>(0.0f) - (rb(0, i) * d[0] + rb(1, i) * d[1] + rb(2, i) * d[2]) -
+                   entry(3 + i);
+    moved_b_squared = moved_b_squared + in_a * in_a;
+    moved_a_squared = moved_a_squared + in_b * in_b;
+  }
+  const L turned = simd::sqrt(turned_squared);
+  alignas(64) float moved_a[kMotionLanes], moved_b[kMotionLanes];
+  simd::store(moved_a, simd::sqrt(moved_a_squared) + turned * simd::load<L>(reach_a));
+  simd::store(moved_b, simd::sqrt(moved_b_squared) + turned * simd::load<L>(reach_b));
+  for (std::size_t i = 0; i < kMotionLanes; ++i) out[i] = {moved_a[i], moved_b[i]};
 }
 
 void ContactPipeline::move_manifold(const CachedPair& cached, BodyId a, BodyId b, double growth,

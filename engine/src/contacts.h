@@ -247,8 +247,16 @@ class ContactPipeline {
     std::array<Point, 4> points;
   };
   static_assert(sizeof(CachedPair) == 208);
-  // how far each body's shape has moved in the other's frame since the entry's pose (m)
-  std::array<double, 2> motion_since(const CachedPair& cached, BodyId a, BodyId b) const;
+  // how far each body's shape has moved in the other's frame since its entry's pose (m), for
+  // the candidates [first, last) with an entry, kMotionLanes at a time (a lane each, as
+  // out[k − first]; the others' lanes are left as they were)
+  static constexpr std::size_t kMotionLanes = simd::kNativeFloats;
+  void motion_in_lanes(std::size_t first, std::size_t last,
+                       std::array<std::array<float, 2>, kMotionLanes>& out) const;
+  // each body's rotation in single precision, row by row (nine floats, then zeros), a record of
+  // kRotationFloats floats: what motion_in_lanes reads
+  static constexpr std::size_t kRotationFloats = 16;
+  std::vector<std::array<float, kRotationFloats>> rotations_;
   // the pair's pose now; with the manifold in the bodies' frames if one is given
   CachedPair cache_pair(BodyId a, BodyId b, double growth, const Manifold* manifold) const;
   // a cached manifold at the bodies' poses now, its depths for the pair's growth now
