@@ -249,7 +249,8 @@ class ContactPipeline {
   static_assert(sizeof(CachedPair) == 208);
   // how far each body's shape has moved in the other's frame since its entry's pose (m), for
   // the candidates [first, last) with an entry, kMotionLanes at a time (a lane each, as
-  // out[k − first]; the others' lanes are left as they were)
+  // out[k − first]; a lane without an entry holds a number that means nothing, and none is
+  // written where no candidate of the group has one)
   static constexpr std::size_t kMotionLanes = simd::kNativeFloats;
   void motion_in_lanes(std::size_t first, std::size_t last,
                        std::array<std::array<float, 2>, kMotionLanes>& out) const;
