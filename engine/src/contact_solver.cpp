@@ -34,6 +34,7 @@
 
 #include "contacts.h"
 #include "hash.h"
+#include "threads.h"
 
 namespace rtp {
 
@@ -414,28 +415,6 @@ static_assert((kNormalFloat + 16) * sizeof(float) <= sizeof(ContactConstraint) &
 // a colour's blocks go to threads only past this many contacts: below it the barrier costs more
 constexpr std::size_t kParallelColour = 256;
 
-// the share of n items that part `part` of `parts` takes: contiguous, and the same wherever it is
-// asked (the colouring orders each thread's contacts, and the passes hand each thread its blocks)
-std::pair<std::size_t, std::size_t> share_of(std::size_t n, int parts, int part) {
-  return {n * std::size_t(part) / std::size_t(parts),
-          n * std::size_t(part + 1) / std::size_t(parts)};
-}
-
-// the calling thread's place in its team (one thread, the first, without OpenMP)
-int team_size() {
-#if defined(_OPENMP)
-  return omp_get_num_threads();
-#else
-  return 1;
-#endif
-}
-int team_index() {
-#if defined(_OPENMP)
-  return omp_get_thread_num();
-#else
-  return 0;
-#endif
-}
 // colours beyond the 63rd are one last group, solved one contact a block, in order
 constexpr int kColours = 64;
 
@@ -588,25 +567,45 @@ void ContactPipeline::for_each_block(Kernel&& kernel, bool backwards) {
     for (int k = 0; k < kColours; ++k) run_colour(k);
     return;
   }
-#pragma omp parallel num_threads(settings_.threads)
+  // the visit: each wide colour, and each run of narrow ones (with the overflow) that holds a
+  // block, on one thread; a barrier between two of them, none after the last (the region's end
+  // is one), and none for a run of empty colours
+  struct Visit {
+    int first, last;  // the k-th colours visited, [first, last)
+    bool wide;
+  };
+  std::array<Visit, kColours> visits;
+  int visit_count = 0;
   for (int k = 0; k < kColours;) {
     if (wide(k)) {
-      // each thread its share of the colour's blocks, the share the colouring packed for it
-      const int c = colour(k);
-      const auto [begin, end] =
-          share_of(start[c + 1] - start[c], team_size(), team_index());
-      for (std::size_t i = start[c] + begin; i < start[c] + end; ++i)
-        run_block(i, start[c] + end);
-#pragma omp barrier
+      visits[std::size_t(visit_count++)] = {k, k + 1, true};
       ++k;
       continue;
     }
-    // a run of narrow colours (and the overflow) on one thread, one barrier for the run
     int end = k;
-    while (end < kColours && !wide(end)) ++end;
-#pragma omp single
-    for (int j = k; j < end; ++j) run_colour(j);
+    bool any = false;
+    for (; end < kColours && !wide(end); ++end)
+      any = any || start[colour(end) + 1] > start[colour(end)];
+    if (any) visits[std::size_t(visit_count++)] = {k, end, false};
     k = end;
+  }
+  SpinBarrier barrier;
+#pragma omp parallel num_threads(settings_.threads)
+  {
+    const int size = team_size(), index = team_index();
+    for (int v = 0; v < visit_count; ++v) {
+      const Visit& visit = visits[std::size_t(v)];
+      if (v > 0) barrier.wait(size);
+      if (visit.wide) {
+        // each thread its share of the colour's blocks, the share the colouring packed for it
+        const int c = colour(visit.first);
+        const auto [begin, end] = share_of(start[c + 1] - start[c], size, index);
+        for (std::size_t i = start[c] + begin; i < start[c] + end; ++i)
+          run_block(i, start[c] + end);
+      } else if (index == 0) {
+        for (int j = visit.first; j < visit.last; ++j) run_colour(j);
+      }
+    }
   }
 }
 

@@ -187,8 +187,12 @@ class ContactPipeline {
     Vec3 position;  // at the step's start
     Quat orientation;
   };
-  std::vector<std::uint32_t> bucket_start_, bucket_fill_;  // find_pairs' counting sort
-  std::vector<std::uint64_t> sorted_candidates_;           // and its output
+  // find_pairs' counting sort: each body's first key, and each thread's keys and their counts
+  // by first body (then their places)
+  std::vector<std::uint32_t> bucket_start_;
+  std::vector<std::vector<std::uint64_t>> part_keys_;
+  std::vector<std::vector<std::uint32_t>> part_counts_;
+  std::vector<std::uint64_t> sorted_candidates_;  // and its output
   std::vector<std::uint8_t> fast_flags_;  // update_bounds' scratch: 1 for a fast body
   std::vector<FastBody> fast_;  // this step's bodies that move beyond their bounds' growth
   std::vector<std::uint64_t> candidates_;  // pair keys, sorted
