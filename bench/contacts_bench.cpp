@@ -5,6 +5,7 @@
 //
 //   build/bench/bench/contacts_bench --benchmark_out=contacts.json --benchmark_out_format=json
 //   build/bench/bench/contacts_bench --benchmark_filter='Pyramid/base:100/'
+//   build/bench/bench/contacts_bench --benchmark_filter=ThreadScaling   (one thread against two)
 #include <benchmark/benchmark.h>
 
 #include <algorithm>
@@ -84,6 +85,39 @@ void Pyramid(benchmark::State& state) {
     state.counters[std::string("share_") + names[i]] = sum[i] / total;
 }
 
+// One thread against two, paired: two worlds of the same pyramid, one on each thread count,
+// stepped in turn, so both run the same steps (the same relax passes: the step's cost varies
+// with them) in the same moments of the machine (whose speed drifts by up to 2x within
+// minutes). Reports each world's ms a step over the run and the speedup as the ratio of the two
+// totals; the runs are bit-identical (a difference in the final poses fails the benchmark).
+void ThreadScaling(benchmark::State& state) {
+  const int base = int(state.range(0));
+  const physbench::Scene scene = physbench::pyramid_scene(base);
+  std::array<std::unique_ptr<rtp::World>, 2> worlds;
+  for (int k = 0; k < 2; ++k) {
+    worlds[std::size_t(k)] = std::make_unique<rtp::World>(physbench::make_rtp_world(
+        scene, rtp::Integrator::SemiImplicitEuler, settings_for(k + 1)));
+    for (int i = 0; i < kSettleSteps; ++i) worlds[std::size_t(k)]->step(scene.dt);
+  }
+  std::array<double, 2> total{};
+  std::size_t steps = 0;
+  for (auto _ : state) {
+    for (int k = 0; k < 2; ++k) {
+      worlds[std::size_t(k)]->step(scene.dt);
+      total[std::size_t(k)] += worlds[std::size_t(k)]->profile().total;
+    }
+    ++steps;
+  }
+  for (rtp::BodyId body = 0; body < worlds[0]->body_count(); ++body)
+    if (worlds[0]->state(body).position != worlds[1]->state(body).position) {
+      state.SkipWithError("two threads did not give one thread's poses");
+      return;
+    }
+  state.counters["ms_per_step_1t"] = 1e3 * total[0] / double(steps);
+  state.counters["ms_per_step_2t"] = 1e3 * total[1] / double(steps);
+  state.counters["speedup_2t"] = total[0] / total[1];
+}
+
 }  // namespace
 
 int main(int argc, char** argv) {
@@ -104,6 +138,13 @@ int main(int argc, char** argv) {
           ->Unit(benchmark::kMillisecond)
           ->UseRealTime()
           ->MinTime(base >= 100 ? 2.0 : 0.5);
+  for (int base : {50, 100})
+    benchmark::RegisterBenchmark("ThreadScaling", ThreadScaling)
+        ->Arg(base)
+        ->ArgName("base")
+        ->Unit(benchmark::kMillisecond)
+        ->UseRealTime()
+        ->Iterations(base >= 100 ? 300 : 600);
   benchmark::Initialize(&argc, argv);
   if (benchmark::ReportUnrecognizedArguments(argc, argv)) return 1;
   benchmark::RunSpecifiedBenchmarks();

@@ -172,8 +172,14 @@ def contacts_benchmark(folder: Path) -> dict | None:
     if document is None:
         return None
     cases: dict[tuple, dict] = {}
+    paired: dict[int, dict] = {}
     for run in document.get("benchmarks", []):
         name = run.get("run_name", run.get("name", ""))
+        if name.startswith("ThreadScaling/"):
+            scaling = thread_scaling_row(folder, name, run)
+            if scaling is not None:
+                paired[scaling["base"]] = scaling
+            continue
         if not name.startswith("Pyramid/"):
             continue
         aggregate = run.get("aggregate_name") if run.get("run_type") == "aggregate" else None
@@ -191,7 +197,7 @@ def contacts_benchmark(folder: Path) -> dict | None:
                               f"or garbles {exc}") from exc
         if aggregate == "median" or key not in cases:
             cases[key] = row
-    if not cases:
+    if not cases and not paired:
         return None
     rows = sorted(cases.values(), key=lambda r: (r["base"], r["threads"]))
     stages = list(dict.fromkeys(stage for r in rows for stage in r["shares"]))
@@ -205,5 +211,23 @@ def contacts_benchmark(folder: Path) -> dict | None:
     fig.update_layout(barmode="stack", title="rtp contact step: each stage's share of the step (contacts_bench)",
                       yaxis_title="share of the step")
     context = document.get("context", {})
-    return dict(rows=rows, stages=stages, chart=figure_html(fig), solver=context.get("solver", ""),
-                scene=context.get("scene", ""))
+    return dict(rows=rows, stages=stages, chart=figure_html(fig) if rows else "", solver=context.get("solver", ""),
+                scene=context.get("scene", ""), paired=[paired[base] for base in sorted(paired)])
+
+
+def thread_scaling_row(folder: Path, name: str, run: dict) -> dict | None:
+    """One ThreadScaling run of contacts_bench (one thread against two, the same steps in turn):
+    its base, each world's ms per step and the speedup; None for an aggregate other than the
+    median, a failed run named as such."""
+    if run.get("run_type") == "aggregate" and run.get("aggregate_name") != "median":
+        return None
+    fields = dict(part.split(":", 1) for part in name.split("/")[1:] if ":" in part)
+    if run.get("error_occurred"):
+        return dict(base=int(fields.get("base", 0)), error=run.get("error_message", "failed"))
+    try:
+        return dict(base=int(fields["base"]), ms_1t=float(run["ms_per_step_1t"]),
+                    ms_2t=float(run["ms_per_step_2t"]), speedup=float(run["speedup_2t"]),
+                    steps=int(run["iterations"]), error=None)
+    except (KeyError, ValueError) as exc:
+        raise ReportError(f"{folder / 'benchmarks' / 'contacts.json'}: benchmark {name!r} lacks "
+                          f"or garbles {exc}") from exc

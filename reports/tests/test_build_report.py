@@ -407,6 +407,24 @@ def test_contacts_benchmark_rows_speedups_and_shares(tmp_path):
     assert bench["solver"] == "soft step, 8 substeps"
 
 
+def test_thread_scaling_runs_are_the_paired_speedups(tmp_path):
+    (tmp_path / "benchmarks").mkdir()
+    scaling = {"name": "ThreadScaling/base:100/iterations:300/real_time",
+               "run_name": "ThreadScaling/base:100/iterations:300/real_time", "run_type": "iteration",
+               "iterations": 300, "real_time": 18.0, "time_unit": "ms",
+               "ms_per_step_1t": 11.0, "ms_per_step_2t": 6.5, "speedup_2t": 11.0 / 6.5}
+    failed = {"name": "ThreadScaling/base:50/iterations:600/real_time", "run_type": "iteration",
+              "iterations": 0, "error_occurred": True, "error_message": "two threads did not give one thread's poses"}
+    (tmp_path / "benchmarks" / "contacts.json").write_text(contacts_json([pyramid_run(10, 1, 2.0), scaling, failed]))
+    bench = benchmarks.contacts_benchmark(tmp_path)
+    assert [p["base"] for p in bench["paired"]] == [50, 100]
+    assert bench["paired"][0]["error"] == "two threads did not give one thread's poses"
+    assert bench["paired"][1]["speedup"] == pytest.approx(11.0 / 6.5)
+    assert bench["paired"][1]["steps"] == 300
+    # the separate runs' rows are still read beside them
+    assert [(r["base"], r["threads"]) for r in bench["rows"]] == [(10, 1)]
+
+
 def test_a_contacts_benchmark_without_its_counters_is_named(tmp_path):
     (tmp_path / "benchmarks").mkdir()
     broken = pyramid_run(10, 1, 2.0)
