@@ -206,7 +206,7 @@ void ContactPipeline::find_pairs() {
   // share of the found pairs, then writes them where the counts put them (each body's bucket
   // holds the parts' keys in part order) and sorts its share of the buckets: the same keys in
   // the same order on any number of threads. (Serial, this took 0.13 ms of a base-100 step,
-  // about 0.17 on two threads, where the keys came from the other core's sweep.)
+  // about 0.16 on two threads, where the keys came from the other core's sweep.)
   const int parts = settings_.threads > 1 && found.size() >= 2048 ? settings_.threads : 1;
   if (part_keys_.size() < std::size_t(parts)) {
     part_keys_.resize(std::size_t(parts));

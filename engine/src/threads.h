@@ -43,10 +43,10 @@ inline void spin_pause() {
 #endif
 }
 
-// A barrier for the threads of one team, spinning: between two colours of a pass the threads
-// wait about a microsecond, where an OpenMP barrier costs 0.7 µs more than this one (two threads
-// on these VMs: a region with six of them 2.1 µs, with six OpenMP barriers 4.2). Past a spin
-// budget a waiting thread yields, so a team larger than the cores still makes progress.
+// A barrier for the threads of one team, spinning: a pass has one between two colours, and an
+// OpenMP barrier costs about 0.35 µs more than this one (two threads on these VMs: a region with
+// six of them 2.1–2.3 µs, with six OpenMP barriers 4.1–4.3). Past a spin budget a waiting thread
+// yields, so a team larger than the cores still makes progress.
 class SpinBarrier {
  public:
   void wait(int team) {
