@@ -3,6 +3,7 @@
 // stage to stage (and the results do not depend on the team's size).
 #pragma once
 
+#include <algorithm>
 #include <atomic>
 #include <cstddef>
 #include <thread>
@@ -45,8 +46,8 @@ inline void spin_pause() {
 
 // A barrier for the threads of one team, spinning: a pass has one between two colours, and an
 // OpenMP barrier costs about 0.35 µs more than this one (two threads on these VMs: a region with
-// six of them 2.1–2.3 µs, with six OpenMP barriers 4.1–4.3). Past a spin budget a waiting thread
-// yields, so a team larger than the cores still makes progress.
+// six of them 2.1–2.3 µs, with six OpenMP barriers 4.1–4.3). Past a spin budget, or at once in a
+// team larger than the cores, a waiting thread yields, so the threads it waits for can run.
 class SpinBarrier {
  public:
   void wait(int team) {
@@ -56,8 +57,11 @@ class SpinBarrier {
       generation_.store(generation + 1, std::memory_order_release);
       return;
     }
+    // a team larger than the cores yields at once: the thread it waits for may need this core
+    static const unsigned cores = std::max(1u, std::thread::hardware_concurrency());
+    const int budget = unsigned(team) > cores ? 0 : kSpins;
     for (int spins = 0; generation_.load(std::memory_order_acquire) == generation; ++spins) {
-      if (spins < kSpins)
+      if (spins < budget)
         spin_pause();
       else
         std::this_thread::yield();
