@@ -69,7 +69,9 @@ class SpinBarrier {
   }
 
  private:
-  static constexpr int kSpins = 1 << 14;
+  // about 40 µs of pauses, twice a colour's share of a pass at base 100: a thread still waiting
+  // then is waiting for one the machine has descheduled (another process on its core)
+  static constexpr int kSpins = 1 << 11;
   alignas(64) std::atomic<int> arrived_{0};
   alignas(64) std::atomic<unsigned> generation_{0};
 };

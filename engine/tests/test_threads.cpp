@@ -56,7 +56,7 @@ void every_thread_sees_every_write(int threads, int rounds) {
 }
 
 TEST(Threads, SpinBarrierHoldsEveryThreadUntilAllArrive) {
-  every_thread_sees_every_write(2, 20000);
+  every_thread_sees_every_write(2, 5000);
   every_thread_sees_every_write(3, 2000);
 }
 
