@@ -108,11 +108,14 @@ void ThreadScaling(benchmark::State& state) {
     }
     ++steps;
   }
-  for (rtp::BodyId body = 0; body < worlds[0]->body_count(); ++body)
-    if (worlds[0]->state(body).position != worlds[1]->state(body).position) {
+  for (rtp::BodyId body = 0; body < worlds[0]->body_count(); ++body) {
+    const rtp::BodyState& one = worlds[0]->state(body);
+    const rtp::BodyState& two = worlds[1]->state(body);
+    if (one.position != two.position || one.orientation.coeffs() != two.orientation.coeffs()) {
       state.SkipWithError("two threads did not give one thread's poses");
       return;
     }
+  }
   state.counters["ms_per_step_1t"] = 1e3 * total[0] / double(steps);
   state.counters["ms_per_step_2t"] = 1e3 * total[1] / double(steps);
   state.counters["speedup_2t"] = total[0] / total[1];

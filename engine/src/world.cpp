@@ -595,7 +595,7 @@ void World::step_with_contacts(double dt) {
             const bool settled =
                 contacts.solve(h, false, backwards, last_needed ? tolerance : 0.0);
             ++profile_.relax_passes;
-            if (i + 1 >= settings.relax_iterations && (settled || tolerance <= 0.0)) break;
+            if (last_needed && (settled || tolerance <= 0.0)) break;
           }
         });
       }
