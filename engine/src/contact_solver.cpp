@@ -680,7 +680,7 @@ SoftLanes soft_lanes(const ContactSettings& settings, double h) {
   return lanes;
 }
 
-void ContactPipeline::prepare(const Vec3& gravity) {
+void ContactPipeline::prepare(const Vec3& gravity, double h) {
   colour_contacts();
   separations_stale_ = true;
   if (settings_.solver == ContactSolver::Seed) return;  // the seed reads the contacts themselves
@@ -689,6 +689,7 @@ void ContactPipeline::prepare(const Vec3& gravity) {
   std::vector<ContactBlock>& blocks = lanes_->blocks;
   const std::size_t block_count = blocks.size();
   const Lane zero_lane = splat(0.0f);
+  std::atomic<bool> bounces{false};
   // a block's contacts, [first, last) in colour_order_: which colour it is of, and where in it
   // (W contacts a block, one in the overflow colour)
   auto contacts_of = [&](std::size_t bi) {
@@ -800,7 +801,8 @@ void ContactPipeline::prepare(const Vec3& gravity) {
       const Vec3 gravity_b = block.inverse_mass_b[i] > 0.0f ? gravity : Vec3::Zero();
       acceleration[i] = float(normal.dot(gravity_b - gravity_a));
     }
-    prepare_lanes(block, rest, exists, cold, acceleration);
+    if (prepare_lanes(block, rest, exists, cold, acceleration, h))
+      bounces.store(true, std::memory_order_relaxed);
   };
   // each thread the blocks it solves: of each colour its share (for_each_block; a colour too
   // small to share is split here too, and solved on one thread there), so that the contacts it
@@ -816,12 +818,15 @@ void ContactPipeline::prepare(const Vec3& gravity) {
     for (std::size_t bi = block_start[k] + begin; bi < block_start[k] + end; ++bi)
       prepare_block(bi);
   }
+  bounces_ = bounces.load(std::memory_order_relaxed);
+  gravity_ = gravity;
+  restitution_step_ = h;
 }
 
-void ContactPipeline::prepare_lanes(ContactBlock& c, ContactBlockRest& r,
+bool ContactPipeline::prepare_lanes(ContactBlock& c, ContactBlockRest& r,
                                     const std::array<LaneMask, 4>& exists,
-                                    const std::array<LaneMask, 4>& cold,
-                                    Lane acceleration) const {
+                                    const std::array<LaneMask, 4>& cold, Lane acceleration,
+                                    double h) const {
   // the rows, effective masses and approach speeds of a block's points, lane by lane
   const Lane zero = splat(0.0f);
   const Lane threshold = splat(float(-settings_.restitution_threshold));
@@ -836,12 +841,23 @@ void ContactPipeline::prepare_lanes(ContactBlock& c, ContactBlockRest& r,
     const LaneMask valid = point & (k > zero);
     return simd::select(valid, splat(1.0f) / simd::select(valid, k, splat(1.0f)), zero);
   };
-  LaneMask fresh = zero != zero;
-  // the centre of each manifold's points, and their mean distance from it
+  LaneMask fresh = zero != zero, bounces = zero != zero;
+  // the centre of each manifold's points, and their mean distance from it: of the points that
+  // touch (within the linear slop), where some do, for friction acts where the bodies touch (a
+  // door toppling about its edge, its other edge a speculative point 4 cm up, took friction
+  // between the two and fell 2 % slow)
+  const Lane slop = splat(float(settings_.linear_slop));
+  std::array<LaneMask, 4> holds;
+  LaneMask any_touches = zero != zero;
+  for (int j = 0; j < 4; ++j) {
+    holds[j] = exists[j] & (r.points[j].base_separation <= slop);
+    any_touches |= holds[j];
+  }
+  for (int j = 0; j < 4; ++j) holds[j] = simd::select(any_touches, holds[j], exists[j]);
   V3 sum_a{zero, zero, zero}, sum_b{zero, zero, zero};
   Lane count = zero;
   for (int j = 0; j < 4; ++j) {
-    const Lane one_if = simd::select(exists[j], splat(1.0f), zero);
+    const Lane one_if = simd::select(holds[j], splat(1.0f), zero);
     sum_a = sum_a + one_if * load3(c.points[j].anchor_a);
     sum_b = sum_b + one_if * load3(c.points[j].anchor_b);
     count = count + one_if;
@@ -853,7 +869,7 @@ void ContactPipeline::prepare_lanes(ContactBlock& c, ContactBlockRest& r,
   Lane arm = zero;
   for (int j = 0; j < 4; ++j) {
     const V3 d = load3(c.points[j].anchor_a) - centre_a;
-    arm = arm + simd::select(exists[j], simd::sqrt(dot(d, d)), zero);
+    arm = arm + simd::select(holds[j], simd::sqrt(dot(d, d)), zero);
   }
   {
     const V3 t0 = load3(c.tangent[0]), t1 = load3(c.tangent[1]);
@@ -878,19 +894,29 @@ void ContactPipeline::prepare_lanes(ContactBlock& c, ContactBlockRest& r,
     // the separation is tracked from here: s = base + n·(motion of b's anchor − a's)
     q.base_separation = separation - dot(n, rb - ra);
     p.normal_mass = effective_mass(ra, rb, n, exists[j]);
-    // a point still apart hits, if it hits this step, at the speed free flight gives it over the
-    // gap: v² = v₀² − 2 a s₀ with a the relative acceleration gravity gives along n (the speed
-    // the solve sees is one a speculative push has already slowed)
-    const Lane approach = pair.normal_velocity(n, NormalRow(p, n));
+    // The approach speed restitution reverses: what the forces alone give the point when it
+    // hits, never a speed another contact's impulse gave it this step (in a row of touching
+    // balls, one struck, the balls behind the first meet each other at a speed the first
+    // contact's push made: reversed as well, that speed created energy, 2.3 times the strike's
+    // in a row of five). It is the speed at the instant of the positions (restitution()): a
+    // solve's velocity is the one over its last step h, half a step behind them, so the speed
+    // at the positions is v + a h/2 with a the relative acceleration gravity gives along n. A
+    // point still apart hits, if it hits this step, at the speed free flight gives it over the
+    // gap, v² = v₀² − 2 a s₀; a touching one hits at its speed now
+    const Lane approach =
+        pair.normal_velocity(n, NormalRow(p, n)) + splat(float(0.5 * h)) * acceleration;
     q.starts_apart = exists[j] & (separation > zero);
     const Lane squared = approach * approach - splat(2.0f) * acceleration * separation;
     q.approach_velocity = simd::select(q.starts_apart, zero - simd::sqrt(simd::max(squared, zero)),
                                        approach);
     // no warm start where it may push, or an approach fast enough to bounce: the manifold is
     // solved locally
-    fresh |= cold[j] | (exists[j] & (q.approach_velocity < threshold));
+    const LaneMask hits = exists[j] & (q.approach_velocity < threshold);
+    fresh |= cold[j] | hits;
+    bounces |= hits & (r.restitution > zero);
   }
   c.fresh = fresh;
+  return simd::any_of(bounces);
 }
 
 void ContactPipeline::warm_start(bool first_substep) {
@@ -1016,21 +1042,9 @@ bool ContactPipeline::solve(double h, bool bias, bool backwards, double toleranc
         c.points[j].separation = motion.separation(c.points[j], r.points[j].base_separation);
     }
 
-    // the approach speed restitution reverses, for points that started the step touching: each
-    // one's last before it first pushed, all read before this manifold pushes at all (read one
-    // by one, the points after the first would see the first's push, and bounce unequally)
-    // (a block where no lane bounces needs neither that speed nor the largest impulse, which
-    // only restitution reads)
-    const LaneMask bounces = r.restitution > zero;
-    const bool any_bounce = simd::any_of(bounces);
-    if (any_bounce)
-      for (int j = 0; j < 4; ++j) {
-        ContactBlockRest::Point& q = r.points[j];
-        const LaneMask unread = (q.max_normal_impulse == zero) & ~q.starts_apart & bounces;
-        if (simd::any_of(unread))
-          q.approach_velocity = simd::select(
-              unread, pair.normal_velocity(n, NormalRow(c.points[j], n)), q.approach_velocity);
-      }
+    // the largest impulse of each point this step, which only restitution reads: kept where
+    // some lane bounces
+    const bool any_bounce = simd::any_of(r.restitution > zero);
     // non-penetration: the normal impulse accumulates and stays ≥ 0 (Catto GDC 2006). A
     // manifold with no warm start (a new contact, an impact) runs its points several times in a
     // row: one pass over a face's four points lands the whole impulse on the first and spins the
@@ -1199,34 +1213,75 @@ bool ContactPipeline::solve(double h, bool bias, bool backwards, double toleranc
 }
 
 void ContactPipeline::restitution() {
+  // Newton's law of restitution on every point that pushed this step, at once: the relative
+  // normal velocity leaves at least −e times the approach speed (prepare()), or 0 where the
+  // approach is slower than the threshold, with the step's accumulated impulse kept ≥ 0. Solved
+  // to convergence, the answer conserves energy at e = 1 for any set of simultaneous contacts:
+  // the kinetic energy changes by ½ Σ λᵢ (vᵢ⁺ + vᵢ⁻), and each term is zero (λᵢ = 0, or
+  // vᵢ⁺ = −vᵢ⁻). A row of touching balls, one struck, then leaves as the row moving together
+  // and the striker rebounding (the simultaneous answer), with momentum and energy kept.
+  // Points that did not bounce take part, so that a bounce cannot push its body into a
+  // neighbour; passes run until no point's velocity changes by the tolerance, at most
+  // restitution_iterations of them (Box2D v3's pass, one over the bouncing points alone, left
+  // the points behind them out)
+  if (!bounces_) return;
   const Lane threshold = splat(float(-settings_.restitution_threshold));
   const Lane zero = splat(0.0f);
-  for (int iteration = 0; iteration < settings_.restitution_iterations; ++iteration)
+  const Lane tolerance = splat(float(settings_.restitution_tolerance));
+  const Lane half_step = splat(float(0.5 * restitution_step_));
+  const bool after_motion = settings_.solver == ContactSolver::SoftStep;
+  for (int iteration = 0; iteration < settings_.restitution_iterations; ++iteration) {
+    std::atomic<bool> moved{false};
     for_each_block([&](ContactBlock& c, const ContactBlockRest& r, Prefetch&) {
       if (!simd::any_of(r.restitution > zero)) return;
       LanePair pair(bodies_, c);
       const V3 n = load3(c.normal);
       const BlockInertia m = inertia_of<false>(c, r);
+      // the relative acceleration gravity gives along n (b's less a's: a static body has none)
+      const Lane gravity_along = dot(n, V3{splat(float(gravity_.x())), splat(float(gravity_.y())),
+                                           splat(float(gravity_.z()))});
+      const Lane acceleration = simd::select(c.inverse_mass_b > zero, gravity_along, zero) -
+                                simd::select(c.inverse_mass_a > zero, gravity_along, zero);
+      LaneMask changed = zero != zero;
+      bool wrote = false;
       // each manifold's points several times in a row, as for a fresh contact in solve()
       for (int round = 0; round < settings_.local_iterations; ++round)
         for (int j = 0; j < 4; ++j) {
           ContactBlock::Point& p = c.points[j];
           const ContactBlockRest::Point& q = r.points[j];
-          // only points that pushed this step, and hit faster than the threshold: a resting
-          // contact does not bounce
-          const LaneMask hit = (q.approach_velocity < threshold) &
-                               (q.max_normal_impulse > zero) & (r.restitution > zero);
-          if (!simd::any_of(hit)) continue;
+          const LaneMask pushed = (q.max_normal_impulse > zero) & (r.restitution > zero);
+          if (!simd::any_of(pushed)) continue;
+          // the speed it leaves the surface at, e times the approach u, then as free flight
+          // carries it to its separation s, w² = e² u² + 2 a s, as a solve's velocity: half a
+          // step behind the positions, w − a h/2, after the soft step's motion; sequential
+          // impulse moves the bodies after this, by a step of the velocity it sets, and
+          // w + a h/2 then leaves the energy at the positions at the end as it was at impact
+          // (e = 1: a box bounces to its height however far from the surface the step began)
+          const Lane separation = simd::max(p.separation, zero);
+          const Lane leave = r.restitution * q.approach_velocity;
+          const Lane leaving = simd::sqrt(
+              simd::max(leave * leave + splat(2.0f) * acceleration * separation, zero));
+          const Lane lag = half_step * acceleration;
+          const Lane target = simd::select(q.approach_velocity < threshold,
+                                           after_motion ? leaving - lag : leaving + lag, zero);
           const NormalRow row(p, n);
           const Lane vn = pair.normal_velocity(n, row);
-          const Lane impulse = zero - p.normal_mass * (vn + r.restitution * q.approach_velocity);
+          const Lane impulse = zero - p.normal_mass * (vn - target);
           const Lane accumulated =
-              simd::select(hit, simd::max(p.normal_impulse + impulse, zero), p.normal_impulse);
-          pair.apply_normal(c, m, row, n, accumulated - p.normal_impulse);
+              simd::select(pushed, simd::max(p.normal_impulse + impulse, zero), p.normal_impulse);
+          const Lane applied = accumulated - p.normal_impulse;
+          changed |= simd::max(applied, zero - applied) > tolerance * p.normal_mass;
+          if (!simd::any_of(applied != zero)) continue;
+          pair.apply_normal(c, m, row, n, applied);
           p.normal_impulse = accumulated;
+          wrote = true;
         }
-      pair.store(bodies_, c);
+      if (wrote) pair.store(bodies_, c);
+      if (simd::any_of(changed) && !moved.load(std::memory_order_relaxed))
+        moved.store(true, std::memory_order_relaxed);
     });
+    if (!moved.load(std::memory_order_relaxed)) break;
+  }
 }
 
 void ContactPipeline::store_impulses() {

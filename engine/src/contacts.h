@@ -22,6 +22,7 @@
 #include <cstdint>
 #include <memory>
 #include <span>
+#include <utility>
 #include <vector>
 
 #include "contact_lanes.h"
@@ -106,9 +107,10 @@ class ContactPipeline {
   void collide_pairs(std::span<const BodyState> states, double dt, const Vec3& gravity);
   // masses and velocities at the step's start
   void load_bodies(std::span<const BodyState> states, std::span<const BodyMass> masses);
-  // the solver's blocks, each contact in its colour's lanes (gravity gives a point still apart
-  // the speed it closes at)
-  void prepare(const Vec3& gravity);
+  // the solver's blocks, each contact in its colour's lanes (gravity gives a point's approach: a
+  // point still apart the speed it closes at; h: the first solve's step, over which gravity acts
+  // before the first push)
+  void prepare(const Vec3& gravity, double h);
   // the warm start: each contact's accumulated impulses applied to its bodies. On the first
   // substep of a step (and for a solver without substeps) by a pass over the contacts; on a later
   // one each body takes the velocity change its contacts gave it over the substep before, which
@@ -168,6 +170,8 @@ class ContactPipeline {
                              ContactConstraint& c) const;
   // a pair's growth this step, the two bodies' together (m); and the two shapes grown by it
   double pair_growth(const BodyShapeData& a, const BodyShapeData& b) const;
+  // how far each shape's surface lies beyond the true one in the pair's narrow phase (m)
+  std::pair<double, double> surface_growth(const BodyShapeData& a, const BodyShapeData& b) const;
   void grow_pair(const BodyShapeData& a, const BodyShapeData& b, Shape& grown_a,
                  Shape& grown_b) const;
   const ContactSettings settings_;
@@ -213,9 +217,10 @@ class ContactPipeline {
   template <class Kernel>
   void for_each_block(Kernel&& kernel, bool backwards = false);
   // a block's rows, effective masses, approach speeds and fresh lanes from its raw points
-  void prepare_lanes(ContactBlock& block, ContactBlockRest& rest,
+  // (whether some lane's point hits fast enough to bounce)
+  bool prepare_lanes(ContactBlock& block, ContactBlockRest& rest,
                      const std::array<LaneMask, 4>& exists,
-                     const std::array<LaneMask, 4>& cold, Lane acceleration) const;
+                     const std::array<LaneMask, 4>& cold, Lane acceleration, double h) const;
   std::vector<std::uint32_t> colour_order_;  // contact indices, colour by colour
   std::vector<std::uint32_t> colour_start_;  // colour k: colour_order_[start[k], start[k + 1])
   std::vector<std::uint64_t> body_colours_;  // per body, the colours holding it this step
@@ -302,6 +307,9 @@ class ContactPipeline {
   std::size_t matched_ = 0;
   std::size_t point_count_ = 0;  // the points of contacts_, counted as they are built
   bool separations_stale_ = true;  // the blocks' separations predate the positions
+  bool bounces_ = false;  // some point hits fast enough to bounce this step (prepare())
+  Vec3 gravity_ = Vec3::Zero();   // this step's, and its solve's last step length (s): what
+  double restitution_step_ = 0.0;  // restitution() reads (prepare())
 };
 
 }  // namespace rtp

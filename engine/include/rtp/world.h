@@ -120,7 +120,10 @@ struct ContactSettings {
                                    // by more than relax_tolerance (a 5,050-box pyramid rings
                                    // otherwise, and drifts 4.5 cm where it drifts 0.9)
   double relax_tolerance = 0.01;   // m/s (0: always relax_iterations)
-  int restitution_iterations = 2;  // passes of the restitution solve
+  int restitution_iterations = 32;  // passes of the restitution solve at most, while the last
+                                    // one still changed a point's normal velocity by more than
+                                    // restitution_tolerance (a step without a bounce runs none)
+  double restitution_tolerance = 1e-6;  // m/s
   int local_iterations = 4;        // a new or hitting manifold's points solved this many times
                                    // in a row (sequential impulses on a face's four points
                                    // otherwise spin a box that lands flat)
