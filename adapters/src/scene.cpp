@@ -93,7 +93,8 @@ const std::vector<Metric>& all_metrics() {
   static const std::vector<Metric> all = {
       Metric::Position,   Metric::Orientation, Metric::Energy,     Metric::LinearMomentum,
       Metric::AngularMomentum, Metric::StackDrift, Metric::Penetration, Metric::BounceApex,
-      Metric::Incline,    Metric::Exchange,    Metric::Tunnelling, Metric::Confined};
+      Metric::Incline,    Metric::Exchange,    Metric::Tunnelling, Metric::Confined,
+      Metric::Rolling,    Metric::Elastic};
   return all;
 }
 
@@ -123,6 +124,10 @@ const char* to_string(Metric metric) {
       return "tunnelling";
     case Metric::Confined:
       return "confined";
+    case Metric::Rolling:
+      return "rolling";
+    case Metric::Elastic:
+      return "elastic";
   }
   return "?";
 }
@@ -228,7 +233,8 @@ void validate_contact_metrics(const Scene& scene) {
   const bool contact_metric = wants(Metric::StackDrift) || wants(Metric::Penetration) ||
                               wants(Metric::BounceApex) || wants(Metric::Incline) ||
                               wants(Metric::Exchange) || wants(Metric::Tunnelling) ||
-                              wants(Metric::Confined);
+                              wants(Metric::Confined) || wants(Metric::Rolling) ||
+                              wants(Metric::Elastic);
   if (!contact_metric) return;
   if (scene.particles) fail("probe.metrics", "the contact metrics are for bodies, not particles");
   if (dynamic.empty()) fail("probe.metrics", "the contact metrics need a dynamic body");
@@ -258,6 +264,24 @@ void validate_contact_metrics(const Scene& scene) {
     if (scene.bodies[dynamic[0]].linear_velocity.norm() == 0.0)
       fail("bodies[" + std::to_string(dynamic[0]) + "].linear_velocity",
            "tunnelling needs a moving body");
+  }
+  if (wants(Metric::Rolling)) {
+    if (dynamic.size() != 1 || planes.size() != 1 ||
+        scene.bodies[dynamic[0]].shape.kind != ShapeKind::Sphere)
+      fail("probe.metrics", "rolling needs one dynamic sphere and one static plane");
+    const Vec3 normal = scene.bodies[planes[0]].orientation * Vec3::UnitY();
+    if (scene.gravity.norm() == 0.0 || normal.cross(scene.gravity).norm() > 1e-9 * scene.gravity.norm() ||
+        normal.dot(scene.gravity) >= 0.0)
+      fail("gravity", "rolling needs gravity straight into the plane");
+  }
+  if (wants(Metric::Elastic)) {
+    if (dynamic.size() < 2) fail("probe.metrics", "elastic needs two dynamic bodies or more");
+    if (scene.gravity.norm() != 0.0) fail("gravity", "elastic holds without gravity");
+    if (!scene.springs.empty() || !scene.impulses.empty())
+      fail("probe.metrics", "elastic needs a scene without springs or impulses");
+    for (int i : dynamic)
+      if (scene.bodies[i].restitution != 1.0 || scene.bodies[i].friction != 0.0)
+        fail("bodies[" + std::to_string(i) + "]", "elastic needs restitution 1 and friction 0");
   }
   if (wants(Metric::Confined)) {
     if (planes.size() != 1 || static_boxes.empty())

@@ -120,6 +120,9 @@ void put_metrics(EvaluatedJob& job, const Scene& scene, const ReferenceRun& refe
   put_value("slide_accel_expected", contact.slide_acceleration_expected);
   put_value("slide_accel_rel_err", contact.slide_acceleration_error);
   put_value("exchange_err", contact.exchange_error);
+  put_value("roll_speed_rel_err", contact.roll_speed_error);
+  put_value("roll_time_rel_err", contact.roll_time_error);
+  row.text("cradle_answer", contact.cradle_answer);
   if (contact.tunnelled) row.integer("tunnelled", *contact.tunnelled ? 1 : 0);
   if (contact.escaped) row.integer("escaped", *contact.escaped);
   row.text("contact_verdict", contact.verdict);
@@ -127,6 +130,21 @@ void put_metrics(EvaluatedJob& job, const Scene& scene, const ReferenceRun& refe
     row.text("contact_verdict", "exploded");
   else if (!contact.message.empty())
     append(message, contact.message);
+  // a contact scene whose energy can only fall, and rose by more than a share of its energy
+  // scale, created energy: diverged on any engine (absolute joules, where the relative change
+  // above divides by a resting stack's zero kinetic energy)
+  if (job.status == Status::Ok && scene.has_contacts() && contact.energy_added_max &&
+      energy_can_only_fall(scene, series)) {
+    const double scale = energy_scale(scene);
+    if (*contact.energy_added_max > kEnergyGainTolerance * scale) {
+      job.status = Status::Diverged;
+      std::ostringstream why;
+      why << std::setprecision(3) << "energy grew by " << *contact.energy_added_max
+          << " J, over " << 100.0 * kEnergyGainTolerance << " % of the scene's energy scale ("
+          << scale << " J), where nothing can add energy";
+      message = why.str() + (message.empty() ? "" : "; " + message);
+    }
+  }
 }
 
 }  // namespace

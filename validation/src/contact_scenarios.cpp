@@ -140,6 +140,106 @@ Scene bounce_scene(double restitution) {
   return scene;
 }
 
+Scene elastic_bounce_scene(ShapeKind shape) {
+  // bounce_scene's drop at e = 1, for 20 bounces: a flight from 1 m and back is 2 √(2 h / g)
+  // = 0.903 s, the twentieth apex 18.1 s after release
+  const bool sphere = shape == ShapeKind::Sphere;
+  const std::string what = sphere ? "sphere" : "box";
+  Scene scene = bounce_scene(1.0);
+  scene.name = "bounce-e1-" + what;
+  scene.description =
+      std::string(sphere ? "a sphere of radius 0.5 m (1 kg)" : "a unit box dropped flat") +
+      " dropped from rest, its lowest point 1 m above the ground, restitution 1 on body and "
+      "ground: every one of 20 bounces reaches 1 m again (closed form)";
+  scene.duration = 18.5;
+  if (sphere) {
+    BodySpec& ball = scene.bodies.back();
+    ball.name = "ball";
+    ball.shape.kind = ShapeKind::Sphere;
+    ball.shape.radius = kHalf;
+  }
+  return scene;
+}
+
+Scene rolling_scene(bool sliding) {
+  // a solid sphere (radius 0.5 m, 1 kg) on the ground, μ = 0.3: launched sliding at v0 = 5 m/s
+  // without spin it rolls at 5/7 v0 from t = 2 v0 / (7 μ g) = 0.485 s; launched rolling at
+  // 3 m/s it rolls on at 3 m/s
+  constexpr double kFriction = 0.3, kRadius = 0.5;
+  const double v0 = sliding ? 5.0 : 3.0;
+  Scene scene = contact_scene(
+      sliding ? "roll-slide" : "roll-keep",
+      sliding ? "a solid sphere (r = 0.5 m, 1 kg) launched sliding at 5 m/s without spin on the "
+                "ground, μ = 0.3: it rolls at 5/7 of 5 m/s from 2 v0 / (7 μ g) = 0.485 s on "
+                "(closed form)"
+              : "a solid sphere (r = 0.5 m, 1 kg) rolling on the ground at 3 m/s (ω = v / r), "
+                "μ = 0.3: it rolls on at 3 m/s, losing no speed and gaining no spin (closed form)",
+      sliding ? 2.0 : 5.0);
+  scene.bodies.push_back(ground(kFriction));
+  BodySpec ball = unit_box("ball", Vec3(0.0, kRadius, 0.0), kFriction);
+  ball.shape.kind = ShapeKind::Sphere;
+  ball.shape.radius = kRadius;
+  ball.linear_velocity = Vec3(v0, 0.0, 0.0);
+  // rolling towards +x turns about −z
+  if (!sliding) ball.angular_velocity = Vec3(0.0, 0.0, -v0 / kRadius);
+  scene.bodies.push_back(ball);
+  scene.probe.interval = scene.dt;  // the time rolling starts is found between samples
+  scene.probe.metrics = {Metric::Rolling, Metric::Penetration, Metric::Energy};
+  return scene;
+}
+
+Scene cradle_scene(int balls) {
+  // balls of radius 0.5 m (1 kg) in a row along x, each touching the next, the first 1 m behind
+  // the row moving at 2 m/s; e = 1, μ = 0, no gravity
+  constexpr double kRadius = 0.5, kSpeed = 2.0;
+  Scene scene = contact_scene(
+      "cradle-" + std::to_string(balls),
+      "a row of " + std::to_string(balls - 1) +
+          " touching spheres (r = 0.5 m, 1 kg) struck along its line by one more at 2 m/s, "
+          "e = 1, μ = 0, no gravity: are momentum and energy kept, and which classical answer "
+          "is given (the last ball leaves, or the row leaves as one)?",
+      2.0);
+  scene.gravity = Vec3::Zero();
+  for (int i = 0; i < balls; ++i) {
+    // the striker at x = −2 (its surface 1 m from the row's first), the row from x = 0
+    const double x = i == 0 ? -2.0 : (i - 1) * 2.0 * kRadius;
+    BodySpec ball = unit_box(i == 0 ? "striker" : "ball" + std::to_string(i), Vec3(x, 0.0, 0.0),
+                             0.0, 1.0);
+    ball.shape.kind = ShapeKind::Sphere;
+    ball.shape.radius = kRadius;
+    if (i == 0) ball.linear_velocity = Vec3(kSpeed, 0.0, 0.0);
+    scene.bodies.push_back(ball);
+  }
+  scene.probe.interval = scene.dt;
+  scene.probe.metrics = {Metric::Elastic, Metric::Penetration, Metric::Energy,
+                         Metric::LinearMomentum};
+  return scene;
+}
+
+Scene offcentre_impact_scene() {
+  // box a turned 45° about z, so that an edge leads along +x at the height of its centre, at
+  // 2 m/s towards box b at rest, 0.2 m above a's line: the edge meets b's face at one line, off
+  // b's centre. Closed form (one impulse J along x at r = (−0.5, −0.2) from b's centre, none on
+  // a's turn): J = 2 v / (2 + 0.2² · 6) = 1.786 N s; a leaves at 0.214 m/s, b at 1.786 m/s
+  // turning at 2.14 rad/s about +z, and the energy, 2 J, is kept. b's corners then move at most
+  // 1.51 m/s about its centre, slower than it draws away: they do not meet again
+  Scene scene = contact_scene(
+      "impact-offcentre",
+      "a unit box turned 45° about z, an edge leading, at 2 m/s into a unit box at rest 0.2 m off "
+      "its line, e = 1, μ = 0, no gravity: are linear and angular momentum and energy kept?",
+      1.5);
+  scene.gravity = Vec3::Zero();
+  BodySpec a = unit_box("striker", Vec3(-2.0, 0.0, 0.0), 0.0, 1.0);
+  a.orientation = Quat(Eigen::AngleAxisd(M_PI / 4.0, Vec3::UnitZ()));
+  a.linear_velocity = Vec3(2.0, 0.0, 0.0);
+  scene.bodies.push_back(a);
+  scene.bodies.push_back(unit_box("struck", Vec3(0.0, 0.2, 0.0), 0.0, 1.0));
+  scene.probe.interval = scene.dt;
+  scene.probe.metrics = {Metric::Elastic, Metric::Penetration, Metric::Energy,
+                         Metric::LinearMomentum, Metric::AngularMomentum};
+  return scene;
+}
+
 Scene incline_scene(double degrees) {
   constexpr double kFriction = 0.5;
   const double theta = degrees * M_PI / 180.0;
@@ -332,6 +432,27 @@ std::vector<Scenario> contact_scenarios() {
     all.push_back({"bounce-e" + tag(e),
                    "do a dropped box's apexes fall as e^(2n) at e = " + tag(e) + "?",
                    [e] { return bounce_scene(e); }});
+  for (ShapeKind shape : {ShapeKind::Box, ShapeKind::Sphere}) {
+    const std::string what = shape == ShapeKind::Sphere ? "sphere" : "box";
+    all.push_back({"bounce-e1-" + what,
+                   "does a " + what + " dropped with e = 1 reach its release height on each of 20 "
+                   "bounces?",
+                   [shape] { return elastic_bounce_scene(shape); }});
+  }
+  all.push_back({"roll-slide",
+                 "does a sphere launched sliding roll at 5/7 of its speed, from the closed form's "
+                 "time?",
+                 [] { return rolling_scene(true); }});
+  all.push_back({"roll-keep", "does a rolling sphere roll on without losing speed?",
+                 [] { return rolling_scene(false); }});
+  all.push_back({"cradle-5",
+                 "does a struck row of elastic spheres keep momentum and energy, and which "
+                 "classical answer does it give?",
+                 [] { return cradle_scene(5); }});
+  all.push_back({"impact-offcentre",
+                 "does an off-centre elastic impact of two boxes keep linear and angular "
+                 "momentum and energy?",
+                 offcentre_impact_scene});
   for (double degrees : {25.0, 30.0})
     all.push_back({"incline-" + tag(degrees),
                    "does a block on a " + tag(degrees) +

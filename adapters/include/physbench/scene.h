@@ -131,6 +131,8 @@ enum class Metric {
   Exchange,
   Tunnelling,
   Confined,
+  Rolling,
+  Elastic,
 };
 
 // every metric, in declaration order (for parsing and messages)

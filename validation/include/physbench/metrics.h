@@ -71,7 +71,14 @@ inline constexpr double kCollapsedBeyond = 0.5;  // m: drift or top drop of a co
 inline constexpr double kSinksBeyond = 0.02;     // m: final penetration of a stack that sinks
 inline constexpr double kMovedBeyond = 0.01;     // m: an incline block that moved
 inline constexpr double kApexFloor = 0.02;       // m: closed-form apexes below this are not judged
-inline constexpr int kMaxApexes = 5;
+inline constexpr int kMaxApexes = 5;  // judged at most (e < 1); at e = 1 every one the run holds
+inline constexpr double kElasticApexWithin = 0.02;  // e = 1: every apex within this of h0
+inline constexpr double kRollsWithin = 0.01;  // rolling: final speed, and slip, within this share
+inline constexpr double kElasticWithin = 0.01;  // elastic: energy kept within this share
+// An energy guard (every engine, every scene whose energy can only fall: docs/metrics.md):
+// mechanical energy that rises above its start by more than this share of the scene's energy
+// scale reads `diverged`
+inline constexpr double kEnergyGainTolerance = 0.05;
 inline constexpr double kTumbledBeyond = 0.1;  // rad: a dropped box that turned this far tumbled
 inline constexpr double kRestlessBeyond = 0.05;  // m/s: a pile's RMS speed, last second, not at rest
 
@@ -94,6 +101,13 @@ struct ContactSummary {
   std::optional<double> slide_acceleration_error;      // relative, when the closed form slides
   // exchange: max over both bodies |v(T) − v_closed_form| / |approach speed|
   std::optional<double> exchange_error;
+  // rolling: the final speed against the closed form's rolling speed, (v − v_roll) / v_roll, and
+  // the time the slip stopped against the closed form's, (t − t_roll) / t_roll (when it slides)
+  std::optional<double> roll_speed_error, roll_time_error;
+  // elastic: which classical answer a row of touching equal spheres, one struck, ended in:
+  // "sequential" (the last ball leaves at the striker's speed), "simultaneous" (the row leaves as
+  // one, the striker rebounds), "other"; empty where the scene is not such a row
+  std::string cradle_answer;
   // tunnelling: the body ended wholly beyond the wall's far face
   std::optional<bool> tunnelled;
   // confined: probed bodies whose centre ends outside the container (beyond a wall's inner face
@@ -121,6 +135,13 @@ struct Container {
   bool holds(const Vec3& centre) const;
 };
 Container container_of(const Scene& scene);
+
+// The energy guard's terms: whether the scene's mechanical energy can only fall (restitution at
+// most 1, no scheduled impulses, no particles, no bodies started overlapping), and its energy
+// scale: the kinetic and spring energy at the start plus, for each dynamic body, its weight
+// times the height of its centre above the scene's lowest point and its own reach (J)
+bool energy_can_only_fall(const Scene& scene, const ErrorSeries& series);
+double energy_scale(const Scene& scene);
 
 // whether a verdict is a failure the row's message must name (collapsed, sinks, tunnelled, …)
 bool verdict_is_failure(const std::string& verdict);

@@ -53,6 +53,11 @@ Scene planar_particles(Scene scene);
 Scene tower_scene(int boxes);                 // "tower-N": μ = 0.6, exactly touching, 10 s
 Scene pyramid_scene(int base);                // "pyramid-B": B (B + 1) / 2 boxes, μ = 0.6, 10 s
 Scene bounce_scene(double restitution);       // "bounce-eE": dropped flat from 1 m, e^(2n) apexes
+// "bounce-e1-box", "bounce-e1-sphere": bounce_scene at e = 1 for 20 bounces (18.5 s)
+Scene elastic_bounce_scene(ShapeKind shape);
+Scene rolling_scene(bool sliding);  // "roll-slide" (5 m/s, no spin), "roll-keep" (rolling 3 m/s)
+Scene cradle_scene(int balls);      // "cradle-N": N − 1 touching spheres struck by one, e = 1
+Scene offcentre_impact_scene();     // "impact-offcentre": two boxes, an edge on a face, e = 1
 Scene incline_scene(double degrees);          // "incline-D": μ = 0.5 on a slope of D degrees
 Scene mass_ratio_scene(double ratio);         // "mass-ratio-R": R kg on 1 kg on the ground
 Scene overlap_recovery_scene();               // "overlap-recovery": a stack started 5 cm deep
