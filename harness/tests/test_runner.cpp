@@ -303,6 +303,27 @@ TEST(Runner, EnergyGrowthOverAHundredPercentReadsDivergedNotOk) {
   EXPECT_EQ(symplectic->at("status"), "ok") << symplectic->at("message");
 }
 
+TEST(Runner, ContactSceneThatCreatesEnergyReadsDivergedNotOk) {
+  // a struck row of elastic balls: nothing in it can add energy. The seed's lab 5 reverses every
+  // relative velocity a contact sees in each of its iterations, and the row ends with 40 % more
+  // energy than the strike's: diverged, with the joules named; the soft step keeps it and is ok
+  const fs::path dir = fresh_dir("contact-diverged");
+  const Invocation inv =
+      physbench({"run", "-s", "cradle-5", "-e", "rtp", "--variant", "seed,soft-step", "--budget",
+                 "0", "--no-sweep", "--out", (dir / "r").string()},
+                dir);
+  ASSERT_EQ(inv.outcome.exit_code, 0) << inv.output;
+  const auto rows = read_rows(dir / "r" / "results.csv");
+  const auto* seed = find_row(rows, "rtp", "seed");
+  const auto* soft = find_row(rows, "rtp", "soft-step");
+  ASSERT_TRUE(seed && soft);
+  EXPECT_EQ(seed->at("status"), "diverged") << seed->at("message");
+  EXPECT_NE(seed->at("message").find("energy grew by"), std::string::npos) << seed->at("message");
+  EXPECT_GT(std::stod(seed->at("energy_added_max")), 0.05 * 2.0);  // of the strike's 2 J
+  EXPECT_EQ(soft->at("status"), "ok") << soft->at("message");
+  EXPECT_EQ(soft->at("cradle_answer"), "simultaneous");
+}
+
 // a body on a spring compared with the converged reference (rtp RK4 at dt / divisor)
 std::string converged_spring_scene(const std::string& name, double dt, double duration,
                                    int divisor) {

@@ -62,17 +62,91 @@ TEST(ContactGates, TowerAndPyramidStandWhereTheSeedCollapses) {
   }
 }
 
-// a box dropped flat: each apex while it is still well above the threshold hop follows
-// e^(2n) h0 within 5 % (the metric judges the apexes, the scene's closed form gives h0)
+// a box dropped flat: every apex the metric judges (the closed form's above 2 cm, at most five)
+// follows e^(2n) h0 within 1 % (the scene's closed form gives h0). Restitution reverses the speed
+// at the positions' instant, not the solve's velocity half a substep behind them: with that lag
+// each bounce lost about 1.5 %, and the fifth apex at e = 0.8 was 8 % low
 TEST(ContactGates, BounceApexesFollowTheRestitution) {
   for (double e : {0.2, 0.5, 0.8}) {
     const ContactRun r = run_rtp("soft-step", bounce_scene(e));
     ASSERT_FALSE(r.contact.apex_relative_errors.empty()) << "e = " << e;
-    // the first three: later ones carry the integration's ~1.5 % loss per bounce past 5 %
-    const std::size_t judged = std::min<std::size_t>(3, r.contact.apex_relative_errors.size());
-    for (std::size_t n = 0; n < judged; ++n)
-      EXPECT_LT(std::abs(r.contact.apex_relative_errors[n]), 0.05)
+    for (std::size_t n = 0; n < r.contact.apex_relative_errors.size(); ++n)
+      EXPECT_LT(std::abs(r.contact.apex_relative_errors[n]), 0.01)
           << "e = " << e << ", apex " << n + 1;
+  }
+}
+
+// e = 1, dropped from 1 m: a box and a sphere reach the release height on each of 20 bounces
+// within 2 %, on the soft step (Box2D's settings too) and on sequential impulses
+TEST(ContactGates, ElasticBouncesKeepTheirHeightOverTwentyBounces) {
+  for (const char* variant : {"soft-step", "soft-step-4", "sequential-impulse"})
+    for (ShapeKind shape : {ShapeKind::Box, ShapeKind::Sphere}) {
+      const Scene scene = elastic_bounce_scene(shape);
+      const ContactRun r = run_rtp(variant, scene);
+      EXPECT_EQ(r.contact.apex_relative_errors.size(), 20u) << variant << " " << scene.name;
+      ASSERT_TRUE(r.contact.apex_relative_error_max) << variant << " " << scene.name;
+      EXPECT_LT(*r.contact.apex_relative_error_max, 0.02) << variant << " " << scene.name;
+      EXPECT_EQ(r.contact.verdict, "keeps height") << variant << " " << scene.name;
+    }
+}
+
+// a solid sphere launched sliding at v0 without spin rolls at 5/7 v0 (closed form) within
+// 0.5 %, and one launched rolling keeps its speed within 0.5 %: friction acts at the true
+// contact, not between the shapes grown by the step's motion (there a sphere at 5 m/s took
+// friction 4 cm inside itself and rolled 7 % slow)
+TEST(ContactGates, SphereLaunchedSlidingRollsAtFiveSeventhsOfItsSpeed) {
+  for (const char* variant : {"soft-step", "soft-step-4", "sequential-impulse", "seed"}) {
+    const ContactRun slides = run_rtp(variant, rolling_scene(true));
+    ASSERT_TRUE(slides.contact.roll_speed_error) << variant;
+    EXPECT_LT(std::abs(*slides.contact.roll_speed_error), 0.005) << variant;
+    EXPECT_EQ(slides.contact.verdict, "rolls") << variant;
+    // the time rolling starts, as sampled every step (1/60 s of 0.485 s is 3.4 %)
+    ASSERT_TRUE(slides.contact.roll_time_error) << variant;
+    EXPECT_LT(std::abs(*slides.contact.roll_time_error), 0.05) << variant;
+    const ContactRun rolls = run_rtp(variant, rolling_scene(false));
+    ASSERT_TRUE(rolls.contact.roll_speed_error) << variant;
+    EXPECT_LT(std::abs(*rolls.contact.roll_speed_error), 0.005) << variant;
+  }
+}
+
+// a row of four touching balls struck by a fifth, e = 1: momentum kept to round-off, the
+// energy never above its start by more than 10⁻⁶ of it at any sample, and the simultaneous
+// answer (the row leaves together at 0.4 v0, the striker rebounds at −0.6 v0). Box2D's settings
+// (one relax pass) keep it within 1 %: the soft push that undoes the impact's overlap is not
+// fully relaxed in a chain
+TEST(ContactGates, StruckRowOfBallsKeepsMomentumAndNeverGainsEnergy) {
+  const Scene scene = cradle_scene(5);
+  for (const char* variant : {"soft-step", "sequential-impulse", "soft-step-4"}) {
+    const ContactRun r = run_rtp(variant, scene);
+    const ErrorSeries series = compare(scene, r.run.trajectory, nullptr);
+    ASSERT_FALSE(series.energy_change.empty()) << variant;
+    const double gained =
+        *std::max_element(series.energy_change.begin(), series.energy_change.end());
+    EXPECT_LE(gained, std::string(variant) == "soft-step-4" ? 0.01 : 1e-6) << variant;
+    ASSERT_TRUE(r.summary.linear_momentum) << variant;
+    EXPECT_LT(r.summary.linear_momentum->max, 1e-5) << variant;  // of 2 kg m/s
+    EXPECT_EQ(r.contact.cradle_answer, "simultaneous") << variant;
+    EXPECT_EQ(r.contact.verdict, "elastic") << variant;
+  }
+}
+
+// a box turned 45° strikes another off its centre, edge on face, e = 1, μ = 0: the closed form
+// of one impulse J = 2 v / (2 + 0.2² · 6) along x at 0.2 m off the struck box's centre gives the
+// struck box 1.786 m/s and 2.143 rad/s about z, the striker 0.214 m/s; energy kept to 10⁻⁴
+TEST(ContactGates, OffCentreElasticImpactFollowsTheClosedForm) {
+  const Scene scene = offcentre_impact_scene();
+  const double impulse = 2.0 * 2.0 / (2.0 + 0.2 * 0.2 * 6.0);
+  for (const char* variant : {"soft-step", "sequential-impulse"}) {
+    const ContactRun r = run_rtp(variant, scene);
+    ASSERT_FALSE(r.run.trajectory.samples.empty()) << variant;
+    const Sample& last = r.run.trajectory.samples.back();
+    EXPECT_NEAR(last.bodies[0].linear_velocity.x(), 2.0 - impulse, 0.01 * impulse) << variant;
+    EXPECT_NEAR(last.bodies[1].linear_velocity.x(), impulse, 0.01 * impulse) << variant;
+    EXPECT_NEAR(last.bodies[1].angular_velocity.z(), 6.0 * 0.2 * impulse, 0.01 * 1.2 * impulse)
+        << variant;
+    EXPECT_EQ(r.contact.verdict, "elastic") << variant;
+    ASSERT_TRUE(r.summary.energy) << variant;
+    EXPECT_LT(r.summary.energy->max, 1e-4) << variant;
   }
 }
 
@@ -173,3 +247,66 @@ TEST(ContactGates, RunsAreBitIdenticalAtAnyThreadCount) {
 }
 
 }  // namespace
+
+namespace {
+
+// a two-sample run of the scene's dynamic bodies: at rest where they start, then the given
+// velocities at the end
+Trajectory two_samples(const Scene& scene, const std::vector<Vec3>& linear,
+                       const std::vector<Vec3>& angular) {
+  Trajectory run;
+  for (int i = 0; i < static_cast<int>(scene.bodies.size()); ++i)
+    if (scene.bodies[i].mass > 0.0) run.bodies.push_back(i);
+  for (int k = 0; k < 2; ++k) {
+    Sample s;
+    s.time = k * scene.duration;
+    for (std::size_t j = 0; j < run.bodies.size(); ++j) {
+      const BodySpec& b = scene.bodies[run.bodies[j]];
+      SampledState x;
+      x.position = b.position;
+      x.orientation = b.orientation;
+      x.linear_velocity = k == 0 ? b.linear_velocity : linear[j];
+      x.angular_velocity = k == 0 ? b.angular_velocity : angular[j];
+      s.bodies.push_back(x);
+    }
+    run.samples.push_back(s);
+  }
+  return run;
+}
+
+}  // namespace
+
+// the cradle's two classical answers, from the velocities alone: the last ball leaving at v0 is
+// sequential, the row leaving together at 2 v0 / 5 with the striker at −3 v0 / 5 simultaneous,
+// and anything else other
+TEST(ContactMetrics, CradleAnswerIsNamedFromTheFinalVelocities) {
+  const Scene scene = cradle_scene(5);
+  const std::vector<Vec3> still(5, Vec3::Zero());
+  auto answer = [&](std::vector<double> vx) {
+    std::vector<Vec3> v;
+    for (double x : vx) v.emplace_back(x, 0.0, 0.0);
+    const Trajectory run = two_samples(scene, v, still);
+    return contact_summary(scene, run, compare(scene, run, nullptr)).cradle_answer;
+  };
+  EXPECT_EQ(answer({0.0, 0.0, 0.0, 0.0, 2.0}), "sequential");
+  EXPECT_EQ(answer({-1.2, 0.8, 0.8, 0.8, 0.8}), "simultaneous");
+  EXPECT_EQ(answer({0.0, 0.0, 0.0, 1.0, 1.0}), "other");
+}
+
+// a sphere launched at 5 m/s that ends rolling 5 % under 5/7 of it reads "rolls slow", one that
+// ends at 5/7 of it but still slipping reads "slips"
+TEST(ContactMetrics, RollingSpeedAndSlipAreJudgedAgainstTheClosedForm) {
+  const Scene scene = rolling_scene(true);
+  const double r = scene.bodies.back().shape.radius, v_roll = 5.0 * 5.0 / 7.0;
+  auto judged = [&](double v, double w) {
+    const Trajectory run = two_samples(scene, {Vec3(v, 0.0, 0.0)}, {Vec3(0.0, 0.0, -w)});
+    return contact_summary(scene, run, compare(scene, run, nullptr));
+  };
+  const ContactSummary slow = judged(0.95 * v_roll, 0.95 * v_roll / r);
+  ASSERT_TRUE(slow.roll_speed_error);
+  EXPECT_NEAR(*slow.roll_speed_error, -0.05, 1e-12);
+  EXPECT_EQ(slow.verdict, "rolls slow");
+  EXPECT_TRUE(verdict_is_failure(slow.verdict));
+  EXPECT_EQ(judged(v_roll, 0.9 * v_roll / r).verdict, "slips");
+  EXPECT_EQ(judged(v_roll, v_roll / r).verdict, "rolls");
+}
