@@ -17,12 +17,16 @@ CONTACT_COLUMNS = [
     ("energy_added_max", "energy added max (J)"), ("speed_max", "speed max (m/s)"),
     ("rest_speed_rms", "RMS speed, last second (m/s)"), ("apex_rel_err", "apex errors (relative)"),
     ("slide_distance", "slide (m)"), ("slide_accel", "slide a (m/s²)"), ("slide_accel_expected", "closed form a"),
-    ("exchange_err", "exchange error"), ("tunnelled", "tunnelled"), ("escaped", "escaped bodies"),
+    ("exchange_err", "exchange error"), ("roll_speed_rel_err", "rolling speed error (relative)"),
+    ("roll_time_rel_err", "rolling time error (relative)"), ("cradle_answer", "cradle answer"),
+    ("tunnelled", "tunnelled"), ("escaped", "escaped bodies"),
     ("contact_points", "contact points a step (the engine's count)"),
 ]
 # verdicts that answer a contact scene's question badly (reports colour them)
 FAILED_VERDICTS = {"collapsed", "sinks", "drifts", "settles", "tumbled", "no bounce", "tunnelled", "stuck",
-                   "exploded", "slides, should stay", "stays, should slide", "escaped", "unsettled"}
+                   "exploded", "slides, should stay", "stays, should slide", "escaped", "unsettled",
+                   "gains height", "loses height", "slips", "rolls slow", "rolls fast", "gains energy",
+                   "loses energy"}
 
 # the two views of drift against cost (docs/engines.md, "Contacts"): each engine at its own
 # defaults, and each at 10 velocity iterations or the nearest it has (Bullet's and Jolt's defaults
@@ -78,7 +82,8 @@ def verdict_table(results: pd.DataFrame) -> dict | None:
             verdict = row.get("contact_verdict")
             text = verdict if isinstance(verdict, str) and verdict else ("ok" if row["status"] == "ok" else row["status"])
             css = "unstable" if text in FAILED_VERDICTS or row["status"] in ("error", "crashed", "timeout") else (
-                "stable" if text in ("stands", "stays", "slides", "stopped", "contained", "ok") else "")
+                "stable" if text in ("stands", "stays", "slides", "stopped", "contained", "keeps height", "rolls",
+                                     "elastic", "ok") else "")
             cells.append((text, css))
         rows.append(dict(label=label, cells=cells))
     return dict(scenarios=contact, rows=rows)
