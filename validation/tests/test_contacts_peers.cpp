@@ -59,7 +59,7 @@ std::vector<Scene> contact_scenes() {
 
 TEST(ContactScenes, EveryOneValidatesAndSurvivesJson) {
   const auto scenes = contact_scenes();
-  ASSERT_EQ(scenes.size(), 21u);
+  ASSERT_EQ(scenes.size(), 27u);
   for (const Scene& scene : scenes) {
     EXPECT_NO_THROW(validate(scene)) << scene.name;
     EXPECT_TRUE(scene.has_contacts()) << scene.name;
