@@ -37,14 +37,25 @@ class Box2dEngine final : public Engine {
   Box2dEngine(bool spring_joints, int velocity_iterations)
       : spring_joints_(spring_joints), velocity_iterations_(velocity_iterations) {}
 
-  // iterations: b2World::Step's velocity iterations (position iterations stay 3); no substeps
+  // iterations: b2World::Step's velocity iterations (position iterations stay 3); substeps: N
+  // calls of b2World::Step(dt/N) (Box2D 2.4 has none of its own)
   Tuning tune(const SolverKnobs& knobs) override {
-    if (knobs.substeps > 0) return {{}, "Box2D 2.4 steps once per step: it has no substeps"};
-    velocity_iterations_ = knobs.iterations;
-    return {{{"velocity / position iterations",
-              std::to_string(knobs.iterations) + " / " + std::to_string(kPositionIterations),
-              "the sweep's value (--sweep-iterations): b2World::Step's velocity iterations"}},
-            ""};
+    Tuning tuning;
+    if (knobs.iterations > 0) {
+      velocity_iterations_ = knobs.iterations;
+      tuning.settings.push_back(
+          {"velocity / position iterations",
+           std::to_string(knobs.iterations) + " / " + std::to_string(kPositionIterations),
+           "the sweep's value (--sweep-iterations): b2World::Step's velocity iterations"});
+    }
+    if (knobs.substeps > 0) {
+      substeps_ = knobs.substeps;
+      tuning.settings.push_back(
+          {"substeps", std::to_string(knobs.substeps) + " calls of Step(dt/" +
+                           std::to_string(knobs.substeps) + ") a step",
+           "the sweep's value (--sweep-substeps): Box2D 2.4 has none of its own"});
+    }
+    return tuning;
   }
 
   void load(const Scene& scene) override {
@@ -204,23 +215,28 @@ class Box2dEngine final : public Engine {
   }
 
   void step() override {
-    // springs as external forces from the state at the start of the step; Box2D clears them after
-    if (!scene_.springs.empty() && !spring_joints_)
-      apply_spring_forces(
-          scene_, [this](int b) { return body_state(b); },
-          [this](int b, const Vec3& f, const Vec3& p) {
-            bodies_[b]->ApplyForce(b2Vec2(float(f.x()), float(f.y())),
-                                   b2Vec2(float(p.x()), float(p.y())), true);
-          });
-    if (driver_) step_particles_before();
-    world_->Step(float(dt_), velocity_iterations_, kPositionIterations);
-    ++steps_;
-    if (contacts_.counting()) {
-      // the touching contacts' manifold points this step
-      for (const b2Contact* c = world_->GetContactList(); c; c = c->GetNext())
-        if (c->IsTouching()) contacts_.add(c->GetManifold()->pointCount);
-      contacts_.end_step();
+    // a sweep's substeps: N calls of Step(dt/N), each with the forces; a contact count a solve
+    const int substeps = std::max(substeps_, 1);
+    for (int k = 0; k < substeps; ++k) {
+      // springs as external forces from the state at the start of the step; Box2D clears them
+      // after
+      if (!scene_.springs.empty() && !spring_joints_)
+        apply_spring_forces(
+            scene_, [this](int b) { return body_state(b); },
+            [this](int b, const Vec3& f, const Vec3& p) {
+              bodies_[b]->ApplyForce(b2Vec2(float(f.x()), float(f.y())),
+                                     b2Vec2(float(p.x()), float(p.y())), true);
+            });
+      if (driver_) step_particles_before();
+      world_->Step(float(dt_ / substeps), velocity_iterations_, kPositionIterations);
+      if (contacts_.counting()) {
+        // the touching contacts' manifold points this solve
+        for (const b2Contact* c = world_->GetContactList(); c; c = c->GetNext())
+          if (c->IsTouching()) contacts_.add(c->GetManifold()->pointCount);
+        contacts_.end_step();
+      }
     }
+    ++steps_;
     if (driver_) step_particles_after();
     // Box2D scales down any velocity that would carry a body more than b2_maxTranslation (2 m)
     // or turn it more than b2_maxRotation (π/2) in one step, silently: the motion is then not the
@@ -228,7 +244,7 @@ class Box2dEngine final : public Engine {
     for (std::size_t i = 0; i < bodies_.size(); ++i) {
       const b2Body* body = bodies_[i];
       if (!body || body->GetType() != b2_dynamicBody) continue;
-      const float h = float(dt_);
+      const float h = float(dt_ / std::max(substeps_, 1));
       const float moved = body->GetLinearVelocity().Length() * h;
       // a particle is a point in the scene: the spin of the circle that stands for it is not
       const float turned =
@@ -260,6 +276,7 @@ class Box2dEngine final : public Engine {
   bool spring_joints_;
   int velocity_iterations_;
   double dt_ = 0.0;
+  int substeps_ = 0;  // a sweep's substeps; 0: one step of dt
   std::unique_ptr<b2World> world_;
   long steps_ = 0;
   ContactTally contacts_;

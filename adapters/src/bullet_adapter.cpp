@@ -40,18 +40,27 @@ btScalar pair_restitution_rule(const btCollisionObject* a, const btCollisionObje
 
 class BulletEngine final : public Engine {
  public:
-  // iterations: btContactSolverInfo::m_numIterations. Substeps are not mapped: Bullet's are
-  // stepSimulation's fixed-step accumulator, which interpolates the poses it reports
+  // iterations: btContactSolverInfo::m_numIterations; substeps: stepSimulation(dt/N, 0) N times,
+  // each a whole internal step of dt/N (no accumulator: maxSubSteps = 0 steps exactly the time
+  // given, and the adapter reads the centre-of-mass transform, which is not interpolated)
   Tuning tune(const SolverKnobs& knobs) override {
-    if (knobs.substeps > 0)
-      return {{}, "Bullet's substeps are stepSimulation's accumulator (its poses interpolated "
-                  "between fixed steps), not a substep of dt: not mapped"};
-    iterations_ = knobs.iterations;
-    return {{{"solver",
-              "btSequentialImpulseConstraintSolver, " + std::to_string(knobs.iterations) +
-                  " iterations",
-              "the sweep's value (--sweep-iterations): btContactSolverInfo::m_numIterations"}},
-            ""};
+    Tuning tuning;
+    if (knobs.iterations > 0) {
+      iterations_ = knobs.iterations;
+      tuning.settings.push_back(
+          {"solver",
+           "btSequentialImpulseConstraintSolver, " + std::to_string(knobs.iterations) +
+               " iterations",
+           "the sweep's value (--sweep-iterations): btContactSolverInfo::m_numIterations"});
+    }
+    if (knobs.substeps > 0) {
+      substeps_ = knobs.substeps;
+      tuning.settings.push_back(
+          {"substeps", std::to_string(knobs.substeps) + " steps of dt/" +
+                           std::to_string(knobs.substeps) + " a step",
+           "the sweep's value (--sweep-substeps): stepSimulation(dt/N, 0) N times"});
+    }
+    return tuning;
   }
 
   ~BulletEngine() override {
@@ -177,26 +186,17 @@ class BulletEngine final : public Engine {
   }
 
   void step() override {
-    // springs as external forces from the state at the start of the step; Bullet clears them after
-    if (!scene_.springs.empty())
-      apply_spring_forces(
-          scene_, [this](int b) { return body_state(b); },
-          [this](int b, const Vec3& force, const Vec3& point) {
-            btRigidBody& body = *bodies_[b];
-            body.applyForce(to_bt(force), to_bt(point) - body.getCenterOfMassPosition());
-          });
-    // particles: drag, wind and attractors as central forces from the state at the start of the
-    // step
-    if (driver_)
-      for (long i = 0; i < driver_->count(); ++i) {
-        btRigidBody& body = *bodies_[first_particle_ + i];
-        body.applyCentralForce(to_bt(driver_->force(i, from_bt(body.getCenterOfMassPosition()),
-                                                    from_bt(body.getLinearVelocity()))));
-      }
-    // maxSubSteps = 0: exactly one internal step of dt, no accumulator or interpolation
-    world_->stepSimulation(btScalar(dt_), 0);
+    // a sweep's substeps: N whole internal steps of dt/N, the step's forces each (Bullet clears
+    // them after every stepSimulation); the particles age once a step
+    const int substeps = std::max(substeps_, 1);
+    for (int k = 0; k < substeps; ++k) {
+      apply_forces();
+      // maxSubSteps = 0: exactly one internal step of the time given, no accumulator or
+      // interpolation
+      world_->stepSimulation(btScalar(dt_ / substeps), 0);
+    }
     if (contacts_.counting()) {
-      // the persistent manifolds' points the solver held this step
+      // the persistent manifolds' points the solver held this step (its last substep's)
       for (int m = 0; m < dispatcher_->getNumManifolds(); ++m)
         contacts_.add(dispatcher_->getManifoldByIndexInternal(m)->getNumContacts());
       contacts_.end_step();
@@ -213,6 +213,28 @@ class BulletEngine final : public Engine {
 
   std::optional<ContactCount> contact_count() const override { return contacts_.count(); }
 
+ private:
+  // the springs', the particles' drag, wind and attractors, as external forces from the state now
+  void apply_forces() {
+    // springs as external forces from the state at the start of the step; Bullet clears them after
+    if (!scene_.springs.empty())
+      apply_spring_forces(
+          scene_, [this](int b) { return body_state(b); },
+          [this](int b, const Vec3& force, const Vec3& point) {
+            btRigidBody& body = *bodies_[b];
+            body.applyForce(to_bt(force), to_bt(point) - body.getCenterOfMassPosition());
+          });
+    // particles: drag, wind and attractors as central forces from the state at the start of the
+    // step
+    if (driver_)
+      for (long i = 0; i < driver_->count(); ++i) {
+        btRigidBody& body = *bodies_[first_particle_ + i];
+        body.applyCentralForce(to_bt(driver_->force(i, from_bt(body.getCenterOfMassPosition()),
+                                                    from_bt(body.getLinearVelocity()))));
+      }
+  }
+
+ public:
   SampledState body_state(int index) const override {
     const btRigidBody& body = *bodies_[index];
     const btTransform& t = body.getCenterOfMassTransform();
@@ -226,6 +248,7 @@ class BulletEngine final : public Engine {
   double dt_ = 0.0;
   ContactTally contacts_;
   int iterations_ = 0;  // a sweep's solver iterations; 0: Bullet's default (10)
+  int substeps_ = 0;    // a sweep's substeps; 0: one step of dt
   std::unique_ptr<btDefaultCollisionConfiguration> configuration_;
   std::unique_ptr<btCollisionDispatcher> dispatcher_;
   std::unique_ptr<btBroadphaseInterface> broadphase_;

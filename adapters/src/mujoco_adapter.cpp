@@ -348,17 +348,28 @@ class MujocoEngine final : public Engine {
   explicit MujocoEngine(std::string variant) : variant_(std::move(variant)) {}
 
   // iterations: mjOption::iterations, the solver's iteration cap (its tolerance still ends it
-  // early); MuJoCo has no substeps
+  // early); substeps: mjOption::timestep dt/N and N calls of mj_step (MuJoCo's own way to step
+  // finer; the contacts' solref, set from the scene's dt, keeps its time constant)
   Tuning tune(const SolverKnobs& knobs) override {
-    if (knobs.substeps > 0) return {{}, "MuJoCo steps once per step: it has no substeps"};
-    iterations_ = knobs.iterations;
-    const bool pgs = variant_ == "pgs-10";
-    return {{{"solver",
-              std::string(pgs ? "PGS" : "Newton") + ", " + std::to_string(knobs.iterations) +
-                  " iterations" + (pgs ? "" : ", tolerance 1e-8, pyramidal cone"),
-              "the sweep's value (--sweep-iterations): mjOption::iterations, a cap the solver's "
-              "tolerance may end early"}},
-            ""};
+    Tuning tuning;
+    if (knobs.iterations > 0) {
+      iterations_ = knobs.iterations;
+      const bool pgs = variant_ == "pgs-10";
+      tuning.settings.push_back(
+          {"solver",
+           std::string(pgs ? "PGS" : "Newton") + ", " + std::to_string(knobs.iterations) +
+               " iterations" + (pgs ? "" : ", tolerance 1e-8, pyramidal cone"),
+           "the sweep's value (--sweep-iterations): mjOption::iterations, a cap the solver's "
+           "tolerance may end early"});
+    }
+    if (knobs.substeps > 0) {
+      substeps_ = knobs.substeps;
+      tuning.settings.push_back(
+          {"substeps", "timestep dt/" + std::to_string(knobs.substeps) + ", " +
+                           std::to_string(knobs.substeps) + " mj_step calls a step",
+           "the sweep's value (--sweep-substeps): mjOption::timestep"});
+    }
+    return tuning;
   }
   ~MujocoEngine() override {
     if (active_ == this) {
@@ -391,6 +402,8 @@ class MujocoEngine final : public Engine {
     if (!model_) throw std::runtime_error(std::string("mujoco: model rejected: ") + error);
     // a sweep's iterations: the solver's iteration cap (mjOption::iterations; Newton and PGS alike)
     if (iterations_ > 0) model_->opt.iterations = iterations_;
+    // a sweep's substeps: the model's step is dt/N, and step() calls mj_step N times
+    if (substeps_ > 0) model_->opt.timestep = scene.dt / substeps_;
     data_ = mj_makeData(model_);
     if (!data_)
       throw std::runtime_error("mujoco: mj_makeData failed (nconmax " +
@@ -432,13 +445,15 @@ class MujocoEngine final : public Engine {
   std::optional<ContactCount> contact_count() const override { return contacts_.count(); }
 
   void step() override {
-    mj_step(model_, data_);
-    ++steps_;
-    // the contacts mj_step's forward pass found and solved (each a point with its own frame)
-    if (contacts_.counting()) {
-      contacts_.add(data_->ncon);
-      contacts_.end_step();
+    for (int k = 0; k < std::max(substeps_, 1); ++k) {
+      mj_step(model_, data_);
+      // the contacts mj_step's forward pass found and solved (each a point with its own frame)
+      if (contacts_.counting()) {
+        contacts_.add(data_->ncon);
+        contacts_.end_step();
+      }
     }
+    ++steps_;
     // MuJoCo checks qpos, qvel and qacc each step and, on a non-finite or huge value, warns and
     // resets the state to the model's initial one (mj_resetData) and carries on: the samples then
     // look sane and the run would read as ok. The warning counters are the only trace.
@@ -541,6 +556,7 @@ class MujocoEngine final : public Engine {
 
   std::string variant_;
   int iterations_ = 0;  // a sweep's mjOption::iterations; 0: the variant's own
+  int substeps_ = 0;    // a sweep's substeps; 0: one mj_step of dt
   Scene scene_;
   std::unique_ptr<ParticleDriver> driver_;
   static inline const MujocoEngine* active_ = nullptr;  // the engine mjcb_passive serves

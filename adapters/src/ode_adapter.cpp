@@ -54,16 +54,28 @@ class OdeEngine final : public Engine {
   OdeEngine(bool quick_step, bool spring_joints, int iterations)
       : quick_step_(quick_step), spring_joints_(spring_joints), iterations_(iterations) {}
 
-  // iterations: QuickStep's (dWorldSetQuickStepNumIterations); dWorldStep and substeps have none
+  // iterations: QuickStep's (dWorldSetQuickStepNumIterations), dWorldStep has none; substeps: N
+  // steps of dt/N (ODE has no substeps of its own: its users step smaller), contacts found anew
+  // for each
   Tuning tune(const SolverKnobs& knobs) override {
-    if (knobs.substeps > 0) return {{}, "ODE steps once per step: it has no substeps"};
-    if (!quick_step_)
-      return {{}, "dWorldStep solves each step's constraints directly (Dantzig LCP): it has no "
-                  "iteration count"};
-    iterations_ = knobs.iterations;
-    return {{{"stepper", "dWorldQuickStep, " + std::to_string(knobs.iterations) + " iterations",
-              "the sweep's value (--sweep-iterations): dWorldSetQuickStepNumIterations"}},
-            ""};
+    Tuning tuning;
+    if (knobs.iterations > 0) {
+      if (!quick_step_)
+        return {{}, "dWorldStep solves each step's constraints directly (Dantzig LCP): it has no "
+                    "iteration count"};
+      iterations_ = knobs.iterations;
+      tuning.settings.push_back(
+          {"stepper", "dWorldQuickStep, " + std::to_string(knobs.iterations) + " iterations",
+           "the sweep's value (--sweep-iterations): dWorldSetQuickStepNumIterations"});
+    }
+    if (knobs.substeps > 0) {
+      substeps_ = knobs.substeps;
+      tuning.settings.push_back(
+          {"substeps", std::to_string(knobs.substeps) + " steps of dt/" +
+                           std::to_string(knobs.substeps) + " a step, contacts found for each",
+           "the sweep's value (--sweep-substeps): ODE has none of its own"});
+    }
+    return tuning;
   }
   ~OdeEngine() override {
     for (dGeomID plane : planes_) dGeomDestroy(plane);
@@ -79,6 +91,7 @@ class OdeEngine final : public Engine {
     dRandSetSeed(0);
     scene_ = scene;
     dt_ = scene.dt;
+    h_ = dt_ / std::max(substeps_, 1);
     contact_tally_.start(scene);
     world_ = dWorldCreate();
     dWorldSetGravity(world_, scene.gravity.x(), scene.gravity.y(), scene.gravity.z());
@@ -240,29 +253,34 @@ class OdeEngine final : public Engine {
   }
 
   void step() override {
-    // springs as external forces from the state at the start of the step; ODE clears them after
-    if (!scene_.springs.empty() && !spring_joints_)
-      apply_spring_forces(
-          scene_, [this](int b) { return body_state(b); },
-          [this](int b, const Vec3& f, const Vec3& p) {
-            dBodyAddForceAtPos(bodies_[b], f.x(), f.y(), f.z(), p.x(), p.y(), p.z());
-          });
-    if (driver_) step_particles_before();
-    if (space_) {
-      dSpaceCollide(space_, this, &body_contact);
-      contact_tally_.end_step();
-    }
-    ode_messages = 0;
-    if (quick_step_)
-      dWorldQuickStep(world_, dt_);
-    else
-      dWorldStep(world_, dt_);
     ++steps_;
-    if (ode_messages > 0)
-      throw std::runtime_error(ode_last_message + " (step " + std::to_string(steps_) +
-                               "): ODE's solver failed, so the run is not a result");
+    // a sweep's substeps: N steps of h = dt/N, each with its forces and contacts; a contact count
+    // a solve
+    for (int k = 0; k < std::max(substeps_, 1); ++k) {
+      // springs as external forces from the state at the start of the step; ODE clears them
+      // after
+      if (!scene_.springs.empty() && !spring_joints_)
+        apply_spring_forces(
+            scene_, [this](int b) { return body_state(b); },
+            [this](int b, const Vec3& f, const Vec3& p) {
+              dBodyAddForceAtPos(bodies_[b], f.x(), f.y(), f.z(), p.x(), p.y(), p.z());
+            });
+      if (driver_) step_particles_before();
+      if (space_) {
+        dSpaceCollide(space_, this, &body_contact);
+        contact_tally_.end_step();
+      }
+      ode_messages = 0;
+      if (quick_step_)
+        dWorldQuickStep(world_, h_);
+      else
+        dWorldStep(world_, h_);
+      if (ode_messages > 0)
+        throw std::runtime_error(ode_last_message + " (step " + std::to_string(steps_) +
+                                 "): ODE's solver failed, so the run is not a result");
+      if (driver_ || space_) dJointGroupEmpty(contacts_);
+    }
     if (driver_) step_particles_after();
-    if (space_) dJointGroupEmpty(contacts_);
   }
 
   // the contact joints made for the bodies' geoms (a joint a point), summed since load()
@@ -304,7 +322,7 @@ class OdeEngine final : public Engine {
       dJointSetDBallAnchor1(joint, point_a.x(), point_a.y(), point_a.z());
       dJointSetDBallAnchor2(joint, point_b.x(), point_b.y(), point_b.z());
       dJointSetDBallDistance(joint, s.rest_length);
-      const double hk = dt_ * s.stiffness;
+      const double hk = h_ * s.stiffness;
       dJointSetDBallParam(joint, dParamERP, hk / (hk + s.damping));
       dJointSetDBallParam(joint, dParamCFM, 1.0 / (hk + s.damping));
     }
@@ -323,6 +341,8 @@ class OdeEngine final : public Engine {
   std::vector<dGeomID> planes_;
   Scene scene_;
   double dt_ = 0.0;
+  double h_ = 0.0;    // a solve's step: dt / substeps
+  int substeps_ = 0;  // a sweep's substeps; 0: one step of dt
   dWorldID world_ = nullptr;
   std::vector<dBodyID> bodies_;
 };

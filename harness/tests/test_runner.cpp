@@ -613,6 +613,49 @@ TEST(Runner, IterationSweepIsARowPerValueWithTheSolverSetAndSaysWhereAVariantHas
     }
 }
 
+#ifdef PHYSBENCH_HAVE_BULLET
+// a swept substep count reaches a peer: Bullet at four steps of dt/4 a frame holds the 10-box
+// tower its single step lets drift half a metre, and its settings table says what ran; an
+// external worker (Jolt, where cargo built it) is given the knob too and answers with its own
+TEST(Runner, SubstepSweepReachesThePeersAndTheirSettingsSayHow) {
+  const fs::path dir = fresh_dir("sweep_substeps");
+  const Invocation inv = physbench(
+      {"run", "-s", "tower-10", "-e", "bullet,jolt", "--variant", "float,default",
+       "--sweep-substeps", "1,4", "--no-sweep", "--budget", "0", "--out", (dir / "r").string()},
+      dir);
+  ASSERT_EQ(inv.outcome.exit_code, 0) << inv.output;
+  const auto rows = read_rows(dir / "r" / "results.csv");
+  auto row = [&](const std::string& engine, const std::string& substeps) {
+    for (const auto& r : rows)
+      if (r.at("engine") == engine && r.at("substeps") == substeps) return &r;
+    return static_cast<const std::map<std::string, std::string>*>(nullptr);
+  };
+  const auto *one = row("bullet", "1"), *four = row("bullet", "4");
+  ASSERT_TRUE(one && four);
+  ASSERT_EQ(one->at("status"), "ok") << one->at("message");
+  ASSERT_EQ(four->at("status"), "ok") << four->at("message");
+  EXPECT_GT(std::stod(one->at("stack_drift_max")), 0.1);
+  EXPECT_LT(std::stod(four->at("stack_drift_max")), 0.5 * std::stod(one->at("stack_drift_max")));
+  // a solve a substep: the engine's own count of points a solve stays a tower's, not four times it
+  EXPECT_LT(std::stod(four->at("contact_points")), 1.5 * std::stod(one->at("contact_points")));
+  std::ifstream meta_file(dir / "r" / "metadata.json");
+  const nlohmann::json meta = nlohmann::json::parse(meta_file);
+  bool stated = false;
+  for (const auto& s : meta["engines"]["bullet"]["sweeps"]["float"]["substeps-4"])
+    stated |= s["name"] == "substeps" &&
+              s["why"].get<std::string>().find("stepSimulation(dt/N, 0)") != std::string::npos;
+  EXPECT_TRUE(stated) << meta["engines"]["bullet"].dump(1);
+  // Jolt, when its worker was built: the knob runs (a row of its own, not `unsupported`) and holds
+  // the tower closer than one collision step does
+  const auto *jolt_one = row("jolt", "1"), *jolt_four = row("jolt", "4");
+  if (jolt_one && jolt_four && jolt_one->at("status") == "ok") {
+    ASSERT_EQ(jolt_four->at("status"), "ok") << jolt_four->at("message");
+    EXPECT_LT(std::stod(jolt_four->at("stack_drift_max")),
+              std::stod(jolt_one->at("stack_drift_max")));
+  }
+}
+#endif
+
 TEST(Runner, BadSweepValueIsRefusedNamingTheOptionAndWritesNothing) {
   const fs::path dir = fresh_dir("bad_sweep");
   for (const auto& [option, value] : std::vector<std::pair<std::string, std::string>>{

@@ -3,7 +3,9 @@
 //! process of its own, never beside the in-process 2.4 adapter.
 
 use boxdd_sys::ffi::*;
-use physbench_worker::{setting, Engine, Scene, Setting, Shape, State, World, RESTITUTION_THRESHOLD};
+use physbench_worker::{
+    setting, Engine, Knobs, Scene, Setting, Shape, State, World, RESTITUTION_THRESHOLD,
+};
 
 struct Box2dV3;
 
@@ -74,7 +76,22 @@ impl Engine for Box2dV3 {
         scene.iterations_not_applicable(variant,
                                         "substeps as iterations matter only with contacts here")
     }
-    fn create(&self, scene: &Scene, variant: &str) -> Result<Box<dyn World>, String> {
+    /// substeps: b2World_Step's subStepCount; v3 has no iteration count (one biased solve and
+    /// one relax pass a substep)
+    fn tune(&self, _variant: &str, knobs: &Knobs) -> Result<Vec<Setting>, String> {
+        if knobs.iterations > 0 {
+            return Err("Box2D v3 has no iteration count: one solve and one relax pass a substep \
+                        (sweep its substeps)".into());
+        }
+        Ok(if knobs.substeps > 0 {
+            vec![setting("subStepCount", knobs.substeps,
+                         "the sweep's substeps (--sweep-substeps), passed to b2World_Step")]
+        } else {
+            Vec::new()
+        })
+    }
+    fn create(&self, scene: &Scene, variant: &str, knobs: &Knobs)
+        -> Result<Box<dyn World>, String> {
         unsafe {
             let mut def = b2DefaultWorldDef();
             def.gravity = v2(scene.gravity[0], scene.gravity[1]);
@@ -131,7 +148,13 @@ impl Engine for Box2dV3 {
                 }
                 bodies.push(body);
             }
-            let substeps = if scene.springs_without_contacts() { 1 } else { substeps(variant) };
+            let substeps = if knobs.substeps > 0 {
+                knobs.substeps as i32
+            } else if scene.springs_without_contacts() {
+                1
+            } else {
+                substeps(variant)
+            };
             Ok(Box::new(Box2dWorld { world, bodies, dt: scene.dt as f32, substeps,
                                      counts_contacts: scene.has_contacts(),
                                      contact_data: std::cell::RefCell::new(Vec::new()) }))

@@ -266,6 +266,19 @@ pub fn setting(name: &str, value: impl ToString, why: &str) -> Setting {
     Setting { name: name.into(), value: value.to_string(), why: why.into() }
 }
 
+/// a sweep's solver knobs (`--iterations N`, `--substeps N`); 0 leaves the variant's own
+#[derive(Clone, Copy, Debug, Default)]
+pub struct Knobs {
+    pub iterations: usize,
+    pub substeps: usize,
+}
+
+impl Knobs {
+    pub fn any(&self) -> bool {
+        self.iterations > 0 || self.substeps > 0
+    }
+}
+
 pub trait Engine {
     fn name(&self) -> &'static str;
     fn version(&self) -> String;
@@ -278,7 +291,18 @@ pub trait Engine {
     fn not_applicable(&self, _scene: &Scene, _variant: &str) -> Option<String> {
         None
     }
-    fn create(&self, scene: &Scene, variant: &str) -> Result<Box<dyn World>, String>;
+    /// a sweep's knobs on the engine's nearest native ones: the settings that says they changed,
+    /// or why the engine has no such knob (the row is `unsupported`)
+    fn tune(&self, _variant: &str, knobs: &Knobs) -> Result<Vec<Setting>, String> {
+        if knobs.any() {
+            Err(format!("{} maps no solver iterations or substeps", self.name()))
+        } else {
+            Ok(Vec::new())
+        }
+    }
+    /// a world for the scene at the variant, with a sweep's knobs (tune() accepted them)
+    fn create(&self, scene: &Scene, variant: &str, knobs: &Knobs)
+        -> Result<Box<dyn World>, String>;
 }
 
 fn rotate(q: [f64; 4], v: [f64; 3]) -> [f64; 3] {
@@ -437,11 +461,19 @@ pub struct Job {
     pub every: i64,
     pub budget: f64,
     pub out: String,
+    pub knobs: Knobs,
+}
+
+fn positive(option: &str, value: &str) -> Result<usize, String> {
+    match value.parse::<usize>() {
+        Ok(n) if n > 0 => Ok(n),
+        _ => Err(format!("{option}: a positive integer, not '{value}'")),
+    }
 }
 
 fn parse_args(engine: &dyn Engine) -> Result<Job, String> {
     let mut job = Job { scene: String::new(), variant: String::new(), every: 0, budget: 0.3,
-                        out: String::new() };
+                        out: String::new(), knobs: Knobs::default() };
     let args: Vec<String> = std::env::args().skip(1).collect();
     let mut i = 0;
     while i < args.len() {
@@ -457,13 +489,15 @@ fn parse_args(engine: &dyn Engine) -> Result<Job, String> {
             "--every" => job.every = value.parse().map_err(|_| "--every: an integer")?,
             "--budget" => job.budget = value.parse().map_err(|_| "--budget: a number")?,
             "--out" => job.out = value,
+            "--iterations" => job.knobs.iterations = positive("--iterations", &value)?,
+            "--substeps" => job.knobs.substeps = positive("--substeps", &value)?,
             other => return Err(format!("unknown option {other}")),
         }
         i += 2;
     }
     if job.scene.is_empty() || job.variant.is_empty() || job.out.is_empty() {
         return Err("usage: --scene FILE --variant NAME --out RESULT.json [--every N] \
-                    [--budget S] [--engine NAME]".into());
+                    [--budget S] [--engine NAME] [--iterations N] [--substeps N]".into());
     }
     Ok(job)
 }
@@ -500,13 +534,23 @@ fn simulate(engine: &dyn Engine, job: &Job) -> Value {
     if let Some(why) = engine.unsupported(&scene, &job.variant) {
         return fail(doc, "unsupported", why);
     }
+    // a sweep's knobs: the settings they changed join the table, or the engine has no such knob
+    match engine.tune(&job.variant, &job.knobs) {
+        Ok(tuned) => {
+            if let Some(table) = doc["settings"].as_array_mut() {
+                table.extend(tuned.iter()
+                    .map(|s| json!({"name": s.name, "value": s.value, "why": s.why})));
+            }
+        }
+        Err(why) => return fail(doc, "unsupported", why),
+    }
     let every = if job.every > 0 { job.every } else { scene.probe_every_steps() };
 
     // first run: the trajectory, and a warm-up for the timed repeats
     let mut samples = Vec::new();
     let mut wall = Vec::new();
     {
-        let mut world = match engine.create(&scene, &job.variant) {
+        let mut world = match engine.create(&scene, &job.variant, &job.knobs) {
             Ok(w) => w,
             Err(e) => return fail(doc, "error", e),
         };
@@ -534,7 +578,7 @@ fn simulate(engine: &dyn Engine, job: &Job) -> Value {
     let mut measured = 0.0;
     while wall.len() < MAX_TIMED_REPEATS && (wall.len() < MIN_TIMED_REPEATS || measured < job.budget)
     {
-        let mut world = match engine.create(&scene, &job.variant) {
+        let mut world = match engine.create(&scene, &job.variant, &job.knobs) {
             Ok(w) => w,
             Err(e) => return fail(doc, "error", e),
         };

@@ -2,7 +2,9 @@
 //! as a harness worker: docs/worker-protocol.md.
 
 use oxijolt_sys::*;
-use physbench_worker::{setting, Engine, Scene, Setting, Shape, State, World, RESTITUTION_THRESHOLD};
+use physbench_worker::{
+    setting, Engine, Knobs, Scene, Setting, Shape, State, World, RESTITUTION_THRESHOLD,
+};
 use std::ptr;
 
 struct Jolt;
@@ -148,7 +150,24 @@ impl Engine for Jolt {
              iterations is its default row".into()
         })
     }
-    fn create(&self, scene: &Scene, _variant: &str) -> Result<Box<dyn World>, String> {
+    /// substeps: PhysicsSystem::Update's collision steps (each a whole step of dt/N: Jolt's own
+    /// substeps); iterations: PhysicsSettings::mNumVelocitySteps (default 10)
+    fn tune(&self, _variant: &str, knobs: &Knobs) -> Result<Vec<Setting>, String> {
+        let mut s = Vec::new();
+        if knobs.substeps > 0 {
+            s.push(setting("collision steps", knobs.substeps,
+                           "the sweep's substeps (--sweep-substeps): PhysicsSystem::Update's \
+                            inCollisionSteps, each a whole step of dt/N"));
+        }
+        if knobs.iterations > 0 {
+            s.push(setting("numVelocitySteps", knobs.iterations,
+                           "the sweep's iterations (--sweep-iterations): \
+                            PhysicsSettings::mNumVelocitySteps (default 10)"));
+        }
+        Ok(s)
+    }
+    fn create(&self, scene: &Scene, _variant: &str, knobs: &Knobs)
+        -> Result<Box<dyn World>, String> {
         init_jolt();
         unsafe {
             let layers = JPH_BroadPhaseLayerInterfaceTable_Create(2, 2);
@@ -182,6 +201,9 @@ impl Engine for Jolt {
             JPH_PhysicsSystem_GetPhysicsSettings(system, &mut physics);
             physics.allowSleeping = false;
             physics.minVelocityForRestitution = RESTITUTION_THRESHOLD as f32;
+            if knobs.iterations > 0 {
+                physics.numVelocitySteps = knobs.iterations as _;
+            }
             JPH_PhysicsSystem_SetPhysicsSettings(system, &mut physics);
             JPH_PhysicsSystem_SetGravity(system, &vec3(scene.gravity));
 
@@ -266,6 +288,7 @@ impl Engine for Jolt {
                 scratch: JPH_TempAllocator_Create(TEMP_ALLOCATOR_BYTES),
                 bodies,
                 dt: scene.dt as f32,
+                collision_steps: knobs.substeps.max(1) as i32,
                 overflow: None,
                 listener,
                 points,
@@ -281,6 +304,7 @@ struct JoltWorld {
     scratch: *mut JPH_TempAllocator,
     bodies: Vec<JPH_BodyID>,
     dt: f32,
+    collision_steps: i32, // PhysicsSystem::Update's inCollisionSteps: 1, or a sweep's substeps
     overflow: Option<String>,
     listener: *mut JPH_ContactListener, // null on a scene without collisions
     points: Box<std::sync::atomic::AtomicUsize>, // the listener's count since the last read
@@ -305,7 +329,8 @@ impl Drop for JoltWorld {
 impl World for JoltWorld {
     fn step(&mut self) {
         // Jolt clears the forces added for a step at its end
-        let result = unsafe { JPH_PhysicsSystem_Update2(self.system, self.dt, 1, self.scratch,
+        let result = unsafe { JPH_PhysicsSystem_Update2(self.system, self.dt, self.collision_steps,
+                                                        self.scratch,
                                                         self.jobs) };
         if result != JPH_PhysicsUpdateError_None && self.overflow.is_none() {
             let mut full = Vec::new();

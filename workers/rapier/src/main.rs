@@ -1,6 +1,6 @@
 //! Rapier (rapier3d, single precision) as a harness worker: docs/worker-protocol.md.
 
-use physbench_worker::{setting, Engine, Scene, Setting, Shape, State, World};
+use physbench_worker::{setting, Engine, Knobs, Scene, Setting, Shape, State, World};
 use rapier3d::na::Unit;
 use rapier3d::prelude::*;
 
@@ -52,7 +52,24 @@ impl Engine for Rapier {
     fn not_applicable(&self, scene: &Scene, variant: &str) -> Option<String> {
         scene.iterations_not_applicable(variant, "solver iterations matter only with contacts")
     }
-    fn create(&self, scene: &Scene, variant: &str) -> Result<Box<dyn World>, String> {
+    /// substeps: num_solver_iterations, which are the substeps of Rapier's soft-step solver;
+    /// iterations: num_internal_pgs_iterations, the PGS passes within each
+    fn tune(&self, _variant: &str, knobs: &Knobs) -> Result<Vec<Setting>, String> {
+        let mut s = Vec::new();
+        if knobs.substeps > 0 {
+            s.push(setting("num_solver_iterations", knobs.substeps,
+                           "the sweep's substeps (--sweep-substeps): Rapier's solver iterations \
+                            are the substeps of its soft-step solver"));
+        }
+        if knobs.iterations > 0 {
+            s.push(setting("num_internal_pgs_iterations", knobs.iterations,
+                           "the sweep's iterations (--sweep-iterations): the PGS passes of each \
+                            substep (default 1)"));
+        }
+        Ok(s)
+    }
+    fn create(&self, scene: &Scene, variant: &str, knobs: &Knobs)
+        -> Result<Box<dyn World>, String> {
         let mut world = PhysicsWorld::new();
         let g = scene.gravity;
         world.gravity = Vector::new(g[0] as f32, g[1] as f32, g[2] as f32);
@@ -62,6 +79,12 @@ impl Engine for Rapier {
         }
         if scene.springs_without_contacts() {
             world.integration_parameters.num_solver_iterations = 1;
+        }
+        if knobs.substeps > 0 {
+            world.integration_parameters.num_solver_iterations = knobs.substeps;
+        }
+        if knobs.iterations > 0 {
+            world.integration_parameters.num_internal_pgs_iterations = knobs.iterations;
         }
         let mut handles = Vec::with_capacity(scene.bodies.len());
         for b in &scene.bodies {
