@@ -137,3 +137,51 @@ def drift_cost_views(results: pd.DataFrame) -> list[dict]:
         fig.update_yaxes(title_text="max drift (m)", row=1, col=1)
         sections.append(dict(scenario=name, chart=figure_html(fig), fronts=fronts, missing=missing))
     return sections
+
+
+def best_configurations(results: pd.DataFrame) -> list[dict]:
+    """Per stack scenario, each engine read at its best knobs (issue 38's rule: no claim rests on an
+    unequal setting): every row of the engine counts — each variant at its own settings and at
+    every swept substep or iteration count. Per engine: its defaults' verdict and ms per step; the
+    cheapest configuration whose verdict is `stands`, its ms and drift, and how many times rtp's
+    cheapest standing configuration is faster (below 1: slower); and the least drift it reaches
+    within the ms of rtp's default. Engines with no standing configuration say so."""
+    defaults = CONTACT_VIEWS["each engine's defaults"]
+    sections = []
+    for name, rows in results.groupby("scenario", sort=False):
+        if "stack_drift_max" not in rows or rows["stack_drift_max"].isna().all():
+            continue
+        rows = rows.copy()
+        speed = rows["steps_per_s"] if "steps_per_s" in rows else pd.Series(float("nan"), index=rows.index)
+        rows["ms"] = 1e3 / speed.where(speed > 0)
+        ok = rows[(rows["status"] == "ok") & rows["ms"].notna()]
+        stands = ok[ok.get("contact_verdict", pd.Series("", index=ok.index)) == "stands"]
+
+        def cheapest(engine: str):
+            mine = stands[stands["engine"] == engine]
+            return None if mine.empty else mine.loc[mine["ms"].idxmin()]
+
+        swept = rows.apply(lambda r: pd.notna(r.get("iterations")) or pd.notna(r.get("substeps")), axis=1)
+        rtp_default = rows[(rows["engine"] == "rtp") & (rows["variant"] == defaults["rtp"]) & ~swept]
+        rtp_ms = rtp_default["ms"].iloc[0] if not rtp_default.empty else float("nan")
+        rtp_best = cheapest("rtp")
+        table = []
+        for engine in rows["engine"].unique():
+            mine = rows[rows["engine"] == engine]
+            own = mine[(mine["variant"] == defaults.get(engine)) & ~swept[mine.index]]
+            default = own.iloc[0] if not own.empty else None
+            best = cheapest(engine)
+            within = ok[(ok["engine"] == engine) & (ok["ms"] <= rtp_ms) & ok["stack_drift_max"].notna()]
+            least = within.loc[within["stack_drift_max"].idxmin()] if not within.empty else None
+            ratio = (best["ms"] / rtp_best["ms"]) if best is not None and rtp_best is not None else None
+            table.append(dict(
+                engine=engine,
+                default=(f"{default['label']}: {default.get('contact_verdict') or default['status']}, "
+                         f"{fmt(default['ms'])} ms") if default is not None else "",
+                best=best["label"] if best is not None else "none stands",
+                best_ms=fmt(best["ms"]) if best is not None else "",
+                best_drift=fmt(best["stack_drift_max"]) if best is not None else "",
+                ratio=fmt(ratio) if ratio is not None else "",
+                within=(f"{fmt(least['stack_drift_max'])} m ({least['label']})" if least is not None else "")))
+        sections.append(dict(scenario=name, rows=table, rtp_ms=fmt(rtp_ms)))
+    return sections

@@ -10,7 +10,7 @@ import plotly.offline
 from . import replay
 from .benchmarks import broadphase_benchmark, contacts_benchmark, narrowphase_benchmark, particle_benchmark
 from .comparison import comparison_section
-from .contacts import CONTACT_VIEWS, drift_cost_views, verdict_table
+from .contacts import CONTACT_VIEWS, best_configurations, drift_cost_views, verdict_table
 from .glance import at_a_glance
 from .load import is_nominal, load_results
 from .profile import stage_profiles
@@ -45,6 +45,7 @@ def build_report(folder: Path, compare_with: Path | None = None) -> Path:
         meta=meta, plotlyjs=plotly.offline.get_plotlyjs(), comparison=comparison, glance=glance,
         table=results_table(results, meta), tablejs=table_script(), scenarios=scenarios,
         verdicts=verdict_table(nominal), drift_cost=drift_cost_views(nominal), contact_views=CONTACT_VIEWS,
+        best_configurations=best_configurations(nominal),
         contacts=contacts, profiles=stage_profiles(results, meta), families=stability_maps(results, meta),
         scaling=scaling_charts(results, meta, benchmark, contacts), benchmark=benchmark,
         narrowphase=narrowphase_benchmark(folder), broadphase=broadphase_benchmark(folder),

@@ -375,6 +375,33 @@ def test_drift_against_cost_has_a_front_per_view():
     assert "box2d\\u002fdefault: settles" in section["chart"]
 
 
+def test_best_configurations_read_every_knob_and_name_the_cheapest_that_stands():
+    def row(engine, variant, ms, drift, verdict, substeps=float("nan")):
+        r = contact_row(engine, variant, 1e3 / ms, drift, verdict=verdict)
+        r.update(substeps=substeps, iterations=float("nan"),
+                 label=f"{engine}/{variant}" + (f" substeps={int(substeps)}" if substeps == substeps else ""))
+        return r
+    rows = pd.DataFrame([
+        row("rtp", "soft-step", 2.0, 1e-3, "stands"),
+        row("rtp", "soft-step", 1.25, 2e-3, "stands", substeps=4),
+        row("rtp", "soft-step", 0.5, 3.0, "collapsed", substeps=1),
+        row("bullet", "float", 1.0, 30.0, "collapsed"),
+        row("bullet", "float", 2.0, 0.05, "drifts", substeps=2),
+        row("bullet", "float", 4.0, 0.005, "stands", substeps=4),
+        row("jolt", "default", 1.0, 20.0, "collapsed"),
+    ])
+    (section,) = contacts.best_configurations(rows)
+    by_engine = {r["engine"]: r for r in section["rows"]}
+    assert section["rtp_ms"] == "2"
+    assert by_engine["rtp"]["best"] == "rtp/soft-step substeps=4"
+    assert by_engine["bullet"]["default"] == "bullet/float: collapsed, 1 ms"
+    assert by_engine["bullet"]["best"] == "bullet/float substeps=4"
+    assert by_engine["bullet"]["ratio"] == "3.2"  # 4 ms against rtp's cheapest standing 1.25 ms
+    # within rtp's default 2 ms: Bullet's 2-substep row is its least drift
+    assert by_engine["bullet"]["within"] == "0.05 m (bullet/float substeps=2)"
+    assert by_engine["jolt"]["best"] == "none stands" and by_engine["jolt"]["ratio"] == ""
+
+
 def test_a_scene_without_drift_has_no_drift_chart():
     rows = pd.DataFrame([dict(contact_row("rtp", "soft-step", 1000, 1e-3), stack_drift_max=float("nan"))])
     assert contacts.drift_cost_views(rows) == []
