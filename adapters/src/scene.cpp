@@ -328,6 +328,12 @@ void validate(const Scene& scene) {
     require_bounded(at + ".position", b.position, kMaxCoordinate, " m");
     require_bounded(at + ".linear_velocity", b.linear_velocity, kMaxSpeed, " m/s");
     require_bounded(at + ".angular_velocity", b.angular_velocity, kMaxAngularSpeed, " rad/s");
+    // a static body does not move: a velocity on it would be kept by some engines (a kinematic
+    // body) and dropped by others, so it has one meaning, none, and is refused
+    if (b.mass == 0.0 && b.linear_velocity.squaredNorm() != 0.0)
+      fail(at + ".linear_velocity", "a static body (mass 0) cannot move: must be 0");
+    if (b.mass == 0.0 && b.angular_velocity.squaredNorm() != 0.0)
+      fail(at + ".angular_velocity", "a static body (mass 0) cannot turn: must be 0");
     require_finite(at + ".orientation", b.orientation.vec());
     require_finite(at + ".orientation", b.orientation.w());
     if (std::abs(b.orientation.norm() - 1.0) > 1e-6)

@@ -111,6 +111,13 @@ TEST(SceneJson, OutOfRangeValuesAreNamed) {
   doc["bodies"][0]["orientation"] = json::array({1.0, 1.0, 0.0, 0.0});
   EXPECT_NE(error_for(doc).find("bodies[0].orientation: must be a unit quaternion"),
             std::string::npos);
+  // a static body with a velocity: engines differ on what it means (moved, or ignored), so none
+  doc = to_json(sample_scene());
+  doc["bodies"][0]["mass"] = 0.0;
+  doc["bodies"][0]["linear_velocity"] = json::array({1.0, 0.0, 0.0});
+  EXPECT_NE(error_for(doc).find("bodies[0].linear_velocity: a static body (mass 0) cannot move"),
+            std::string::npos)
+      << error_for(doc);
   doc = to_json(sample_scene());
   doc["bodies"][0]["shape"]["type"] = "torus";
   EXPECT_NE(error_for(doc).find("bodies[0].shape.type: unknown shape \"torus\""),
