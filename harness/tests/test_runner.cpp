@@ -17,6 +17,10 @@
 
 #include "physbench/process.h"
 #include "physbench/registry.h"
+#include "physbench/metrics.h"
+#include "physbench/runner.h"
+#include "physbench/scenarios.h"
+#include "physbench/scene_json.h"
 
 // the linked MuJoCo build's name ("mujoco-2.2" where MuJoCo 4, in physbench-mujoco4, is the
 // mujoco row)
@@ -340,61 +344,80 @@ std::string converged_spring_scene(const std::string& name, double dt, double du
 }
 
 TEST(Runner, ConvergedReferenceThatFailsOrTimesOutIsNamedOnEveryRowThatNeededIt) {
+  // the reference is SciPy's, run by the project's Python: one run where it works, one where its
+  // interpreter is missing (an error) and one where it hangs (a timeout)
   const fs::path dir = fresh_dir("reference_failure");
-  // 10⁵ steps: the reference at dt/1,024 would be 1.02·10⁸, over the step cap of 10⁸, so its
-  // worker rejects the refined scene (an error)
-  std::ofstream(dir / "capped.json") << converged_spring_scene("capped", 1e-3, 100.0, 1024);
-  // 9·10⁴ steps (some 0.05 s a run) against 9.2·10⁷ for the reference (tens of seconds): only
-  // the reference outlasts the 8 s timeout. The rows are the one-evaluation integrators: rk4's own
-  // 10⁵ steps took over 5 s in the sanitizer build beside another test, a timeout of their own
-  std::ofstream(dir / "slow.json") << converged_spring_scene("slow", 1e-3, 90.0, 1024);
-  // a reference that runs: the control
-  std::ofstream(dir / "fine.json") << converged_spring_scene("fine", 1e-3, 1.0, 4);
-  const Invocation inv =
-      physbench({"run", "--scene", (dir / "capped.json").string(), "--scene",
-                 (dir / "slow.json").string(), "--scene", (dir / "fine.json").string(), "-e", "rtp",
-                 "--variant", "euler,symplectic", "--budget", "0", "--timeout", "8", "--out",
-                 (dir / "r").string()},
-                dir);
-  ASSERT_EQ(inv.outcome.exit_code, 0) << inv.output;
-  const auto rows = read_rows(dir / "r" / "results.csv");
-  ASSERT_EQ(rows.size(), 6u) << inv.output;
-  const std::map<std::string, std::string> expected = {
-      {"capped", "error"}, {"slow", "timeout"}, {"fine", "ok"}};
-  for (const auto& row : rows) {
-    const std::string what = row.at("scenario") + " " + row.at("variant");
-    const std::string& want = expected.at(row.at("scenario"));
-    // the engine's own run was fine; the reference's fate is a column of its own
-    EXPECT_EQ(row.at("status"), "ok") << what << ": " << row.at("message");
-    EXPECT_EQ(row.at("reference"), "converged") << what;
-    EXPECT_EQ(row.at("reference_status"), want) << what << ": " << row.at("message");
-    EXPECT_FALSE(row.at("energy_drift_max").empty()) << what << ": invariants need no reference";
-    if (want == "ok") {
-      EXPECT_FALSE(row.at("position_err_max").empty()) << what;
-      EXPECT_FALSE(row.at("orientation_err_max").empty()) << what;
-      EXPECT_FALSE(row.at("reference_self_error").empty()) << what;
-      EXPECT_EQ(row.at("message").find("reference"), std::string::npos) << row.at("message");
-      continue;
+  std::ofstream(dir / "spring.json") << converged_spring_scene("spring", 1e-3, 1.0, 4);
+  const fs::path hang = dir / "hang.sh";
+  std::ofstream(hang) << "#!/bin/sh\nsleep 60\n";
+  fs::permissions(hang, fs::perms::owner_all);
+  const std::map<std::string, std::string> cases = {
+      {"ok", ""}, {"error", (dir / "no-python").string()}, {"timeout", hang.string()}};
+  for (const auto& [want, python] : cases) {
+    if (python.empty())
+      ::unsetenv("PHYSBENCH_REFERENCE_PYTHON");
+    else
+      ::setenv("PHYSBENCH_REFERENCE_PYTHON", python.c_str(), 1);
+    const fs::path out = dir / ("r-" + want);
+    const Invocation inv =
+        physbench({"run", "--scene", (dir / "spring.json").string(), "-e", "rtp", "--variant",
+                   "euler,symplectic", "--budget", "0", "--timeout", "3", "--out", out.string()},
+                  dir);
+    ::unsetenv("PHYSBENCH_REFERENCE_PYTHON");
+    ASSERT_EQ(inv.outcome.exit_code, 0) << inv.output;
+    const auto rows = read_rows(out / "results.csv");
+    ASSERT_EQ(rows.size(), 2u) << inv.output;
+    for (const auto& row : rows) {
+      const std::string what = want + " " + row.at("variant");
+      // the engine's own run was fine; the reference's fate is a column of its own
+      EXPECT_EQ(row.at("status"), "ok") << what << ": " << row.at("message");
+      EXPECT_EQ(row.at("reference"), "converged") << what;
+      EXPECT_EQ(row.at("reference_status"), want) << what << ": " << row.at("message");
+      EXPECT_FALSE(row.at("energy_drift_max").empty()) << what << ": invariants need no reference";
+      if (want == "ok") {
+        EXPECT_FALSE(row.at("position_err_max").empty()) << what;
+        EXPECT_FALSE(row.at("orientation_err_max").empty()) << what;
+        EXPECT_FALSE(row.at("reference_self_error").empty()) << what;
+        EXPECT_EQ(row.at("message").find("reference"), std::string::npos) << row.at("message");
+        continue;
+      }
+      EXPECT_TRUE(row.at("position_err_max").empty()) << what;
+      EXPECT_TRUE(row.at("orientation_err_max").empty()) << what;
+      EXPECT_TRUE(row.at("reference_self_error").empty()) << what;
+      EXPECT_NE(row.at("message").find("no position or orientation error: reference run (SciPy "
+                                       "dop853) " + want),
+                std::string::npos)
+          << what << ": " << row.at("message");
     }
-    EXPECT_TRUE(row.at("position_err_max").empty()) << what;
-    EXPECT_TRUE(row.at("orientation_err_max").empty()) << what;
-    EXPECT_TRUE(row.at("reference_self_error").empty()) << what;
-    EXPECT_NE(row.at("message").find("no position or orientation error: reference run (rtp rk4 "
-                                     "at dt/1024) " +
-                                     want),
-              std::string::npos)
-        << what << ": " << row.at("message");
+    // the reason is in the metadata too, per step, for the report's section
+    std::ifstream in(out / "metadata.json");
+    const nlohmann::json meta = nlohmann::json::parse(in);
+    EXPECT_EQ(meta.at("scenarios").at("spring").contains("reference_failure"), want != "ok")
+        << meta.at("scenarios").at("spring").dump();
   }
-  // the reason is in the metadata too, per step, for the report's section
-  std::ifstream in(dir / "r" / "metadata.json");
-  const nlohmann::json meta = nlohmann::json::parse(in);
-  EXPECT_NE(meta.at("scenarios").at("capped").at("reference_failure").dump().find("over the cap"),
-            std::string::npos)
-      << meta.at("scenarios").at("capped").dump();
-  EXPECT_NE(meta.at("scenarios").at("slow").at("reference_failure").dump().find("timed out"),
-            std::string::npos)
-      << meta.at("scenarios").at("slow").dump();
-  EXPECT_FALSE(meta.at("scenarios").at("fine").contains("reference_failure"));
+}
+
+// The SciPy reference against the closed forms it is not built from: a torque-free symmetric top
+// (Goldstein §5.6) and a damped oscillator, to 1e-9 in position and orientation over the run
+TEST(Runner, ScipyReferenceAgreesWithTheClosedForms) {
+  const fs::path dir = fresh_dir("scipy_reference");
+  for (const physbench::Scene& scene : {physbench::symmetric_top_scene(), physbench::spring_oscillator_scene(0.1)}) {
+    const fs::path file = dir / (scene.name + ".json");
+    std::ofstream(file) << physbench::to_json(scene).dump();
+    const physbench::RunResult r = physbench::run_worker_job(physbench::scipy_reference("dop853"), file, dir / "r.json",
+                                       dir / "r.log", scene.probe_every_steps(), 0.0, 120.0);
+    ASSERT_EQ(r.status, physbench::Status::Ok) << scene.name << ": " << r.message;
+    ASSERT_EQ(r.trajectory.samples.size(), std::size_t(scene.step_count() /
+                                                       scene.probe_every_steps() + 1))
+        << scene.name;
+    const physbench::Trajectory closed = physbench::analytic_reference(scene, r.trajectory);
+    physbench::Scene check = scene;
+    check.probe.metrics = {physbench::Metric::Position, physbench::Metric::Orientation};
+    const physbench::ErrorSummary e = physbench::summarise(physbench::compare(check, r.trajectory, &closed));
+    ASSERT_TRUE(e.position && e.orientation) << scene.name;
+    EXPECT_LT(e.position->max, 1e-9) << scene.name;
+    EXPECT_LT(e.orientation->max, 1e-9) << scene.name;
+  }
 }
 
 // rtp's determinism across processes (in-process repeats and threads: validation's Determinism

@@ -55,6 +55,12 @@ RunResult run_worker_job(const EngineVariant& ev, const std::filesystem::path& s
                          double timing_budget, double timeout_seconds,
                          const SolverKnobs& knobs = {});
 
+// The converged reference of a scene without contacts (docs/metrics.md, "References"): SciPy's
+// DOP853 on the rigid-body equations of motion (validation/reference/scipy_reference.py), a worker
+// of its own run by the project's Python (.venv/bin/python, or PHYSBENCH_REFERENCE_PYTHON), at
+// `variant` "dop853" (rtol 1e-12) or "dop853-1e-10"
+EngineVariant scipy_reference(const std::string& variant);
+
 struct RunOptions {
   std::vector<std::string>
       scenarios;  // names; empty: every built-in (unless scene files are given)
