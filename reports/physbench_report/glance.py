@@ -4,6 +4,7 @@ from __future__ import annotations
 
 import pandas as pd
 
+from .contacts import FAILED_VERDICTS
 from .load import is_nominal
 from .speed import pareto_front
 from .style import anchor_of, fmt
@@ -25,10 +26,16 @@ def at_a_glance(results: pd.DataFrame, meta: dict) -> list[dict]:
     in words."""
     glance = []
     for name, rows in results.groupby("scenario", sort=False):
-        nominal = rows[[is_nominal(meta, r) for _, r in rows.iterrows()]]
-        ok = nominal[(nominal["status"] == "ok") & nominal["steps_per_s"].notna()]
+        # a run passed when it is ok and its contact verdict, where it has one, is not a failure
+        # (collapsed, drifts, settles, sinks, …): only such runs are named fastest, most accurate or
+        # on a front; the others are listed as failures, in words
+        verdicts = rows["contact_verdict"] if "contact_verdict" in rows else pd.Series("", index=rows.index)
+        failed_verdict = verdicts.isin(FAILED_VERDICTS)
+        passed = rows[(rows["status"] == "ok") & ~failed_verdict]
+        nominal = passed[[is_nominal(meta, r) for _, r in passed.iterrows()]]
+        ok = nominal[nominal["steps_per_s"].notna()]
         entry = dict(name=name, anchor=anchor_of(name), fastest="", accurate="", metric="", front="", budget="",
-                     budget_rows=[], failures=[], unsupported=int((nominal["status"] == "unsupported").sum()))
+                     budget_rows=[], failures=[], unsupported=int((rows["status"] == "unsupported").sum()))
         if not ok.empty:
             best = ok.loc[ok["steps_per_s"].idxmax()]
             entry["fastest"] = f"{best['label']} ({fmt(best['steps_per_s'])} steps/s)"
@@ -40,7 +47,7 @@ def at_a_glance(results: pd.DataFrame, meta: dict) -> list[dict]:
             if not scored.empty:
                 best = scored.loc[scored[column].abs().idxmin()]
                 entry["accurate"] = f"{best['label']} ({fmt(abs(best[column]))})"
-            points = rows[(rows["status"] == "ok") & rows["steps_per_s"].notna() & rows[column].notna()].copy()
+            points = passed[passed["steps_per_s"].notna() & passed[column].notna()].copy()
             if not points.empty:
                 points["cost"] = points["wall_s_median"] / points["duration"]
                 points[column] = points[column].abs()
@@ -55,9 +62,11 @@ def at_a_glance(results: pd.DataFrame, meta: dict) -> list[dict]:
                 entry["budget"] = fmt(budget)
                 entry["budget_rows"] = [dict(label=r["label"], error=fmt(r[column]), dt=f"1/{1 / r['dt']:.0f}")
                                         for _, r in best_within.iterrows()]
-        for _, r in rows.iterrows():
+        for index, r in rows.iterrows():
+            why = r["message"] if isinstance(r.get("message"), str) and r["message"] else "no reason given"
             if r["status"] in FAILED:
-                why = r["message"] if isinstance(r.get("message"), str) and r["message"] else "no reason given"
                 entry["failures"].append(f"{r['label']} {FAILED[r['status']]} at dt = {fmt(r['dt'])} s: {why}")
+            elif r["status"] == "ok" and failed_verdict[index]:
+                entry["failures"].append(f"{r['label']} {verdicts[index]} at dt = {fmt(r['dt'])} s: {why}")
         glance.append(entry)
     return glance

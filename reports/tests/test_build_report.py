@@ -13,7 +13,7 @@ import pytest
 
 from support import PHYSBENCH, physbench_run
 import build_report  # noqa: E402  (found through support's path)
-from physbench_report import benchmarks, contacts, load, profile, speed, table  # noqa: E402
+from physbench_report import benchmarks, contacts, glance, load, profile, speed, table  # noqa: E402
 
 
 @pytest.fixture(scope="module")
@@ -400,6 +400,27 @@ def test_best_configurations_read_every_knob_and_name_the_cheapest_that_stands()
     # within rtp's default 2 ms: Bullet's 2-substep row is its least drift
     assert by_engine["bullet"]["within"] == "0.05 m (bullet/float substeps=2)"
     assert by_engine["jolt"]["best"] == "none stands" and by_engine["jolt"]["ratio"] == ""
+
+
+def test_front_page_never_names_a_failed_run_fastest_or_most_accurate():
+    # bullet collapses the stack fastest of all, jolt drifts: neither may be named fastest, most
+    # accurate or be on the front; both are failures in words
+    rows = pd.DataFrame([
+        contact_row("bullet", "float", 5000, 30.0, verdict="collapsed"),
+        contact_row("jolt", "default", 4000, 0.2, verdict="drifts"),
+        contact_row("rtp", "soft-step", 1000, 1e-3),
+        contact_row("ode", "quickstep", 500, 5e-4),
+    ])
+    rows["dt"], rows["duration"], rows["message"] = 1 / 60, 10.0, ""
+    rows["wall_s_median"] = 600 / rows["steps_per_s"]
+    rows.loc[0, "message"] = "collapsed: drift 30 m"
+    (entry,) = glance.at_a_glance(rows, {"scenarios": {"tower-10": {"dt": 1 / 60}}})
+    assert entry["fastest"].startswith("rtp/soft-step")
+    assert entry["accurate"].startswith("ode/quickstep")
+    assert "bullet" not in entry["front"] and "jolt" not in entry["front"]
+    assert [r["label"] for r in entry["budget_rows"]] == ["ode/quickstep", "rtp/soft-step"]
+    assert any(f.startswith("bullet/float collapsed") and "drift 30 m" in f for f in entry["failures"])
+    assert any(f.startswith("jolt/default drifts") for f in entry["failures"])
 
 
 def test_a_scene_without_drift_has_no_drift_chart():
