@@ -110,6 +110,8 @@ void put_metrics(EvaluatedJob& job, const Scene& scene, const ReferenceRun& refe
     if (v) row.number(key, *v);
   };
   put_value("top_height_change", contact.top_height_change);
+  put_value("drift_in_plane_max", contact.drift_in_plane);
+  put_value("drift_out_of_plane_max", contact.drift_out_of_plane);
   put_value("energy_added_max", contact.energy_added_max);
   put_value("speed_max", contact.speed_max);
   put_value("rest_speed_rms", contact.rest_speed_rms);

@@ -12,7 +12,9 @@ from .style import figure_html, fmt, hue
 
 # the contact table of a contact scenario: results.csv column, heading (docs/metrics.md, "Contact")
 CONTACT_COLUMNS = [
-    ("contact_verdict", "verdict"), ("stack_drift_max", "drift max (m)"), ("top_height_change", "top height change (m)"),
+    ("contact_verdict", "verdict"), ("stack_drift_max", "drift max (m)"),
+    ("drift_in_plane_max", "in the plane (m)"), ("drift_out_of_plane_max", "out of the plane (m)"),
+    ("top_height_change", "top height change (m)"),
     ("penetration_max", "penetration max (m)"), ("penetration_final", "penetration final (m)"),
     ("energy_added_max", "energy added max (J)"), ("speed_max", "speed max (m/s)"),
     ("rest_speed_rms", "RMS speed, last second (m/s)"), ("apex_rel_err", "apex errors (relative)"),

@@ -442,6 +442,20 @@ void judge_stack(const Scene& scene, const Trajectory& run, const ErrorSeries& s
   out.top_height_change =
       (run.samples.back().bodies[top].position - run.samples.front().bodies[top].position).dot(up);
   judge_speeds(run, out);
+  // a planar scene's drift in its plane (along its horizontal, x) and out of it (z), apart: a 3D
+  // engine's stack may lean out of a plane nothing holds it to
+  if (scene.planar) {
+    double in_plane = 0.0, out_of_plane = 0.0;
+    for (const Sample& s : run.samples)
+      for (std::size_t b = 0; b < run.bodies.size(); ++b) {
+        const Vec3 moved = s.bodies[b].position - run.samples.front().bodies[b].position;
+        const Vec3 level = moved - moved.dot(up) * up;
+        in_plane = std::max(in_plane, std::abs(level.x()));
+        out_of_plane = std::max(out_of_plane, std::abs(level.z()));
+      }
+    out.drift_in_plane = in_plane;
+    out.drift_out_of_plane = out_of_plane;
+  }
 
   double drift = 0.0;
   for (double d : series.stack_drift) drift = std::isnan(d) ? d : std::max(drift, d);

@@ -310,3 +310,17 @@ TEST(ContactMetrics, RollingSpeedAndSlipAreJudgedAgainstTheClosedForm) {
   EXPECT_EQ(judged(v_roll, 0.9 * v_roll / r).verdict, "slips");
   EXPECT_EQ(judged(v_roll, v_roll / r).verdict, "rolls");
 }
+
+// a planar stack's drift apart in the plane and out of it: the top box moved 0.3 m along x and
+// 0.4 m along z drifts 0.5 m, 0.3 of it in the plane and 0.4 out of it
+TEST(ContactMetrics, PlanarDriftIsSplitIntoInAndOutOfThePlane) {
+  const Scene scene = tower_scene(2);
+  Trajectory run = two_samples(scene, {Vec3::Zero(), Vec3::Zero()}, {Vec3::Zero(), Vec3::Zero()});
+  run.samples.back().bodies[1].position += Vec3(0.3, 0.0, 0.4);
+  const ErrorSeries series = compare(scene, run, nullptr);
+  const ContactSummary c = contact_summary(scene, run, series);
+  ASSERT_TRUE(c.drift_in_plane && c.drift_out_of_plane);
+  EXPECT_NEAR(*c.drift_in_plane, 0.3, 1e-12);
+  EXPECT_NEAR(*c.drift_out_of_plane, 0.4, 1e-12);
+  EXPECT_NEAR(summarise(series).stack_drift->max, 0.5, 1e-12);
+}

@@ -86,7 +86,10 @@ inline constexpr double kRestlessBeyond = 0.05;  // m/s: a pile's RMS speed, las
 // computed stays empty (nullopt), never zero.
 struct ContactSummary {
   // stack_drift
-  std::optional<double> top_height_change;  // the initially highest body, final − start along up (m)
+  std::optional<double> top_height_change;
+  // planar scenes: the largest drift of any probed body along the plane's horizontal (x), and out
+  // of the plane (z), over the run (m)
+  std::optional<double> drift_in_plane, drift_out_of_plane;  // the initially highest body, final − start along up (m)
   std::optional<double> speed_max;          // fastest probed body at any sample (m/s)
   std::optional<double> rest_speed_rms;     // RMS speed of all probed bodies over the last second (m/s)
   // energy (absolute: a resting stack has no energy in play to divide by)
