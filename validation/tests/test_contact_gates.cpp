@@ -6,6 +6,7 @@
 #include <algorithm>
 #include <cmath>
 #include <cstdio>
+#include <functional>
 #include <vector>
 
 #include "physbench/metrics.h"
@@ -323,4 +324,31 @@ TEST(ContactMetrics, PlanarDriftIsSplitIntoInAndOutOfThePlane) {
   EXPECT_NEAR(*c.drift_in_plane, 0.3, 1e-12);
   EXPECT_NEAR(*c.drift_out_of_plane, 0.4, 1e-12);
   EXPECT_NEAR(summarise(series).stack_drift->max, 0.5, 1e-12);
+}
+
+// the collapse rule scales with the stack: a 10-box tower whose every contact sank 6 cm dropped
+// its top 0.6 m without a box falling (it sinks); a top box that slid 1 m off collapsed (slid);
+// one turned on its side collapsed (toppled)
+TEST(ContactMetrics, SinkingSlidingAndTopplingAreToldApart) {
+  const Scene scene = tower_scene(10);
+  const std::vector<Vec3> still(10, Vec3::Zero());
+  auto verdict = [&](const std::function<void(std::vector<SampledState>&)>& move) {
+    Trajectory run = two_samples(scene, still, still);
+    move(run.samples.back().bodies);
+    const ContactSummary c = contact_summary(scene, run, compare(scene, run, nullptr));
+    return c.verdict + " | " + c.message;
+  };
+  const std::string sunk = verdict([](std::vector<SampledState>& boxes) {
+    for (std::size_t i = 0; i < boxes.size(); ++i) boxes[i].position.y() -= 0.06 * double(i + 1);
+  });
+  EXPECT_EQ(sunk.substr(0, 5), "sinks") << sunk;
+  const std::string slid = verdict(
+      [](std::vector<SampledState>& boxes) { boxes.back().position.x() += 1.0; });
+  EXPECT_EQ(slid.substr(0, 17), "collapsed | colla") << slid;
+  EXPECT_NE(slid.find("(slid)"), std::string::npos) << slid;
+  const std::string toppled = verdict([](std::vector<SampledState>& boxes) {
+    boxes.back().position += Vec3(1.0, -0.5, 0.0);
+    boxes.back().orientation = Quat(Eigen::AngleAxisd(M_PI / 2.0, Vec3::UnitZ()));
+  });
+  EXPECT_NE(toppled.find("(toppled)"), std::string::npos) << toppled;
 }

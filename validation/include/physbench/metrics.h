@@ -67,7 +67,10 @@ bool has_analytic_reference(const Scene& scene);
 
 // the verdict's thresholds
 inline constexpr double kStandsWithin = 0.01;  // m: drift and top-height change of a stack that stands
-inline constexpr double kCollapsedBeyond = 0.5;  // m: drift or top drop of a collapsed stack
+inline constexpr double kCollapsedBeyond = 0.5;  // m: drift, or top drop past the sinking, of a
+                                                 // collapsed stack
+inline constexpr double kToppledBeyond = 0.5;  // rad: a collapsed stack where a body turned this far
+                                               // toppled; one where none did slid
 inline constexpr double kSinksBeyond = 0.02;     // m: final penetration of a stack that sinks
 inline constexpr double kMovedBeyond = 0.01;     // m: an incline block that moved
 inline constexpr double kApexFloor = 0.02;       // m: closed-form apexes below this are not judged
