@@ -12,7 +12,7 @@ models them). A scheduled impulse is applied at t = round(time / dt) · dt, betw
 `unsupported`.
 
 It speaks the worker protocol (docs/worker-protocol.md): variants `dop853` (rtol 1e-12, the
-reference) and `dop853-1e-10` (rtol 1e-10, the run that shows the first converged).
+reference) and `dop853-1e-13` (rtol 1e-13: the change from the first bounds the first's error).
     scipy_reference.py --scene S.json --variant dop853 --every N --out R.json
 """
 import argparse
@@ -26,7 +26,7 @@ import numpy as np
 import scipy
 from scipy.integrate import solve_ivp
 
-TOLERANCES = {"dop853": 1e-12, "dop853-1e-10": 1e-10}
+TOLERANCES = {"dop853": 1e-12, "dop853-1e-13": 1e-13}
 
 
 def principal_inertia(shape: dict, mass: float) -> np.ndarray:

@@ -104,7 +104,7 @@ enum class ReferenceKind {
   Oscillator,  // closed form of one body on one spring to a world anchor, moving along the spring
   Orbit,       // closed form of one particle on a circular orbit about one attractor
   Bounce,      // closed form of one particle dropped from rest onto one plane with restitution
-  Converged,   // SciPy's DOP853 at rtol 1e-12, shown converged against rtol 1e-10
+  Converged,   // SciPy's DOP853 at rtol 1e-12, shown converged against rtol 1e-13
 };
 
 // What a scene asks to be measured. The contact metrics (docs/metrics.md) are computed from the

@@ -58,7 +58,7 @@ RunResult run_worker_job(const EngineVariant& ev, const std::filesystem::path& s
 // The converged reference of a scene without contacts (docs/metrics.md, "References"): SciPy's
 // DOP853 on the rigid-body equations of motion (validation/reference/scipy_reference.py), a worker
 // of its own run by the project's Python (.venv/bin/python, or PHYSBENCH_REFERENCE_PYTHON), at
-// `variant` "dop853" (rtol 1e-12) or "dop853-1e-10"
+// `variant` "dop853" (rtol 1e-12) or "dop853-1e-13"
 EngineVariant scipy_reference(const std::string& variant);
 
 struct RunOptions {
