@@ -7,6 +7,7 @@ import json
 import re
 import shutil
 import subprocess
+import sys
 from pathlib import Path
 
 import pandas as pd
@@ -580,3 +581,27 @@ def test_speed_against_error_leaves_out_diverged_rows_as_it_does_exploded_ones(m
     # the diverged point is the cheapest of all: were it plotted, it would open the front
     assert all(p["error"] not in (build_report.fmt(30.0), build_report.fmt(1e9)) for p in front)
     assert {p["label"] for p in front} <= {"rtp/rk4", "rtp/midpoint", "rtp/euler"}
+
+
+def test_run_summary_names_its_source_and_tables_each_engine(contact_results, tmp_path):
+    out = tmp_path / "summary.md"
+    subprocess.run([sys.executable, str(Path(build_report.__file__).parent / "run_summary.py"), str(contact_results),
+                    "--title", "contacts", "-o", str(out)], check=True, capture_output=True)
+    text = out.read_text()
+    meta = json.loads((contact_results / "metadata.json").read_text())
+    # the source: the command, the commit and the machine
+    assert meta["command"] in text and meta["git_commit"] in text and meta["machine"]["cpu"] in text
+    # the stack's best-knobs table has a row per engine; the bounce's verdict table a row per run
+    stack = text.split("## tower-10")[1].split("##")[0]
+    for engine in ("rtp", "box2d", "ode"):
+        assert f"\n| {engine} |" in stack
+    bounce = text.split("## bounce-e0.5")[1]
+    assert "| rtp/soft-step | ok |" in bounce and "apex error max" in bounce
+
+
+def test_run_summary_names_a_folder_that_is_not_a_run(tmp_path):
+    result = subprocess.run([sys.executable, str(Path(build_report.__file__).parent / "run_summary.py"),
+                             str(tmp_path / "nothing"), "--title", "x", "-o", str(tmp_path / "s.md")],
+                            capture_output=True, text=True)
+    assert result.returncode == 2 and "nothing" in result.stderr
+    assert not (tmp_path / "s.md").exists()
