@@ -48,8 +48,10 @@ std::vector<PlannedScene> planned_scenes(const RunOptions& options) {
         names += (names.empty() ? "" : ", ") + s.name;
       throw RunError("unknown scenario '" + name + "' (built in: " + names + ")");
     }
-    PlannedScene p{scenario->build(), scenario->question,       scenario->sweep_dt,
-                   scenario->family,  scenario->parameter_name, scenario->parameter};
+    PlannedScene p{scenario->build(),  scenario->question,       scenario->sweep_dt,
+                   scenario->family,   scenario->parameter_name, scenario->parameter,
+                   {}};
+    for (int n : scenario->sweep_substeps) p.knobs.push_back({0, n});
     scenes.push_back(std::move(p));
   }
   for (const std::string& file : options.scene_files) {
@@ -67,6 +69,10 @@ std::vector<PlannedScene> planned_scenes(const RunOptions& options) {
     if (options.duration) p.scene.duration = *options.duration;
     if (!options.sweep_dt.empty()) p.dts = options.sweep_dt;
     if (options.dt || options.no_sweep) p.dts.clear();
+    // the run's own knob sweep replaces the scenario's grid; --no-sweep drops it
+    if (options.no_sweep || !options.sweep_iterations.empty() || !options.sweep_substeps.empty())
+      p.knobs.clear();
+    p.knobs.insert(p.knobs.begin(), SolverKnobs{});
     // the scene's own step first; the sweep's other steps after it
     std::erase_if(p.dts, [&](double dt) { return std::abs(dt - p.scene.dt) < 1e-12 * p.scene.dt; });
     p.dts.insert(p.dts.begin(), p.scene.dt);
@@ -133,9 +139,9 @@ Plan plan_run(const RunOptions& options, const std::vector<EngineVariant>& catal
   for (int n : options.sweep_substeps) plan.knob_settings.push_back({0, n});
 
   // every scene step (a scene at one of its steps) in order, numbered from 0, each with every
-  // engine variant at every knob setting: with K settings, job (s·E + e)·K + k is step s on
-  // engine variant e at setting k (K = 1 without a knob sweep). The fingerprint covers each scene
-  // as it will run, the engine variants, the swept knobs and the timing budget
+  // engine variant at every knob setting of its scene (the run's sweep, or the scenario's own
+  // grid), in that order. The fingerprint covers each scene as it will run, the engine variants,
+  // the swept knobs and the timing budget
   std::string plan_text = "budget " + exact(options.timing_budget) + "\n";
   // (a plan without a knob sweep fingerprints as it did before knobs were swept)
   if (!options.sweep_iterations.empty() || !options.sweep_substeps.empty()) {
@@ -144,7 +150,15 @@ Plan plan_run(const RunOptions& options, const std::vector<EngineVariant>& catal
     plan_text += "\n";
   }
   for (std::size_t s = 0; s < plan.scenes.size(); ++s) {
-    const PlannedScene& p = plan.scenes[s];
+    PlannedScene& p = plan.scenes[s];
+    if (plan.knob_settings.size() > 1) p.knobs = plan.knob_settings;
+    // (a scene at its own settings only fingerprints as it did before knobs were swept)
+    const bool grid = p.knobs.size() > 1 && plan.knob_settings.size() <= 1;
+    if (grid) {
+      plan_text += "scene knobs";
+      for (const SolverKnobs& k : p.knobs) plan_text.append(" ").append(knob_tag(k));
+      plan_text += "\n";
+    }
     for (double dt : p.dts) {
       SceneStep step{plan.steps.size(), s, dt,
                      // one file per step when the scene is swept, else the scene's own name
@@ -155,7 +169,7 @@ Plan plan_run(const RunOptions& options, const std::vector<EngineVariant>& catal
       for (std::size_t e = 0; e < plan.engines.size(); ++e) {
         const EngineVariant& ev = plan.engines[e];
         plan_text += ev.engine + "/" + ev.variant + "\n";
-        for (const SolverKnobs& knobs : plan.knob_settings)
+        for (const SolverKnobs& knobs : p.knobs)
           plan.jobs.push_back({plan.jobs.size(), step.number, e, knobs});
       }
       plan.steps.push_back(std::move(step));

@@ -149,6 +149,34 @@ TEST(Plan, AKnobSweepRunsEveryVariantOncePerValueWithinItsSceneStep) {
   EXPECT_NE(plan.fingerprint, physbench::plan_run(other, catalog()).fingerprint);
 }
 
+// tower-20 carries its own substep grid: every engine variant at its own settings and at 1, 2,
+// 4 and 8 substeps, in the default suite; tower-10 none; a run's own sweep replaces the grid and
+// --no-sweep drops it
+TEST(Plan, AScenariosOwnSubstepGridRunsUnlessARunSweepsOrSaysNoSweep) {
+  RunOptions towers = options();
+  towers.scenarios = {"tower-10", "tower-20"};
+  const Plan plan = physbench::plan_run(towers, catalog());
+  ASSERT_EQ(plan.steps.size(), 2u);
+  std::map<std::size_t, std::vector<int>> substeps_of_step;
+  for (const PlannedJob& job : plan.jobs) {
+    if (job.engine == 0) substeps_of_step[job.step].push_back(job.knobs.substeps);
+    EXPECT_EQ(job.knobs.iterations, 0);
+  }
+  EXPECT_EQ(substeps_of_step[0], (std::vector<int>{0}));              // tower-10: its own only
+  EXPECT_EQ(substeps_of_step[1], (std::vector<int>{0, 1, 2, 4, 8}));  // tower-20: and the grid
+  for (std::size_t i = 0; i < plan.jobs.size(); ++i) EXPECT_EQ(plan.jobs[i].number, i);
+  RunOptions none = towers;
+  none.no_sweep = true;
+  EXPECT_EQ(physbench::plan_run(none, catalog()).jobs.size(), 2u * plan.engines.size());
+  EXPECT_NE(physbench::plan_run(none, catalog()).fingerprint, plan.fingerprint);
+  RunOptions swept = towers;
+  swept.sweep_substeps = {3};
+  const Plan replaced = physbench::plan_run(swept, catalog());
+  EXPECT_EQ(replaced.jobs.size(), 2u * 2u * plan.engines.size());
+  for (const PlannedJob& job : replaced.jobs)
+    EXPECT_TRUE(job.knobs.substeps == 0 || job.knobs.substeps == 3);
+}
+
 TEST(Plan, BadNamesAreRefusedBeforeAnythingIsPlanned) {
   RunOptions engine = options();
   engine.engines = {"havok"};

@@ -21,6 +21,7 @@ struct PlannedScene {
   std::string family;       // scenarios that map one parameter, e.g. stiff-spring
   std::string parameter_name;
   double parameter = std::nan("");
+  std::vector<SolverKnobs> knobs;  // every engine variant's settings here: its own, then a sweep's
 };
 
 // a scene at one of its steps: the unit a shard takes whole, with every engine variant
@@ -47,7 +48,7 @@ struct Plan {
   std::vector<EngineVariant> engines;  // the engine variants every step runs, in order
   // what each engine variant runs with at every step: its own settings first, then each value
   // of --sweep-iterations, then of --sweep-substeps (one knob at a time)
-  std::vector<SolverKnobs> knob_settings;
+  std::vector<SolverKnobs> knob_settings;  // the run's own sweep (--sweep-*), or none
   std::vector<PlannedJob> jobs;        // the whole plan in order; jobs[i].number == i
   double timing_budget = 0.0;
   // 64-bit FNV-1a, in hex, of each scene as it will run (its JSON at each step), the engine

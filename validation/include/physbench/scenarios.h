@@ -21,6 +21,10 @@ struct Scenario {
   std::string family = {};
   std::string parameter_name = {};
   double parameter = 0.0;
+  // substep counts the default suite runs every engine variant at besides its own settings (the
+  // contact stacks: each engine's best knobs, not only its defaults); `--sweep-substeps` or
+  // `--sweep-iterations` replace it, `--no-sweep` drops it
+  std::vector<int> sweep_substeps = {};
 };
 
 // 1/30 … 1/960 s: the sweep of the integrator scenarios
