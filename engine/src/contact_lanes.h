@@ -56,10 +56,9 @@ struct ContactBlockRest {
     Lane base_separation;     // at the step's start, less n·(anchor_b − anchor_a) (m)
     Lane max_normal_impulse;  // the largest this step (N s; kept where some lane bounces)
     Lane approach_velocity;   // relative normal velocity at impact (m/s), < 0 closing
-    LaneMask starts_apart;    // a speculative point at the step's start
   } points[4];
 };
-static_assert(sizeof(ContactBlockRest) == 28 * sizeof(float) * kBlockLanes);
+static_assert(sizeof(ContactBlockRest) == 24 * sizeof(float) * kBlockLanes);
 inline constexpr std::uint32_t kNoContact = ~std::uint32_t{0};
 
 struct ContactLanes {

@@ -905,9 +905,9 @@ bool ContactPipeline::prepare_lanes(ContactBlock& c, ContactBlockRest& r,
     // gap, v² = v₀² − 2 a s₀; a touching one hits at its speed now
     const Lane approach =
         pair.normal_velocity(n, NormalRow(p, n)) + splat(float(0.5 * h)) * acceleration;
-    q.starts_apart = exists[j] & (separation > zero);
+    const LaneMask starts_apart = exists[j] & (separation > zero);
     const Lane squared = approach * approach - splat(2.0f) * acceleration * separation;
-    q.approach_velocity = simd::select(q.starts_apart, zero - simd::sqrt(simd::max(squared, zero)),
+    q.approach_velocity = simd::select(starts_apart, zero - simd::sqrt(simd::max(squared, zero)),
                                        approach);
     // no warm start where it may push, or an approach fast enough to bounce: the manifold is
     // solved locally
