@@ -12,7 +12,8 @@ from .style import anchor_of, fmt
 # the error a scenario's question is about, in this order of preference (results.csv column, words)
 GLANCE_METRICS = [("position_err_max", "position error"), ("orientation_err_max", "orientation error"),
                   ("apex_rel_err_max", "apex error"), ("slide_accel_rel_err", "slide acceleration error"),
-                  ("exchange_err", "velocity exchange error"), ("stack_drift_max", "stack drift"),
+                  ("exchange_err", "velocity exchange error"), ("roll_speed_rel_err", "rolling speed error"),
+                  ("stack_drift_max", "stack drift"),
                   ("penetration_max", "deepest penetration"), ("energy_drift_max", "energy drift")]
 # a failed run's status in words
 FAILED = {"exploded": "exploded", "crashed": "crashed", "timeout": "timed out", "error": "failed",
