@@ -1,5 +1,7 @@
 // The contact pipeline's collision half: shapes, bounds, candidate pairs, manifolds, and the
-// match with last step's contacts (contacts.h says what each stage does).
+// match with last step's contacts (contacts.h says what each stage does). Over 800 lines because
+// the pair cache and the growth bookkeeping serve the one collide_pairs() stage and share its
+// private state; split out, they would be its internals in two places.
 #include "contacts.h"
 
 #include <algorithm>

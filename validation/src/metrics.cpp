@@ -1,3 +1,6 @@
+// Accuracy metrics and the contact scenes' judges (metrics.h defines them). Over 800 lines because
+// every judge reads the trajectories through the same few private helpers (the body on its plane,
+// support extents, slots); docs/metrics.md is their reference.
 #include "physbench/metrics.h"
 
 #include <algorithm>
