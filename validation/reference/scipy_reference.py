@@ -44,6 +44,16 @@ def rotation(q: np.ndarray) -> np.ndarray:
                      [2 * (x * z - w * y), 2 * (y * z + w * x), 1 - 2 * (x * x + y * y)]])
 
 
+def rotations(q: np.ndarray) -> np.ndarray:
+    """rotation() of each row of q (n × 4), as n × 3 × 3."""
+    q = q / np.linalg.norm(q, axis=1)[:, None]
+    w, x, y, z = q[:, 0], q[:, 1], q[:, 2], q[:, 3]
+    return np.stack([np.stack([1 - 2 * (y * y + z * z), 2 * (x * y - w * z), 2 * (x * z + w * y)], axis=1),
+                     np.stack([2 * (x * y + w * z), 1 - 2 * (x * x + z * z), 2 * (y * z - w * x)], axis=1),
+                     np.stack([2 * (x * z - w * y), 2 * (y * z + w * x), 1 - 2 * (x * x + y * y)], axis=1)],
+                    axis=1)
+
+
 class Model:
     """The scene's free bodies and springs as one first-order system, 13 numbers a dynamic body."""
 
@@ -56,6 +66,26 @@ class Model:
         self.inverse_inertia = {i: 1.0 / principal_inertia(self.bodies[i]["shape"], self.mass[i])
                                 for i in self.dynamic}
         self.springs = scene.get("springs", [])
+        # the right-hand side on arrays: every scene body a row (a static one at its pose, at rest)
+        # and a last row for the world a spring may be anchored to
+        count = len(self.bodies)
+        self.rows = np.array(self.dynamic, dtype=int)
+        self.masses = np.array([self.mass[i] for i in self.dynamic])
+        self.inverse_inertias = np.array([self.inverse_inertia[i] for i in self.dynamic]).reshape(-1, 3)
+        self.static_x = np.zeros((count + 1, 3))
+        self.static_r = np.tile(np.eye(3), (count + 1, 1, 1))
+        for i, b in enumerate(self.bodies):
+            if b["mass"] <= 0.0:
+                self.static_x[i] = b["position"]
+                self.static_r[i] = rotation(np.asarray(b["orientation"], float))
+        springs = self.springs
+        self.spring_a = np.array([sp["body_a"] for sp in springs], dtype=int)
+        self.spring_b = np.array([count if sp["body_b"] < 0 else sp["body_b"] for sp in springs], dtype=int)
+        self.local_a = np.array([sp["local_point_a"] for sp in springs], float).reshape(-1, 3)
+        self.local_b = np.array([sp["point_b"] for sp in springs], float).reshape(-1, 3)
+        self.stiffness = np.array([sp["stiffness"] for sp in springs], float)
+        self.damping = np.array([sp["damping"] for sp in springs], float)
+        self.rest = np.array([sp["rest_length"] for sp in springs], float)
 
     def initial(self) -> np.ndarray:
         y = np.zeros(13 * len(self.dynamic))
@@ -82,47 +112,41 @@ class Model:
         return y[s:s + 3], y[s + 3:s + 6], r, omega
 
     def rates(self, _t: float, y: np.ndarray) -> np.ndarray:
-        dy = np.zeros_like(y)
-        force = {i: self.mass[i] * self.gravity for i in self.dynamic}
-        torque = {i: np.zeros(3) for i in self.dynamic}
-        for spring in self.springs:
-            a = spring["body_a"]
-            xa, va, ra, wa = self.pose(y, a)
-            point_a = xa + ra @ np.asarray(spring["local_point_a"], float)
-            velocity_a = va + np.cross(wa, point_a - xa)
-            if spring["body_b"] < 0:
-                point_b, velocity_b = np.asarray(spring["point_b"], float), np.zeros(3)
-            else:
-                xb, vb, rb, wb = self.pose(y, spring["body_b"])
-                point_b = xb + rb @ np.asarray(spring["point_b"], float)
-                velocity_b = vb + np.cross(wb, point_b - xb)
-            delta = point_a - point_b
-            length = np.linalg.norm(delta)
-            if length <= 1e-12:
-                continue  # no direction: it pulls along nothing
-            u = delta / length
-            f = -(spring["stiffness"] * (length - spring["rest_length"]) +
-                  spring["damping"] * u.dot(velocity_a - velocity_b)) * u
-            if a in force:
-                force[a] = force[a] + f
-                torque[a] = torque[a] + np.cross(point_a - xa, f)
-            if spring["body_b"] in force:
-                force[spring["body_b"]] = force[spring["body_b"]] - f
-                torque[spring["body_b"]] = torque[spring["body_b"]] - np.cross(point_b - xb, f)
-        for i in self.dynamic:
-            s = 13 * self.slot[i]
-            _, v, _, omega = self.pose(y, i)
-            q = y[s + 6:s + 10]
-            dy[s:s + 3] = v
-            dy[s + 3:s + 6] = force[i] / self.mass[i]
-            # dq/dt = ½ (0, ω) ⊗ q
-            w, x, yq, z = q
-            dy[s + 6:s + 10] = 0.5 * np.array([-omega[0] * x - omega[1] * yq - omega[2] * z,
-                                               omega[0] * w + omega[1] * z - omega[2] * yq,
-                                               omega[1] * w + omega[2] * x - omega[0] * z,
-                                               omega[2] * w + omega[0] * yq - omega[1] * x])
-            dy[s + 10:s + 13] = torque[i]
-        return dy
+        state = y.reshape(-1, 13)
+        x, v, q, momentum = state[:, 0:3], state[:, 3:6], state[:, 6:10], state[:, 10:13]
+        r = rotations(q)
+        omega = np.einsum("nij,nj->ni", r, self.inverse_inertias * np.einsum("nji,nj->ni", r, momentum))
+        force = self.masses[:, None] * self.gravity
+        torque = np.zeros_like(force)
+        if len(self.spring_a):
+            # every body's pose and velocity, the world's last
+            all_x, all_r = self.static_x.copy(), self.static_r.copy()
+            all_v, all_w = np.zeros_like(all_x), np.zeros_like(all_x)
+            all_x[self.rows], all_r[self.rows], all_v[self.rows], all_w[self.rows] = x, r, v, omega
+            a, b = self.spring_a, self.spring_b
+            arm_a = np.einsum("kij,kj->ki", all_r[a], self.local_a)
+            arm_b = np.einsum("kij,kj->ki", all_r[b], self.local_b)
+            velocity_a = all_v[a] + np.cross(all_w[a], arm_a)
+            velocity_b = all_v[b] + np.cross(all_w[b], arm_b)
+            delta = (all_x[a] + arm_a) - (all_x[b] + arm_b)
+            length = np.linalg.norm(delta, axis=1)
+            pulls = length > 1e-12  # a spring of zero length has no direction: it pulls along nothing
+            u = np.where(pulls[:, None], delta / np.where(pulls, length, 1.0)[:, None], 0.0)
+            f = -(self.stiffness * (length - self.rest) +
+                  self.damping * np.einsum("ki,ki->k", u, velocity_a - velocity_b))[:, None] * u
+            all_f, all_t = np.zeros_like(all_x), np.zeros_like(all_x)
+            np.add.at(all_f, a, f)
+            np.add.at(all_f, b, -f)
+            np.add.at(all_t, a, np.cross(arm_a, f))
+            np.add.at(all_t, b, -np.cross(arm_b, f))
+            force = force + all_f[self.rows]
+            torque = torque + all_t[self.rows]
+        # dq/dt = ½ (0, ω) ⊗ q
+        w, qx, qy, qz = q[:, 0], q[:, 1], q[:, 2], q[:, 3]
+        ox, oy, oz = omega[:, 0], omega[:, 1], omega[:, 2]
+        dq = 0.5 * np.stack([-ox * qx - oy * qy - oz * qz, ox * w + oy * qz - oz * qy,
+                             oy * w + oz * qx - ox * qz, oz * w + ox * qy - oy * qx], axis=1)
+        return np.concatenate([v, force / self.masses[:, None], dq, torque], axis=1).ravel()
 
     def apply_impulse(self, y: np.ndarray, impulse: dict) -> None:
         body = impulse["body"]
