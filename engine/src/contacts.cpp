@@ -751,26 +751,19 @@ std::pair<double, double> ContactPipeline::surface_growth(const BodyShapeData& a
 
 void ContactPipeline::grow_pair(const BodyShapeData& a, const BodyShapeData& b, Shape& grown_a,
                                 Shape& grown_b) const {
-  // Both shapes hold the fixed growth already. The growth beyond it goes where the collision
-  // function reads a size: to a sphere's radius or a plane's offset (the other shape's share
-  // too), or to each of two boxes' half extents (the box path reads those, the hull paths the
-  // fixed hulls). A pair with a hull keeps the fixed growth.
+  // Both shapes hold the fixed growth already; the growth beyond it goes where surface_growth()
+  // places it, to what the collision function reads as a size: a sphere's radius, a plane's
+  // offset, a box's half extents (the box path reads those, the hull paths the fixed hulls)
   const double fixed = 0.5 * settings_.speculative_distance;
-  const double extra_a = a.growth - fixed, extra_b = b.growth - fixed;
+  const auto [growth_a, growth_b] = surface_growth(a, b);
   auto widen = [](BodyShape kind, Shape& shape, double extra) {
+    if (extra <= 0.0) return;
     if (kind == BodyShape::Sphere) shape.radius += extra;
     else if (kind == BodyShape::Plane) shape.plane_offset += extra;
-    else shape.half_extents.array() += extra;
+    else if (kind == BodyShape::Box) shape.half_extents.array() += extra;
   };
-  if (a.kind == BodyShape::Hull || b.kind == BodyShape::Hull) return;
-  if (a.kind == BodyShape::Box && b.kind == BodyShape::Box) {
-    widen(a.kind, grown_a, extra_a);
-    widen(b.kind, grown_b, extra_b);
-  } else if (a.kind != BodyShape::Box) {
-    widen(a.kind, grown_a, extra_a + extra_b);
-  } else {
-    widen(b.kind, grown_b, extra_a + extra_b);
-  }
+  widen(a.kind, grown_a, growth_a - fixed);
+  widen(b.kind, grown_b, growth_b - fixed);
 }
 
 std::size_t ContactPipeline::sweep_fast_bodies(std::span<BodyState> states) {

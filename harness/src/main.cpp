@@ -162,7 +162,7 @@ int main(int argc, char** argv) {
 
   // every scene a default run writes, without running it (the scene loader's fuzz seeds)
   auto* export_scenes = app.add_subcommand(
-      "export-scenes", "write every built-in scene, at each swept step and reference step, as JSON");
+      "export-scenes", "write every built-in scene, at each swept step, as JSON (a converged reference reads the scene itself)");
   std::string export_dir;
   export_scenes->add_option("dir", export_dir, "folder to write into")->required();
   export_scenes->group("");  // hidden from --help
@@ -195,14 +195,6 @@ int main(int argc, char** argv) {
         save_scene_file(scene, stem + ".json");
         load_scene_file(stem + ".json");  // what a run writes, its workers must read
         ++written;
-        if (scene.reference.kind == ReferenceKind::Converged)
-          for (int factor : {1, 2}) {
-            const int divisor = scene.reference.dt_divisor * factor;
-            const std::string file = stem + ".reference-dt-over-" + std::to_string(divisor) + ".json";
-            save_scene_file(refined(scene, divisor), file);
-            load_scene_file(file);
-            ++written;
-          }
       }
     }
     std::cout << written << " scenes in " << export_dir << "\n";
