@@ -50,10 +50,8 @@ class Box2dEngine final : public Engine {
     }
     if (knobs.substeps > 0) {
       substeps_ = knobs.substeps;
-      tuning.settings.push_back(
-          {"substeps", std::to_string(knobs.substeps) + " calls of Step(dt/" +
-                           std::to_string(knobs.substeps) + ") a step",
-           "the sweep's value (--sweep-substeps): Box2D 2.4 has none of its own"});
+      tuning.settings.push_back(swept_substeps(
+          knobs.substeps, "N calls of b2World::Step(dt/N) (Box2D 2.4 has none of its own)"));
     }
     return tuning;
   }

@@ -55,10 +55,7 @@ class BulletEngine final : public Engine {
     }
     if (knobs.substeps > 0) {
       substeps_ = knobs.substeps;
-      tuning.settings.push_back(
-          {"substeps", std::to_string(knobs.substeps) + " steps of dt/" +
-                           std::to_string(knobs.substeps) + " a step",
-           "the sweep's value (--sweep-substeps): stepSimulation(dt/N, 0) N times"});
+      tuning.settings.push_back(swept_substeps(knobs.substeps, "stepSimulation(dt/N, 0) N times"));
     }
     return tuning;
   }

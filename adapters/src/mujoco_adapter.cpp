@@ -365,9 +365,7 @@ class MujocoEngine final : public Engine {
     if (knobs.substeps > 0) {
       substeps_ = knobs.substeps;
       tuning.settings.push_back(
-          {"substeps", "timestep dt/" + std::to_string(knobs.substeps) + ", " +
-                           std::to_string(knobs.substeps) + " mj_step calls a step",
-           "the sweep's value (--sweep-substeps): mjOption::timestep"});
+          swept_substeps(knobs.substeps, "mjOption::timestep dt/N and N calls of mj_step"));
     }
     return tuning;
   }

@@ -70,10 +70,8 @@ class OdeEngine final : public Engine {
     }
     if (knobs.substeps > 0) {
       substeps_ = knobs.substeps;
-      tuning.settings.push_back(
-          {"substeps", std::to_string(knobs.substeps) + " steps of dt/" +
-                           std::to_string(knobs.substeps) + " a step, contacts found for each",
-           "the sweep's value (--sweep-substeps): ODE has none of its own"});
+      tuning.settings.push_back(swept_substeps(
+          knobs.substeps, "N steps of dt/N, contacts found for each (ODE has none of its own)"));
     }
     return tuning;
   }

@@ -33,6 +33,14 @@ struct Setting {
   std::string why;
 };
 
+// a sweep's substeps (--sweep-substeps) as a settings-table line: N steps of dt/N a step, by the
+// engine's own knob
+inline Setting swept_substeps(int substeps, const std::string& knob) {
+  const std::string n = std::to_string(substeps);
+  return {"substeps", n + " steps of dt/" + n + " a step",
+          "the sweep's value (--sweep-substeps): " + knob};
+}
+
 // where the steps' time went, by the engine's own named stages (rtp's StepProfile), summed over
 // the steps since load()
 struct StageTimes {
