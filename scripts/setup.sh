@@ -11,6 +11,7 @@ packages=(
   build-essential cmake ninja-build pkg-config git
   libeigen3-dev libboost-dev nlohmann-json3-dev libcli11-dev libgtest-dev libbenchmark-dev
   libbullet-dev libode-dev libbox2d-dev libmujoco-dev libqhull-dev
+  clang  # physx-sys (the PhysX worker, workers/physx) compiles PhysX with clang++
   python3 python3-venv
   chromium  # the report's browser test (reports/viewer/tests) drives /usr/bin/chromium headless
 )
