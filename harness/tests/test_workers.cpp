@@ -118,6 +118,19 @@ void expect_ok(const RunResult& r, const EngineVariant& w) {
   EXPECT_FALSE(r.wall_seconds.empty()) << w.engine << " did not time its steps";
 }
 
+// with cargo on the machine the build compiles every worker in the catalog (a failed cargo build
+// fails the build), so a worker the catalog names and this build lacks is a broken build, never a
+// skipped test
+TEST(WorkerConformance, EveryCatalogWorkerIsBuilt) {
+#ifndef PHYSBENCH_WORKERS_BUILT
+  GTEST_SKIP() << "this build has no cargo: the workers are not built";
+#else
+  const auto catalog = read_worker_catalog(worker_catalog_file(), default_workers_dir());
+  EXPECT_FALSE(catalog.empty()) << worker_catalog_file();
+  for (const CatalogEntry& e : catalog) EXPECT_EQ(e.missing, "") << e.engine;
+#endif
+}
+
 TEST(WorkerConformance, FreeFlightFollowsTheClosedForm) {
   const auto workers = built_workers();
   if (workers.empty()) GTEST_SKIP() << "no external worker is built (cargo missing?)";

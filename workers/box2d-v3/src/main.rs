@@ -244,3 +244,37 @@ impl World for Box2dWorld {
 fn main() {
     physbench_worker::main(&Box2dV3);
 }
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use physbench_worker::checks;
+
+    #[test]
+    fn friction_mixes_by_the_scenes_pair_rule() {
+        checks::pair_friction(&Box2dV3, "default").unwrap();
+    }
+    #[test]
+    fn restitution_mixes_by_the_scenes_pair_rule() {
+        checks::pair_restitution(&Box2dV3, "default").unwrap();
+    }
+    #[test]
+    fn the_scenes_mass_and_inertia_reach_the_engine() {
+        checks::mass_and_inertia(&Box2dV3, "default").unwrap();
+    }
+    #[test]
+    fn the_plane_segment_is_the_planes_surface() {
+        checks::rests_on_the_plane(&Box2dV3, "default").unwrap();
+    }
+    #[test]
+    fn the_substeps_knob_reaches_b2world_step() {
+        for n in [1, 4] {
+            checks::substeps_reach_the_step(&Box2dV3, "default", n).unwrap();
+        }
+    }
+    #[test]
+    fn an_iterations_knob_is_refused_with_the_reason() {
+        let knobs = Knobs { iterations: 8, substeps: 0 };
+        assert!(Box2dV3.tune("default", &knobs).unwrap_err().contains("no iteration count"));
+    }
+}

@@ -2,6 +2,8 @@
 //! line and the scene file, drive an engine through the scene, sample the probed bodies, time the
 //! steps and write the result file. An engine binary supplies only `Engine` and `World`.
 
+pub mod checks;
+
 use serde_json::{json, Value};
 use std::time::Instant;
 
@@ -256,6 +258,7 @@ pub trait World {
     }
 }
 
+#[derive(Debug)]
 pub struct Setting {
     pub name: String,
     pub value: String,
@@ -613,4 +616,61 @@ pub fn main(engine: &dyn Engine) -> ! {
         std::process::exit(3);
     }
     std::process::exit(0);
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    fn write(name: &str, text: &str) -> String {
+        let path = std::env::temp_dir().join(format!("physbench-worker-{}-{name}", std::process::id()));
+        std::fs::write(&path, text).unwrap();
+        path.to_string_lossy().into_owned()
+    }
+
+    #[test]
+    fn a_scene_file_reads_with_the_formats_defaults() {
+        let path = write("scene.json", r#"{"name": "s", "dt": 0.01, "duration": 1.0,
+            "bodies": [{"name": "g", "shape": {"type": "plane"}},
+                       {"name": "b", "shape": {"type": "box", "half_extents": [1, 2, 3]},
+                        "mass": 2, "position": [0, 1, 0]}],
+            "impulses": [{"time": 0.5, "body": 1, "impulse": [0, 1, 0]},
+                         {"time": 0.2, "body": 1, "impulse": [1, 0, 0]}]}"#);
+        let scene = load_scene(&path).unwrap();
+        assert_eq!(scene.gravity, [0.0, -9.81, 0.0]);
+        assert!(scene.collisions && !scene.planar && !scene.has_particles);
+        // friction 0.5 and restitution 0 when a body gives none (docs/scene-format.md)
+        assert_eq!((scene.bodies[1].friction, scene.bodies[1].restitution), (0.5, 0.0));
+        // the probe defaults to the dynamic bodies
+        assert_eq!(scene.probe_bodies, vec![1]);
+        // impulses in step order, at the step their time rounds to
+        assert_eq!(scene.impulses.iter().map(|p| p.step).collect::<Vec<_>>(), vec![20, 50]);
+        assert_eq!(scene.step_count(), 100);
+        assert!(scene.has_contacts() && scene.one_material());
+    }
+
+    #[test]
+    fn a_bad_scene_file_names_what_is_wrong() {
+        let path = write("bad.json", r#"{"bodies": [{"shape": {"type": "cone"}}]}"#);
+        assert!(load_scene(&path).unwrap_err().contains("cone"));
+        assert!(load_scene("/no/such/file.json").unwrap_err().contains("/no/such/file.json"));
+    }
+
+    #[test]
+    fn a_box_has_the_solid_boxs_inertia() {
+        let b = Body { name: "b".into(), shape: Shape::Box { half_extents: [0.5, 1.0, 1.5] },
+                       mass: 12.0, position: [0.0; 3], orientation: [1.0, 0.0, 0.0, 0.0],
+                       linear_velocity: [0.0; 3], angular_velocity: [0.0; 3], friction: 0.5,
+                       restitution: 0.0 };
+        // m (b² + c²) / 12 with full sides 1, 2, 3
+        assert_eq!(b.principal_inertia(), [13.0, 10.0, 5.0]);
+    }
+
+    #[test]
+    fn rotate_turns_a_vector_by_the_quaternion() {
+        let half = std::f64::consts::FRAC_PI_4; // a quarter turn about z
+        let q = [half.cos(), 0.0, 0.0, half.sin()];
+        let v = rotate(q, [1.0, 0.0, 0.0]);
+        assert!((v[0]).abs() < 1e-12 && (v[1] - 1.0).abs() < 1e-12 && v[2].abs() < 1e-12);
+    }
 }

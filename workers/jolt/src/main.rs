@@ -394,3 +394,58 @@ impl World for JoltWorld {
 fn main() {
     physbench_worker::main(&Jolt);
 }
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use physbench_worker::checks;
+
+    #[test]
+    fn friction_mixes_by_the_scenes_pair_rule() {
+        checks::pair_friction(&Jolt, "default").unwrap();
+    }
+    #[test]
+    fn restitution_mixes_by_the_scenes_pair_rule() {
+        checks::pair_restitution(&Jolt, "default").unwrap();
+    }
+    #[test]
+    fn the_scenes_mass_and_inertia_reach_the_engine() {
+        checks::mass_and_inertia(&Jolt, "default").unwrap();
+    }
+    #[test]
+    fn the_plane_is_the_bodys_y_zero_surface() {
+        checks::rests_on_the_plane(&Jolt, "default").unwrap();
+    }
+    #[test]
+    fn the_substeps_knob_reaches_the_collision_steps() {
+        for n in [1, 4] {
+            checks::substeps_reach_the_step(&Jolt, "default", n).unwrap();
+        }
+    }
+    #[test]
+    fn a_thin_box_gets_a_convex_radius_it_can_hold() {
+        assert_eq!(convex_radius([0.5, 0.5, 0.5]), DEFAULT_CONVEX_RADIUS);
+        // a 4 cm plate: half of its 2 cm half thickness
+        assert!((convex_radius([0.5, 0.02, 0.5]) - 0.01).abs() < 1e-7);
+    }
+    #[test]
+    fn the_buffers_grow_with_the_body_count() {
+        let mut scene = physbench_worker::load_scene(&write_scene(6000)).unwrap();
+        let (bodies, pairs, contacts) = capacities(&scene);
+        assert_eq!(bodies, 6000);
+        assert!(pairs >= 16 * 6000 && contacts >= 8 * 6000);
+        scene.bodies.truncate(10);
+        let (_, pairs, contacts) = capacities(&scene);
+        assert_eq!((pairs, contacts), (DEFAULT_MAX_BODY_PAIRS, DEFAULT_MAX_CONTACT_CONSTRAINTS));
+    }
+
+    fn write_scene(boxes: usize) -> String {
+        let body = r#"{"name": "b", "shape": {"type": "box", "half_extents": [0.5, 0.5, 0.5]},
+                       "mass": 1}"#;
+        let text = format!(r#"{{"name": "many", "dt": 0.01, "duration": 0.01, "bodies": [{}]}}"#,
+                           vec![body; boxes].join(","));
+        let path = std::env::temp_dir().join(format!("physbench-jolt-{}.json", std::process::id()));
+        std::fs::write(&path, text).unwrap();
+        path.to_string_lossy().into_owned()
+    }
+}

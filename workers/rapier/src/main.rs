@@ -124,6 +124,10 @@ impl Engine for Rapier {
                     InteractionGroups::none()
                 });
             world.colliders.insert_with_parent(collider, handle, &mut world.bodies);
+            // Rapier computes a body's mass properties in its first step; until then its inverse
+            // mass is zero and an impulse at step 0 (before the first step) would do nothing
+            let colliders = &world.colliders;
+            world.bodies[handle].recompute_mass_properties_from_colliders(colliders);
             handles.push(handle);
         }
         Ok(Box::new(RapierWorld { world, handles, counts_contacts: scene.has_contacts() }))
@@ -180,4 +184,33 @@ impl World for RapierWorld {
 
 fn main() {
     physbench_worker::main(&Rapier);
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use physbench_worker::checks;
+
+    #[test]
+    fn friction_mixes_by_the_scenes_pair_rule() {
+        checks::pair_friction(&Rapier, "default").unwrap();
+    }
+    #[test]
+    fn restitution_mixes_by_the_scenes_pair_rule() {
+        checks::pair_restitution(&Rapier, "default").unwrap();
+    }
+    #[test]
+    fn the_scenes_mass_and_inertia_reach_the_engine() {
+        checks::mass_and_inertia(&Rapier, "default").unwrap();
+    }
+    #[test]
+    fn the_plane_is_the_bodys_y_zero_surface() {
+        checks::rests_on_the_plane(&Rapier, "default").unwrap();
+    }
+    #[test]
+    fn the_substeps_knob_reaches_the_solver_iterations() {
+        for n in [1, 4] {
+            checks::substeps_reach_the_step(&Rapier, "default", n).unwrap();
+        }
+    }
 }
