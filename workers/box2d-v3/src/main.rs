@@ -31,8 +31,11 @@ impl Engine for Box2dV3 {
         "box2d-v3"
     }
     fn version(&self) -> String {
+        // the crate bundles a snapshot of Box2D's main branch (2026-06-16), which already calls
+        // itself 3.2.0 though the v3.2.0 release came later: name the commit the build used
         let v = unsafe { b2GetVersion() };
-        format!("{}.{}.{} (float)", v.major, v.minor, v.revision)
+        format!("commit {} (b2GetVersion {}.{}.{}, before the v3.2.0 release; float)",
+                &boxdd_sys::UPSTREAM_SHA[..8], v.major, v.minor, v.revision)
     }
     fn variants(&self) -> &'static [&'static str] {
         &["default", "iterations-10"]

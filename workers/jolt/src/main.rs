@@ -9,7 +9,8 @@ use std::ptr;
 
 struct Jolt;
 
-// the Jolt release that oxijolt-sys 1.5.0 vendors (its own version says so: 1.5.0+jolt-5.6.0)
+// the Jolt release that oxijolt-sys 1.5.0 vendors (its own version says so: 1.5.0+jolt-5.6.0);
+// joltc exports no version function, so the version names the commits the crate's build used
 const JOLT_VERSION: &str = "5.6.0";
 // Jolt's default rounding of a box's edges (cDefaultConvexRadius), kept where the box allows it
 const DEFAULT_CONVEX_RADIUS: f32 = 0.05;
