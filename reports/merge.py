@@ -145,6 +145,13 @@ def merge(out: Path, folders: list[Path]) -> int:
         writer = csv.writer(f, lineterminator="\n")
         writer.writerow(shards[0]["header"])
         writer.writerows(row for _, row in rows)
+    # each shard's timing rounds (a scene step is in one shard only, so none repeats)
+    timed = [s["folder"] / "timing_rounds.csv" for s in shards if (s["folder"] / "timing_rounds.csv").is_file()]
+    if timed:
+        with open(out / "timing_rounds.csv", "w", newline="") as f:
+            for i, source in enumerate(timed):
+                lines = source.read_text().splitlines(keepends=True)
+                f.writelines(lines if i == 0 else lines[1:])
     (out / "metadata.json.partial").rename(out / "metadata.json")
     (out / "results.csv.partial").rename(out / "results.csv")
     return len(rows)

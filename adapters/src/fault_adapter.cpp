@@ -4,6 +4,7 @@
 // never schedules it (docs/engines.md, "Test-only engine").
 #include <chrono>
 #include <cstdlib>
+#include <fstream>
 #include <thread>
 
 #include "physbench/registry.h"
@@ -15,7 +16,17 @@ namespace {
 class FaultEngine final : public Engine {
  public:
   explicit FaultEngine(std::string variant) : variant_(std::move(variant)) {}
-  void load(const Scene&) override {}
+  void load(const Scene&) override {
+    // abort-later: runs in the first process of a job and aborts in every later one (a timing
+    // round), as an engine that crashes now and then would; the processes share a marker file
+    // named by PHYSBENCH_TEST_FAULT_MARKER (without it the variant never aborts)
+    if (variant_ == "abort-later") {
+      const char* marker = std::getenv("PHYSBENCH_TEST_FAULT_MARKER");
+      if (!marker) return;
+      if (std::ifstream(marker).good()) std::abort();
+      std::ofstream(marker) << "ran once\n";
+    }
+  }
   void step() override {
     // abort: the adapter dies by SIGABRT in its first step, as a failed assertion would
     if (variant_ == "abort") std::abort();
@@ -35,7 +46,7 @@ class FaultEngine final : public Engine {
 EngineInfo fault_engine_info() {
   EngineInfo info;
   info.name = "test-fault";
-  info.variants = {"abort", "hang"};
+  info.variants = {"abort", "hang", "abort-later"};
   info.version = "test only";
   info.test_only = true;
   info.unsupported = [](const Scene&, const std::string&) -> std::optional<std::string> {

@@ -190,8 +190,8 @@ RunResult simulate(const EngineInfo& info, const std::string& variant, const Sce
     }
   }
 
-  // first run: the trajectory, and a warm-up for the timed repeats
-  {
+  // first run: the trajectory, and a warm-up for the timed repeats (a timing round has neither)
+  if (!options.timing_only) {
     auto engine = create();
     engine->load(scene);
     const Pass pass = run_once(*engine, scene, result.trajectory.bodies, every,
@@ -218,8 +218,9 @@ RunResult simulate(const EngineInfo& info, const std::string& variant, const Sce
 
   // timed repeats, each on a freshly built world
   double measured = 0.0;
+  const int min_repeats = options.timing_only ? 1 : options.min_timed_repeats;
   while (static_cast<int>(result.wall_seconds.size()) < options.max_timed_repeats &&
-         (static_cast<int>(result.wall_seconds.size()) < options.min_timed_repeats ||
+         (static_cast<int>(result.wall_seconds.size()) < min_repeats ||
           measured < options.timing_budget)) {
     auto engine = create();
     engine->load(scene);

@@ -131,6 +131,11 @@ int main(int argc, char** argv) {
                   "seconds of measured stepping per job (repeats)")
       ->capture_default_str()
       ->check(CLI::NonNegativeNumber);
+  run->add_option("--rounds", options.rounds,
+                  "timing rounds per scene step: each job timed once a round, in a fresh order "
+                  "each round, so a slow spell falls on every engine alike (1: no interleaving)")
+      ->capture_default_str()
+      ->check(CLI::Range(1, 50));
   std::string sweep_iterations, sweep_substeps;
   run->add_option("--sweep-iterations", sweep_iterations,
                   "run every engine variant once more per value, with its solver's iterations "

@@ -143,6 +143,8 @@ Plan plan_run(const RunOptions& options, const std::vector<EngineVariant>& catal
   // grid), in that order. The fingerprint covers each scene as it will run, the engine variants,
   // the swept knobs and the timing budget
   std::string plan_text = "budget " + exact(options.timing_budget) + "\n";
+  // (a plan timed in the default five rounds fingerprints as one before rounds existed)
+  if (options.rounds != 5) plan_text += "rounds " + std::to_string(options.rounds) + "\n";
   // (a plan without a knob sweep fingerprints as it did before knobs were swept)
   if (!options.sweep_iterations.empty() || !options.sweep_substeps.empty()) {
     plan_text += "knobs";

@@ -239,6 +239,9 @@ ResultsFolder::ResultsFolder(const fs::path& out, const Plan& plan, const RunOpt
   for (std::size_t i = 0; i < std::size(kResultColumns); ++i)
     csv_ << (i ? "," : "") << kResultColumns[i].name;
   csv_ << '\n';
+  rounds_.open(out_ / "timing_rounds.csv.partial");
+  rounds_ << "scenario,dt,engine,variant,iterations,substeps,round,order,repeats,"
+             "seconds_per_step\n";
 
   json& metadata = metadata_;
   metadata["created"] = timestamp_utc();
@@ -257,9 +260,15 @@ ResultsFolder::ResultsFolder(const fs::path& out, const Plan& plan, const RunOpt
   metadata["compiler"] = std::string("g++ ") + __VERSION__;
   metadata["timing"] = {
       {"budget_s", options.timing_budget},
+      {"rounds", options.rounds},
+      {"round_cap_s", 3.0},
       {"note",
-       "each job: one warm-up run that records the trajectory, then timed repeats on a "
-       "fresh world until the budget is spent (at least 3); steps/s is the median"}};
+       "a scene step's jobs are timed in rounds: the first runs each job once in plan order "
+       "(the sampled run, then timed repeats on a fresh world, at least 3, until budget/rounds "
+       "is spent); every later round runs each job once more in its own process, in a fresh "
+       "shuffled order, with timed repeats (at least 1) until budget/rounds; a job whose run "
+       "takes over round_cap_s is timed in the first round only. steps/s is the median over "
+       "every repeat; timing_rounds.csv has each round's median"}};
   metadata["engines"] = json::object();
   metadata["scenarios"] = json::object();
 
@@ -387,9 +396,21 @@ void ResultsFolder::add(EvaluatedJob& job, const std::string& stem, bool own_ste
   metadata_["plan"]["row_jobs"].push_back(job_number);
 }
 
+void ResultsFolder::add_round(const Round& r) {
+  rounds_ << csv_field(r.scenario) << ',' << number(r.dt) << ',' << csv_field(r.engine) << ','
+          << csv_field(r.variant) << ','
+          << (r.knobs.iterations > 0 ? std::to_string(r.knobs.iterations) : "") << ','
+          << (r.knobs.substeps > 0 ? std::to_string(r.knobs.substeps) : "") << ',' << r.round
+          << ',' << r.order << ',' << r.repeats << ',' << number(r.seconds_per_step) << '\n';
+  rounds_.flush();
+}
+
 void ResultsFolder::finish() {
   csv_.close();
   if (!csv_) throw RunError("cannot write " + (out_ / "results.csv").string());
+  rounds_.close();
+  if (!rounds_) throw RunError("cannot write " + (out_ / "timing_rounds.csv").string());
+  fs::rename(out_ / "timing_rounds.csv.partial", out_ / "timing_rounds.csv");
   {
     std::ofstream meta(out_ / "metadata.json.partial");
     meta << metadata_.dump(2) << '\n';
@@ -402,6 +423,7 @@ void ResultsFolder::finish() {
 void ResultsFolder::mark_interrupted(int signal, std::size_t done, std::size_t total) {
   // the rows done so far stay in results.csv.partial; results.csv never appears
   csv_.close();
+  rounds_.close();
   metadata_["interrupted"] = {
       {"signal", signal}, {"rows_written", rows_written_}, {"jobs_total", total}};
   {
@@ -424,6 +446,7 @@ void ResultsFolder::mark_interrupted(int signal, std::size_t done, std::size_t t
 void ResultsFolder::mark_stopped(const std::string& why, std::size_t done, std::size_t total) {
   // a row that does not fit the schema: the rows before it stay, and the folder says why
   csv_.close();
+  rounds_.close();
   std::ofstream(out_ / "INCOMPLETE") << "This run stopped at job " << done << " of " << total
                                      << ": " << why << "\nresults.csv.partial holds the "
                                      << rows_written_ << " rows written before it.\n";

@@ -10,6 +10,7 @@
 #include <fstream>
 #include <iostream>
 #include <optional>
+#include <random>
 #include <sstream>
 #include <utility>
 
@@ -122,7 +123,8 @@ std::vector<EngineVariant> engine_catalog(const fs::path& self) {
 
 RunResult run_worker_job(const EngineVariant& ev, const fs::path& scene_file,
                          const fs::path& result_file, const fs::path& log_file, int every_steps,
-                         double timing_budget, double timeout, const SolverKnobs& knobs) {
+                         double timing_budget, double timeout, const SolverKnobs& knobs,
+                         bool timing_only) {
   const struct {
     fs::path scene, result, log;
   } paths{scene_file, result_file, log_file};
@@ -141,6 +143,7 @@ RunResult run_worker_job(const EngineVariant& ev, const fs::path& scene_file,
   if (knobs.substeps > 0)
     for (const std::string& a : {std::string("--substeps"), std::to_string(knobs.substeps)})
       argv.push_back(a);
+  if (timing_only) argv.push_back("--timing-only");
   fs::remove(paths.result);
   const ChildOutcome outcome = run_child(argv, paths.log.string(), timeout);
   if (outcome.kind == ChildOutcome::Kind::Interrupted)
@@ -212,6 +215,94 @@ ReferenceRun converged_reference(const Scene& scene, const std::string& tag, Res
 }
 
 // a finished row in one line of progress
+// a job of the scene step being run: run once (its first timing round, with the trajectory),
+// waiting for the step's other timing rounds before it is evaluated and written
+struct RanJob {
+  PlannedJob planned;
+  std::string stem;
+  RunResult result;
+  int rounds = 1;  // the timing rounds its time comes from
+};
+
+// a job whose one run takes longer than this is timed in its first round only (the rounds would
+// multiply the suite's slowest jobs); its row says so
+constexpr double kRoundCapSeconds = 3.0;
+
+double median_of(std::vector<double> v) {
+  std::sort(v.begin(), v.end());
+  const std::size_t n = v.size();
+  return n % 2 ? v[n / 2] : 0.5 * (v[n / 2 - 1] + v[n / 2]);
+}
+
+void note(std::string& message, const std::string& more) {
+  message += (message.empty() ? "" : "; ") + more;
+}
+
+// The scene step's timing rounds 2…R (docs/metrics.md, "Interleaved timing"): every job that ran
+// ok takes one more timed run a round, in its own process, in an order shuffled afresh each round
+// (seeded by the step and the round: a run's order is reproducible), so a slow spell of the
+// machine falls on every engine of the step alike. A round that fails is that job's failure.
+void run_timing_rounds(std::vector<RanJob>& ran, const Plan& plan, const SceneStep& step,
+                       const PlannedScene& scene, const fs::path& scene_file,
+                       const RunOptions& options, ResultsFolder& folder) {
+  std::vector<std::size_t> timed;
+  for (std::size_t i = 0; i < ran.size(); ++i) {
+    const RunResult& r = ran[i].result;
+    if (r.status == Status::Ok && !r.wall_seconds.empty() &&
+        median_of(r.wall_seconds) <= kRoundCapSeconds)
+      timed.push_back(i);
+    else if (r.status == Status::Ok && !r.wall_seconds.empty() && options.rounds > 1)
+      note(ran[i].result.message, "timed in one round only (a run takes over " +
+                                      number(kRoundCapSeconds) + " s)");
+  }
+  const auto record = [&](const RanJob& job, int round, int order, const RunResult& r) {
+    const EngineVariant& ev = plan.engines[job.planned.engine];
+    ResultsFolder::Round row{scene.scene.name, ev.engine, ev.variant, step.dt, job.planned.knobs, round,
+                             order, static_cast<int>(r.wall_seconds.size()),
+                             median_of(r.wall_seconds) / static_cast<double>(r.steps)};
+    folder.add_round(row);
+  };
+  for (std::size_t i = 0; i < ran.size(); ++i)
+    if (!ran[i].result.wall_seconds.empty() && ran[i].result.status == Status::Ok)
+      record(ran[i], 1, static_cast<int>(i + 1), ran[i].result);
+  if (timed.empty() || options.rounds < 2) return;
+  const double budget = options.timing_budget / options.rounds;
+  std::cerr << "  timing rounds 2-" << options.rounds << " of " << timed.size() << " job"
+            << (timed.size() == 1 ? "" : "s") << " ..." << std::flush;
+  for (int round = 2; round <= options.rounds; ++round) {
+    std::mt19937_64 shuffle(step.number * 1000003ULL + static_cast<unsigned>(round));
+    std::vector<std::size_t> order = timed;
+    std::shuffle(order.begin(), order.end(), shuffle);
+    for (std::size_t k = 0; k < order.size(); ++k) {
+      RanJob& job = ran[order[k]];
+      if (job.result.status != Status::Ok) continue;  // an earlier round failed
+      const EngineVariant& ev = plan.engines[job.planned.engine];
+      const std::string stem = job.stem + ".round-" + std::to_string(round);
+      RunResult r = run_worker_job(ev, scene_file, folder.work() / (stem + ".json"),
+                                   folder.work() / (stem + ".log"), 0, budget,
+                                   options.timeout_seconds, job.planned.knobs, true);
+      if (r.status != Status::Ok || r.wall_seconds.empty()) {
+        job.result.status = r.status == Status::Ok ? Status::Error : r.status;
+        note(job.result.message, "timing round " + std::to_string(round) + ": " +
+                                     to_string(r.status) + (r.message.empty() ? "" : ", ") +
+                                     r.message);
+        continue;
+      }
+      record(job, round, static_cast<int>(k + 1), r);
+      ++job.rounds;
+      job.result.wall_seconds.insert(job.result.wall_seconds.end(), r.wall_seconds.begin(),
+                                     r.wall_seconds.end());
+      StageTimes& stages = job.result.stages;
+      if (stages.names == r.stages.names && stages.seconds.size() == r.stages.seconds.size()) {
+        for (std::size_t s = 0; s < stages.seconds.size(); ++s)
+          stages.seconds[s] += r.stages.seconds[s];
+        stages.steps += r.stages.steps;
+      }
+    }
+  }
+  std::cerr << " done\n";
+}
+
 void print_outcome(const ResultRow& row, Status status) {
   std::cerr << row["status"];
   if (!row["steps_per_s"].empty()) std::cerr << "  " << row["steps_per_s"] << " steps/s";
@@ -306,10 +397,31 @@ int run_suite(const RunOptions& options, const fs::path& self) {
   fs::path scene_file;
   ReferenceRun reference;
   std::optional<std::pair<std::size_t, std::size_t>> not_applicable;  // (step, engine)
+  // the step's jobs, run once; timed in rounds, evaluated and written when the step ends
+  std::vector<RanJob> ran;
+  const auto finish_step = [&] {
+    if (!step) return;
+    const PlannedScene& p = plan.scenes[step->scene];
+    run_timing_rounds(ran, plan, *step, p, scene_file, options, folder);
+    for (RanJob& r : ran) {
+      const EngineVariant& ev = plan.engines[r.planned.engine];
+      EvaluatedJob job = evaluate_job(p, scene, ev, r.planned.knobs, std::move(r.result), reference);
+      if (job.status == Status::Crashed || job.status == Status::Timeout ||
+          job.status == Status::Error)
+        ++failures;
+      if (!job.row["steps_per_s"].empty()) job.row.integer("timing_rounds", r.rounds);
+      folder.add(job, r.stem, step->own_step, r.planned.number);
+      std::cerr << "  " << ev.engine << "/" << ev.variant
+                << (r.planned.knobs.any() ? " " + knob_tag(r.planned.knobs) : "") << ": ";
+      print_outcome(job.row, job.status);
+    }
+    ran.clear();
+  };
   try {
     for (const PlannedJob& planned : jobs) {
       const PlannedScene& p = plan.scenes[plan.steps[planned.step].scene];
       if (!step || step->number != planned.step) {
+        finish_step();
         if (!step || step->scene != plan.steps[planned.step].scene) folder.describe_scenario(p);
         step = &plan.steps[planned.step];
         scene = plan.scene_at(*step);
@@ -336,24 +448,22 @@ int run_suite(const RunOptions& options, const fs::path& self) {
         std::cerr << "not applicable here\n";
         continue;
       }
+      // the first timing round: the sampled run and its share of the timing budget
       RunResult result = run_worker_job(ev, scene_file, folder.work() / (stem + ".json"),
                                         folder.work() / (stem + ".log"),
-                                        scene.probe_every_steps(), options.timing_budget,
+                                        scene.probe_every_steps(),
+                                        options.timing_budget / std::max(1, options.rounds),
                                         options.timeout_seconds, planned.knobs);
       if (result.status == Status::NotApplicable) {
         not_applicable = {planned.step, planned.engine};
         std::cerr << "not applicable here\n";
         continue;
       }
-
-      // ---- evaluate, write
-      EvaluatedJob job = evaluate_job(p, scene, ev, planned.knobs, std::move(result), reference);
-      if (job.status == Status::Crashed || job.status == Status::Timeout ||
-          job.status == Status::Error)
-        ++failures;
-      folder.add(job, stem, step->own_step, planned.number);
-      print_outcome(job.row, job.status);
+      std::cerr << to_string(result.status) << '\n';
+      ran.push_back({planned, stem, std::move(result)});
     }
+    // ---- the last step's timing rounds; evaluate, write
+    finish_step();
   } catch (const RunInterrupted& e) {
     folder.mark_interrupted(e.signal, done, jobs.size());
     throw;

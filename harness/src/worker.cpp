@@ -132,6 +132,7 @@ int run_worker(const WorkerJob& job) {
       options.timing_budget = job.timing_budget;
       options.slowdown = test_slowdown(job.engine, job.variant);
       options.knobs = job.knobs;
+      options.timing_only = job.timing_only;
       result = simulate(*engine, job.variant, scene, options);
     }
   } catch (const std::exception& e) {

@@ -829,4 +829,75 @@ TEST(ResultsSchema, ARowFitsOrTheRunSaysWhichColumnDoesNot) {
   }
 }
 
+// docs/metrics.md, "Interleaved timing": a scene step's jobs are timed in rounds, each job once a
+// round; the first round in plan order (it also samples the trajectory), every later one in a
+// fresh order, so a slow spell of the machine falls on every engine alike
+TEST(Runner, EveryJobIsTimedOnceARoundInAFreshOrder) {
+  const fs::path dir = fresh_dir("rounds");
+  std::ofstream(dir / "spring.json")
+      << R"({"name": "spring", "dt": 0.01, "duration": 1, "collisions": false,
+    "bodies": [{"shape": {"type": "sphere", "radius": 0.1}, "mass": 1, "position": [1, 0, 0]}],
+    "springs": [{"body_a": 0, "body_b": -1, "point_b": [0, 0, 0], "stiffness": 10}],
+    "probe": {"metrics": ["energy"]}})";
+  const Invocation inv =
+      physbench({"run", "--scene", (dir / "spring.json").string(), "-e", "rtp", "--variant",
+                 "rk4,euler,symplectic,midpoint", "--rounds", "4", "--budget", "0.004", "--out",
+                 (dir / "r").string()},
+                dir);
+  ASSERT_EQ(inv.outcome.exit_code, 0) << inv.output;
+  const auto rows = read_rows(dir / "r" / "results.csv");
+  ASSERT_EQ(rows.size(), 4u) << inv.output;
+  std::vector<std::string> plan_order;
+  for (const auto& row : rows) {
+    plan_order.push_back(row.at("variant"));
+    EXPECT_EQ(row.at("timing_rounds"), "4") << row.at("variant");
+    // the first round's at least 3 repeats and at least one in each later round
+    EXPECT_GE(std::stoi(row.at("repeats")), 6) << row.at("variant");
+  }
+  const auto rounds = read_rows(dir / "r" / "timing_rounds.csv");
+  ASSERT_EQ(rounds.size(), 16u) << "four jobs, four rounds";
+  std::map<int, std::vector<std::string>> order;  // round → variants in the order they ran
+  for (int round = 1; round <= 4; ++round) order[round].assign(4, "");
+  for (const auto& r : rounds) {
+    const int round = std::stoi(r.at("round")), place = std::stoi(r.at("order"));
+    ASSERT_TRUE(round >= 1 && round <= 4 && place >= 1 && place <= 4) << round << " " << place;
+    EXPECT_EQ(order[round][place - 1], "") << "two jobs at one place of round " << round;
+    order[round][place - 1] = r.at("variant");
+    EXPECT_GT(std::stod(r.at("seconds_per_step")), 0.0);
+    EXPECT_EQ(r.at("scenario"), "spring");
+  }
+  EXPECT_EQ(order[1], plan_order) << "the first round runs in plan order";
+  int shuffled = 0;
+  for (int round = 2; round <= 4; ++round) {
+    std::vector<std::string> sorted = order[round], expected = plan_order;
+    std::sort(sorted.begin(), sorted.end());
+    std::sort(expected.begin(), expected.end());
+    EXPECT_EQ(sorted, expected) << "round " << round << " runs every job once";
+    shuffled += order[round] != plan_order;
+  }
+  EXPECT_GT(shuffled, 0) << "no later round changed the order";
+}
+
+// a job that crashes in a later timing round is a crash, not a row timed in fewer rounds
+TEST(Runner, AJobThatCrashesInALaterTimingRoundIsCrashed) {
+  const fs::path dir = fresh_dir("round_crash");
+  const fs::path marker = dir / "fault-marker";
+  ::setenv("PHYSBENCH_TEST_FAULT_MARKER", marker.c_str(), 1);
+  std::ofstream(dir / "free.json")
+      << R"({"name": "free", "dt": 0.01, "duration": 0.1, "collisions": false,
+    "bodies": [{"shape": {"type": "sphere", "radius": 0.1}, "mass": 1}],
+    "probe": {"metrics": ["energy"]}})";
+  const Invocation inv =
+      physbench({"run", "--scene", (dir / "free.json").string(), "-e", "test-fault", "--variant",
+                 "abort-later", "--rounds", "3", "--budget", "0", "--out", (dir / "r").string()},
+                dir);
+  ::unsetenv("PHYSBENCH_TEST_FAULT_MARKER");
+  ASSERT_EQ(inv.outcome.exit_code, 0) << inv.output;
+  const auto rows = read_rows(dir / "r" / "results.csv");
+  ASSERT_EQ(rows.size(), 1u) << inv.output;
+  EXPECT_EQ(rows[0].at("status"), "crashed") << rows[0].at("message");
+  EXPECT_NE(rows[0].at("message").find("timing round 2"), std::string::npos)
+      << rows[0].at("message");
+}
+
 }  // namespace

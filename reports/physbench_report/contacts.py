@@ -7,6 +7,7 @@ import pandas as pd
 import plotly.graph_objects as go
 from plotly.subplots import make_subplots
 
+from .rounds import format_ratio
 from .speed import pareto_front
 from .style import figure_html, fmt, hue
 
@@ -36,10 +37,11 @@ FAILED_VERDICTS = {"collapsed", "sinks", "drifts", "settles", "tumbled", "no bou
 CONTACT_VIEWS = {
     "each engine's defaults": {"rtp": "soft-step", "bullet": "float", "ode": "quickstep", "box2d": "default",
                                "mujoco": "euler", "mujoco-2.2": "euler", "box2d-v3": "default",
-                               "rapier": "default", "jolt": "default"},
+                               "rapier": "default", "jolt": "default", "physx": "pgs", "box3d": "default"},
     "equal iterations (10)": {"rtp": "sequential-impulse", "bullet": "float", "ode": "quickstep-10",
                               "box2d": "iterations-10", "mujoco": "pgs-10", "mujoco-2.2": "pgs-10",
-                              "box2d-v3": "iterations-10", "rapier": "iterations-10", "jolt": "default"},
+                              "box2d-v3": "iterations-10", "rapier": "iterations-10", "jolt": "default",
+                              "physx": "iterations-10", "box3d": "iterations-10"},
 }
 # drift below this is drawn at it (a log axis has no zero)
 DRIFT_FLOOR = 1e-6
@@ -141,13 +143,14 @@ def drift_cost_views(results: pd.DataFrame) -> list[dict]:
     return sections
 
 
-def best_configurations(results: pd.DataFrame) -> list[dict]:
+def best_configurations(results: pd.DataFrame, paired=None) -> list[dict]:
     """Per stack scenario, each engine read at its best knobs (issue 38's rule: no claim rests on an
     unequal setting): every row of the engine counts — each variant at its own settings and at
     every swept substep or iteration count. Per engine: its defaults' verdict and ms per step; the
     cheapest configuration whose verdict is `stands`, its ms and drift, and how many times rtp's
     cheapest standing configuration is faster (below 1: slower); and the least drift it reaches
-    within the ms of rtp's default. Engines with no standing configuration say so."""
+    within the ms of rtp's default. Engines with no standing configuration say so. With `paired`
+    (rounds.PairedRatios) the ratio is read round by round, with its 95 % interval."""
     defaults = CONTACT_VIEWS["each engine's defaults"]
     sections = []
     for name, rows in results.groupby("scenario", sort=False):
@@ -176,6 +179,8 @@ def best_configurations(results: pd.DataFrame) -> list[dict]:
             within = ok[(ok["engine"] == engine) & (ok["ms"] <= rtp_ms) & ok["stack_drift_max"].notna()]
             least = within.loc[within["stack_drift_max"].idxmin()] if not within.empty else None
             ratio = (best["ms"] / rtp_best["ms"]) if best is not None and rtp_best is not None else None
+            interval = (paired.ratio(name, float(best["dt"]), best["label"], rtp_best["label"])
+                        if paired is not None and ratio is not None else None)
             table.append(dict(
                 engine=engine,
                 default=(f"{default['label']}: {default.get('contact_verdict') or default['status']}, "
@@ -183,7 +188,8 @@ def best_configurations(results: pd.DataFrame) -> list[dict]:
                 best=best["label"] if best is not None else "none stands",
                 best_ms=fmt(best["ms"]) if best is not None else "",
                 best_drift=fmt(best["stack_drift_max"]) if best is not None else "",
-                ratio=fmt(ratio) if ratio is not None else "",
+                ratio=(format_ratio(interval) if interval is not None and engine != "rtp"
+                       else fmt(ratio) if ratio is not None else ""),
                 within=(f"{fmt(least['stack_drift_max'])} m ({least['label']})" if least is not None else "")))
         sections.append(dict(scenario=name, rows=table, rtp_ms=fmt(rtp_ms)))
     return sections

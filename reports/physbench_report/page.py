@@ -12,6 +12,7 @@ from .benchmarks import broadphase_benchmark, contacts_benchmark, narrowphase_be
 from .comparison import comparison_section
 from .contacts import CONTACT_VIEWS, best_configurations, drift_cost_views, verdict_table
 from .glance import at_a_glance
+from .rounds import PairedRatios, load_rounds, rtp_against_peers
 from .load import is_nominal, load_results
 from .profile import stage_profiles
 from .scaling import scaling_charts
@@ -40,12 +41,14 @@ def build_report(folder: Path, compare_with: Path | None = None) -> Path:
     benchmark = particle_benchmark(folder)
     contacts = contacts_benchmark(folder)
     nominal = results[[is_nominal(meta, r) for _, r in results.iterrows()]]
+    paired = PairedRatios(load_rounds(folder))
     # in page order
     page = TEMPLATES.get_template("page.html.j2").render(
         meta=meta, plotlyjs=plotly.offline.get_plotlyjs(), comparison=comparison, glance=glance,
         table=results_table(results, meta), tablejs=table_script(), scenarios=scenarios,
         verdicts=verdict_table(nominal), drift_cost=drift_cost_views(nominal), contact_views=CONTACT_VIEWS,
-        best_configurations=best_configurations(nominal),
+        best_configurations=best_configurations(nominal, paired),
+        rtp_against=rtp_against_peers(nominal, paired, CONTACT_VIEWS["each engine's defaults"]),
         contacts=contacts, profiles=stage_profiles(results, meta), families=stability_maps(results, meta),
         scaling=scaling_charts(results, meta, benchmark, contacts), benchmark=benchmark,
         narrowphase=narrowphase_benchmark(folder), broadphase=broadphase_benchmark(folder),

@@ -30,6 +30,9 @@ struct SimulateOptions {
   int every_steps = 0;         // steps between samples; 0: the scene's probe interval
   double timing_budget = 0.3;  // s: timed repeats go on until this much stepping is measured
   int min_timed_repeats = 3;
+  // a timing round (the harness's interleaved rounds, docs/metrics.md): no sampled run, no
+  // trajectory; timed repeats from the first, at least one, until the budget
+  bool timing_only = false;
   int max_timed_repeats = 50;
   double explosion_distance = 1e6;  // m from the origin: a body beyond it has exploded
   // for the harness's own tests only: each timed stretch of stepping is stretched by this share

@@ -43,6 +43,18 @@ class ResultsFolder {
   void add(EvaluatedJob& job, const std::string& stem, bool own_step, std::size_t job_number);
   std::size_t rows_written() const { return rows_written_; }
 
+  // one timing round of one job (docs/metrics.md, "Interleaved timing"): timing_rounds.csv's row
+  // of the scene step, the job's engine, variant and knobs, the round (from 1), the job's place
+  // in that round's order (from 1), its timed repeats and their median's seconds per step
+  struct Round {
+    std::string scenario, engine, variant;
+    double dt = 0.0;
+    SolverKnobs knobs;
+    int round = 0, order = 0, repeats = 0;
+    double seconds_per_step = 0.0;
+  };
+  void add_round(const Round& round);
+
   // results.csv and metadata.json renamed into place: the run is complete
   void finish();
   // the run stops at job `done` of `total`: results.csv.partial keeps the rows so far, an
@@ -54,7 +66,7 @@ class ResultsFolder {
   void write_poses(const EvaluatedJob& job, const std::string& stem);
 
   std::filesystem::path out_, work_;
-  std::ofstream csv_;
+  std::ofstream csv_, rounds_;
   nlohmann::json metadata_;
   std::uint64_t pose_bytes_ = 0;
   std::size_t rows_written_ = 0;

@@ -53,7 +53,7 @@ RunResult run_worker_job(const EngineVariant& ev, const std::filesystem::path& s
                          const std::filesystem::path& result_file,
                          const std::filesystem::path& log_file, int every_steps,
                          double timing_budget, double timeout_seconds,
-                         const SolverKnobs& knobs = {});
+                         const SolverKnobs& knobs = {}, bool timing_only = false);
 
 // The converged reference of a scene without contacts (docs/metrics.md, "References"): SciPy's
 // DOP853 on the rigid-body equations of motion (validation/reference/scipy_reference.py), a worker
@@ -72,7 +72,10 @@ struct RunOptions {
   bool no_sweep = false;         // only each scene's own step
   std::filesystem::path out;
   double timeout_seconds = 300.0;
-  double timing_budget = 0.2;  // s of measured stepping per job
+  double timing_budget = 0.2;  // s of measured stepping per job, over all its timing rounds
+  // --rounds: a scene step's jobs are timed in this many rounds, each job once a round in a fresh
+  // order (docs/metrics.md, "Interleaved timing"); the first round also samples the trajectory
+  int rounds = 5;
   // --shard K/N: the K-th of N disjoint slices of the planned jobs (K from 1), a stride over the
   // plan's scene steps (steps K−1, K−1+N, …, each with all its engine variants), so a scene's
   // engines are timed on one machine; `physbench merge` joins the N folders (docs/regression.md)

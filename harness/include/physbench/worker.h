@@ -19,6 +19,7 @@ struct WorkerJob {
   double timing_budget = 0.3;
   std::string out_path;
   SolverKnobs knobs;  // a sweep's iterations or substeps; none: the variant's own
+  bool timing_only = false;  // a timing round: timed repeats only, no trajectory
 };
 
 // Runs the job with the engines linked into this executable and writes out_path.

@@ -465,6 +465,8 @@ pub struct Job {
     pub budget: f64,
     pub out: String,
     pub knobs: Knobs,
+    /// a timing round (--timing-only): no sampled run, timed repeats only, at least one
+    pub timing_only: bool,
 }
 
 fn positive(option: &str, value: &str) -> Result<usize, String> {
@@ -476,10 +478,15 @@ fn positive(option: &str, value: &str) -> Result<usize, String> {
 
 fn parse_args(engine: &dyn Engine) -> Result<Job, String> {
     let mut job = Job { scene: String::new(), variant: String::new(), every: 0, budget: 0.3,
-                        out: String::new(), knobs: Knobs::default() };
+                        out: String::new(), knobs: Knobs::default(), timing_only: false };
     let args: Vec<String> = std::env::args().skip(1).collect();
     let mut i = 0;
     while i < args.len() {
+        if args[i] == "--timing-only" {
+            job.timing_only = true;
+            i += 1;
+            continue;
+        }
         let value = args.get(i + 1).cloned().ok_or(format!("{} needs a value", args[i]))?;
         match args[i].as_str() {
             "--scene" => job.scene = value,
@@ -500,7 +507,8 @@ fn parse_args(engine: &dyn Engine) -> Result<Job, String> {
     }
     if job.scene.is_empty() || job.variant.is_empty() || job.out.is_empty() {
         return Err("usage: --scene FILE --variant NAME --out RESULT.json [--every N] \
-                    [--budget S] [--engine NAME] [--iterations N] [--substeps N]".into());
+                    [--budget S] [--engine NAME] [--iterations N] [--substeps N] \
+                    [--timing-only]".into());
     }
     Ok(job)
 }
@@ -549,10 +557,10 @@ fn simulate(engine: &dyn Engine, job: &Job) -> Value {
     }
     let every = if job.every > 0 { job.every } else { scene.probe_every_steps() };
 
-    // first run: the trajectory, and a warm-up for the timed repeats
+    // first run: the trajectory, and a warm-up for the timed repeats (a timing round has neither)
     let mut samples = Vec::new();
     let mut wall = Vec::new();
-    {
+    if !job.timing_only {
         let mut world = match engine.create(&scene, &job.variant, &job.knobs) {
             Ok(w) => w,
             Err(e) => return fail(doc, "error", e),
@@ -579,7 +587,8 @@ fn simulate(engine: &dyn Engine, job: &Job) -> Value {
     }
     // timed repeats, each on a freshly built world
     let mut measured = 0.0;
-    while wall.len() < MAX_TIMED_REPEATS && (wall.len() < MIN_TIMED_REPEATS || measured < job.budget)
+    let min_repeats = if job.timing_only { 1 } else { MIN_TIMED_REPEATS };
+    while wall.len() < MAX_TIMED_REPEATS && (wall.len() < min_repeats || measured < job.budget)
     {
         let mut world = match engine.create(&scene, &job.variant, &job.knobs) {
             Ok(w) => w,

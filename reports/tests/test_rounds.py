@@ -1,0 +1,58 @@
+"""Speed ratios paired by timing round (reports/physbench_report/rounds.py)."""
+import sys
+from pathlib import Path
+
+import numpy as np
+
+sys.path.insert(0, str(Path(__file__).resolve().parents[1]))
+from physbench_report.rounds import PairedRatios, bootstrap_median, format_ratio, load_rounds  # noqa: E402
+
+HEADER = "scenario,dt,engine,variant,iterations,substeps,round,order,repeats,seconds_per_step\n"
+
+
+def write_rounds(folder: Path, lines: list[str]) -> None:
+    (folder / "timing_rounds.csv").write_text(HEADER + "".join(line + "\n" for line in lines))
+
+
+def test_a_ratio_is_read_round_by_round(tmp_path):
+    # the machine doubles its speed halfway through: each engine's own times spread 2x, but within
+    # each round the peer takes exactly 3x rtp's time, so the paired ratio has no spread at all
+    lines = []
+    for k, scale in enumerate([1.0, 1.0, 2.0, 2.0, 1.5], start=1):
+        lines.append(f"tower-20,0.0166666667,rtp,soft-step,,,{k},1,3,{1e-4 * scale}")
+        lines.append(f"tower-20,0.0166666667,bullet,float,,,{k},2,3,{3e-4 * scale}")
+        lines.append(f"tower-20,0.0166666667,bullet,float,,4,{k},3,3,{9e-4 * scale}")
+    write_rounds(tmp_path, lines)
+    paired = PairedRatios(load_rounds(tmp_path))
+    r = paired.ratio("tower-20", 1 / 60, "bullet/float", "rtp/soft-step")
+    assert r["rounds"] == 5
+    assert abs(r["median"] - 3.0) < 1e-9 and abs(r["lo"] - 3.0) < 1e-9 and abs(r["hi"] - 3.0) < 1e-9
+    # a swept configuration is its own label, as in results.csv
+    r = paired.ratio("tower-20", 1 / 60, "bullet/float substeps=4", "rtp/soft-step")
+    assert abs(r["median"] - 9.0) < 1e-9
+    assert format_ratio(r) == "9× (9–9)"
+
+
+def test_a_pair_timed_in_fewer_than_three_common_rounds_has_no_ratio(tmp_path):
+    write_rounds(tmp_path, ["s,0.01,rtp,rk4,,,1,1,3,1e-6", "s,0.01,rtp,rk4,,,2,1,1,1e-6",
+                            "s,0.01,ode,step,,,1,2,3,2e-6", "s,0.01,ode,step,,,2,2,1,2e-6"])
+    paired = PairedRatios(load_rounds(tmp_path))
+    assert paired.ratio("s", 0.01, "ode/step", "rtp/rk4") is None
+    assert paired.ratio("s", 0.02, "ode/step", "rtp/rk4") is None  # another step
+    assert format_ratio(None) == ""
+
+
+def test_a_folder_from_before_rounds_has_no_ratios(tmp_path):
+    assert PairedRatios(load_rounds(tmp_path)).ratio("s", 0.01, "a/b", "c/d") is None
+
+
+def test_the_bootstrap_interval_holds_the_median_and_widens_with_spread():
+    rng = np.random.default_rng(1)
+    narrow = 2.0 + 0.01 * rng.standard_normal(9)
+    wide = 2.0 + 0.3 * rng.standard_normal(9)
+    m, lo, hi = bootstrap_median(narrow)
+    assert lo <= m <= hi and hi - lo < 0.05
+    m2, lo2, hi2 = bootstrap_median(wide)
+    assert lo2 <= m2 <= hi2 and hi2 - lo2 > 5 * (hi - lo)
+    # the same interval every time (a fixed seed)
+    assert bootstrap_median(wide) == (m2, lo2, hi2)
