@@ -187,7 +187,7 @@ def speed_change(a: dict, b: dict, peers: float, alpha: float) -> tuple[float, b
     return change, apart, f"fastest {x:.3g} → {y:.3g} steps/s, ranges"
 
 
-def compare(old: dict, new: dict, against: str | None = None, speed_threshold: float = 0.15,
+def compare(old: dict, new: dict, against: str | None = None, speed_threshold: float = 0.10,
             accuracy_tolerance: float = 0.05, accuracy_floor: float = 1e-9, alpha: float = 0.01) -> Comparison:
     if against and not any(named_by(k, against) for k in set(old) & set(new)):
         raise CompareError(f"--against {against}: no such engine variant in both runs")
@@ -265,8 +265,9 @@ def main(argv: list[str] | None = None) -> int:
     parser.add_argument("new", type=Path, help="the results folder under test")
     parser.add_argument("--against", help="ENGINE[/VARIANT]: the peer rows whose speed change a row's is taken "
                         "relative to (default: every engine but the row's own)")
-    parser.add_argument("--speed-threshold", type=float, default=0.15,
-                        help="a speed change smaller than this share is never flagged (default 0.15)")
+    parser.add_argument("--speed-threshold", type=float, default=0.10,
+                        help="a speed change smaller than this share is never flagged (default 0.10: a "
+                             "step that takes 15 %% longer is 13 %% slower)")
     parser.add_argument("--alpha", type=float, default=0.01,
                         help="the Mann–Whitney U test's significance level for a speed change (default 0.01)")
     parser.add_argument("--accuracy-tolerance", type=float, default=0.05,
