@@ -502,7 +502,7 @@ void ContactPipeline::colour_contacts() {
   const std::vector<std::uint32_t>& by_colour = colour_scratch_order_;
   const std::size_t count = contacts_.size();
   colour_order_.resize(count);
-  const int threads = std::max(1, settings_.threads);
+  const int threads = std::max(1, threads_);
 #pragma omp parallel num_threads(threads) if (threads > 1 && count >= 2048)
   {
     const int size = team_size(), index = team_index();
@@ -572,7 +572,7 @@ void ContactPipeline::for_each_block(Kernel&& kernel, bool backwards) {
   // a barrier among threads that have nothing to share costs more than the colour
   bool any_wide = false;
   for (int k = 0; k + 1 < kColours && !any_wide; ++k) any_wide = wide(k);
-  if (settings_.threads <= 1 || !any_wide) {
+  if (threads_ <= 1 || !any_wide) {
     for (int k = 0; k < kColours; ++k) run_colour(k);
     return;
   }
@@ -599,7 +599,7 @@ void ContactPipeline::for_each_block(Kernel&& kernel, bool backwards) {
     k = end;
   }
   SpinBarrier barrier;
-#pragma omp parallel num_threads(settings_.threads)
+#pragma omp parallel num_threads(threads_)
   {
     const int size = team_size(), index = team_index();
     for (int v = 0; v < visit_count; ++v) {
@@ -629,7 +629,7 @@ void ContactPipeline::load_bodies(std::span<const BodyState> states,
   mass_records_.back() = {};
   // each body by itself, on the threads
   const std::ptrdiff_t n = std::ptrdiff_t(states.size());
-#pragma omp parallel for num_threads(settings_.threads) schedule(static) if (n >= 2048)
+#pragma omp parallel for num_threads(threads_) schedule(static) if (n >= 2048)
   for (std::ptrdiff_t i = 0; i < n; ++i) {
     SolverBody& body = bodies_[i];
     SolverMass& mass = masses_[i];
@@ -811,7 +811,7 @@ void ContactPipeline::prepare(const Vec3& gravity, double h) {
   // blocks in order, each thread read half its contacts from the other core's cache, and two
   // threads took longer over this stage than one
   const int colours = int(block_start.size()) - 1;
-#pragma omp parallel num_threads(settings_.threads) if (block_count >= 64)
+#pragma omp parallel num_threads(threads_) if (block_count >= 64)
   for (int k = 0; k < colours; ++k) {
     const auto [begin, end] =
         share_of(block_start[k + 1] - block_start[k], team_size(), team_index());
@@ -924,7 +924,7 @@ void ContactPipeline::warm_start(bool first_substep) {
   substep_start_.resize(bodies_.size());
   substep_change_.resize(bodies_.size());
   if (!first_substep) {
-#pragma omp parallel for num_threads(settings_.threads) schedule(static) if (n >= 2048)
+#pragma omp parallel for num_threads(threads_) schedule(static) if (n >= 2048)
     for (std::ptrdiff_t i = 0; i < n; ++i) {
       SolverBody& body = bodies_[i];
       substep_start_[i].linear = body.linear_velocity;
@@ -934,7 +934,7 @@ void ContactPipeline::warm_start(bool first_substep) {
     }
     return;
   }
-#pragma omp parallel for num_threads(settings_.threads) schedule(static) if (n >= 2048)
+#pragma omp parallel for num_threads(threads_) schedule(static) if (n >= 2048)
   for (std::ptrdiff_t i = 0; i < n; ++i)
     substep_start_[i] = {bodies_[i].linear_velocity, bodies_[i].angular_velocity,
                          masses_[i].inverse_mass > 0.0 ? 1.0f : 0.0f};
@@ -969,7 +969,7 @@ void ContactPipeline::warm_start(bool first_substep) {
 
 void ContactPipeline::end_substep() {
   const std::ptrdiff_t n = std::ptrdiff_t(bodies_.size());
-#pragma omp parallel for num_threads(settings_.threads) schedule(static) if (n >= 2048)
+#pragma omp parallel for num_threads(threads_) schedule(static) if (n >= 2048)
   for (std::ptrdiff_t i = 0; i < n; ++i) {
     substep_change_[i].linear = bodies_[i].linear_velocity - substep_start_[i].linear;
     substep_change_[i].angular = bodies_[i].angular_velocity - substep_start_[i].angular;
@@ -978,7 +978,7 @@ void ContactPipeline::end_substep() {
 
 void ContactPipeline::next_substep(const Eigen::Vector3f& kick) {
   const std::ptrdiff_t n = std::ptrdiff_t(bodies_.size());
-#pragma omp parallel for num_threads(settings_.threads) schedule(static) if (n >= 2048)
+#pragma omp parallel for num_threads(threads_) schedule(static) if (n >= 2048)
   for (std::ptrdiff_t i = 0; i < n; ++i) {
     SolverBody& body = bodies_[i];
     Velocities& start = substep_start_[i];
@@ -1301,7 +1301,7 @@ void ContactPipeline::store_impulses() {
   const std::vector<ContactBlock>& blocks = lanes_->blocks;
   const std::vector<ContactBlockRest>& rest = lanes_->rest;
   const std::size_t block_count = blocks.size();
-#pragma omp parallel for num_threads(settings_.threads) schedule(static) if (block_count >= 64)
+#pragma omp parallel for num_threads(threads_) schedule(static) if (block_count >= 64)
   for (std::size_t b = 0; b < block_count; ++b) {
     const ContactBlock& block = blocks[b];
     const auto& contact = rest[b].contact;

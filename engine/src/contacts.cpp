@@ -67,7 +67,9 @@ std::vector<Vec3> offset_vertices(const ConvexHull& hull, double d) {
 }  // namespace
 
 ContactPipeline::ContactPipeline(const ContactSettings& settings)
-    : settings_(settings), broad_phase_(make_broad_phase(BroadPhaseKind::BoxPruning)) {}
+    : settings_(settings),
+      threads_(std::max(1, settings.threads)),
+      broad_phase_(make_broad_phase(BroadPhaseKind::BoxPruning)) {}
 
 ContactPipeline::~ContactPipeline() = default;
 
@@ -155,7 +157,7 @@ void ContactPipeline::update_bounds(std::span<const BodyState> states, double dt
   // broad phase), then the fast ones gathered in body order
   const std::ptrdiff_t n = std::ptrdiff_t(shapes_.size());
   fast_flags_.assign(shapes_.size(), 0);
-#pragma omp parallel for num_threads(settings_.threads) schedule(static) if (n >= 2048)
+#pragma omp parallel for num_threads(threads_) schedule(static) if (n >= 2048)
   for (std::ptrdiff_t i = 0; i < n; ++i) {
     BodyShapeData& data = shapes_[i];
     const BodyState& s = states[i];
@@ -197,7 +199,7 @@ void ContactPipeline::update_bounds(std::span<const BodyState> states, double dt
 }
 
 void ContactPipeline::find_pairs() {
-  broad_phase_->set_threads(settings_.threads);
+  broad_phase_->set_threads(threads_);
   broad_phase_->update();
   const std::vector<ProxyPair>& found = broad_phase_->pairs();
   const std::size_t bodies = shapes_.size();
@@ -209,7 +211,7 @@ void ContactPipeline::find_pairs() {
   // holds the parts' keys in part order) and sorts its share of the buckets: the same keys in
   // the same order on any number of threads. (Serial, this took 0.13 ms of a base-100 step,
   // about 0.16 on two threads, where the keys came from the other core's sweep.)
-  const int parts = settings_.threads > 1 && found.size() >= 2048 ? settings_.threads : 1;
+  const int parts = threads_ > 1 && found.size() >= 2048 ? threads_ : 1;
   if (part_keys_.size() < std::size_t(parts)) {
     part_keys_.resize(std::size_t(parts));
     part_counts_.resize(std::size_t(parts));
@@ -303,7 +305,7 @@ void ContactPipeline::collide_pairs(std::span<const BodyState> states, double dt
   // (and the rotation in single precision, as a record the pair cache's test reads in lanes)
   poses_.resize(states.size());
   rotations_.resize(states.size());
-#pragma omp parallel for num_threads(settings_.threads) schedule(static) if (states.size() >= 2048)
+#pragma omp parallel for num_threads(threads_) schedule(static) if (states.size() >= 2048)
   for (std::size_t i = 0; i < states.size(); ++i) {
     if (shapes_[i].kind == BodyShape::None) continue;
     poses_[i] = pose_of(states[i]);
@@ -347,7 +349,7 @@ void ContactPipeline::collide_pairs(std::span<const BodyState> states, double dt
   // threads wrote each other's cache lines (a pair's outcome is a byte) and read half the
   // manifolds from the other core: at base 100 this loop took 0.85 ms on two threads against
   // 1.15 on one, 0.55 in halves
-#pragma omp parallel for num_threads(settings_.threads) schedule(static) \
+#pragma omp parallel for num_threads(threads_) schedule(static) \
     if (n >= 1024) reduction(+ : reused, moved)
   for (std::size_t group = 0; group < groups; ++group) {
     const std::size_t group_first = group * kMotionLanes;
@@ -445,7 +447,7 @@ void ContactPipeline::collide_pairs(std::span<const BodyState> states, double dt
   // fourteen probes each
   constexpr std::size_t kChunk = 256;
   const std::size_t chunks = (m + kChunk - 1) / kChunk;
-#pragma omp parallel for num_threads(settings_.threads) schedule(static) if (m >= 1024) \
+#pragma omp parallel for num_threads(threads_) schedule(static) if (m >= 1024) \
     reduction(max : deepest) reduction(+ : matched, points)
   for (std::size_t chunk = 0; chunk < chunks; ++chunk) {
     const std::size_t first = chunk * kChunk, last = std::min(m, first + kChunk);

@@ -99,6 +99,10 @@ class ContactPipeline {
   void add_body(BodyId id, const ShapeDef& shape, double friction, double restitution,
                 bool is_static);
 
+  // the team this step's parallel loops use, from 1 to settings.threads (World's ThreadGovernor);
+  // the results are the same on any team
+  void set_threads(int threads) { threads_ = threads; }
+
   // ---- the stages, in order ----
   void update_bounds(std::span<const BodyState> states, double dt);
   void find_pairs();
@@ -175,6 +179,7 @@ class ContactPipeline {
   void grow_pair(const BodyShapeData& a, const BodyShapeData& b, Shape& grown_a,
                  Shape& grown_b) const;
   const ContactSettings settings_;
+  int threads_ = 1;  // this step's team (set_threads): settings_.threads, or fewer on a busy machine
   std::vector<BodyShapeData> shapes_;  // per body
   std::vector<ConvexHull> hulls_;      // the grown hulls: the pool Shape::hull indexes
   std::unique_ptr<BroadPhase> broad_phase_;

@@ -49,7 +49,11 @@ Vec3 spring_force_on_a(const SpringDef& spring, const Vec3& point_a, const Vec3&
 }  // namespace
 
 World::World(Vec3 gravity, Integrator integrator, ContactSettings contacts)
-    : gravity_(gravity), integrator_(integrator), contact_settings_(contacts) {
+    : gravity_(gravity),
+      integrator_(integrator),
+      contact_settings_(contacts),
+      governor_(contacts.threads, contacts.adaptive_threads),
+      active_threads_(std::max(1, contacts.threads)) {
   if (contacts.substeps < 1 || contacts.velocity_iterations < 0 || contacts.relax_iterations < 0 ||
       contacts.max_relax_iterations < 0 || contacts.restitution_iterations < 0 ||
       contacts.local_iterations < 1 || contacts.threads < 1)
@@ -449,7 +453,7 @@ void World::integrate_positions(double h) {
   const std::ptrdiff_t groups = (n + G - 1) / G;
   FM offsets;
   for (std::ptrdiff_t i = 0; i < G; ++i) offsets[i] = std::int32_t(i * kRecordFloats);
-#pragma omp parallel for num_threads(contact_settings_.threads) schedule(static) \
+#pragma omp parallel for num_threads(active_threads_) schedule(static) \
     if (groups >= 256)
   for (std::ptrdiff_t g = 0; g < groups; ++g) {
     const std::ptrdiff_t first = g * G;
@@ -541,7 +545,7 @@ void World::store_momenta() {
   const std::vector<SolverBody>& bodies = pipeline_->bodies();
   // each body by itself, on the threads
   const std::ptrdiff_t n = std::ptrdiff_t(states_.size());
-#pragma omp parallel for num_threads(contact_settings_.threads) schedule(static) if (n >= 2048)
+#pragma omp parallel for num_threads(active_threads_) schedule(static) if (n >= 2048)
   for (std::ptrdiff_t i = 0; i < n; ++i) {
     const BodyMass& m = masses_[i];
     if (m.inverse_mass == 0.0) continue;
@@ -561,6 +565,8 @@ void World::step_with_contacts(double dt) {
   profile_ = StepProfile{};
   ContactPipeline& contacts = *pipeline_;
   const ContactSettings& settings = contact_settings_;
+  active_threads_ = governor_.next();
+  contacts.set_threads(active_threads_);
   timed(profile_.prepare, [&] { contacts.load_bodies(states_, masses_); });
   timed(profile_.bounds, [&] { contacts.update_bounds(states_, dt); });
   timed(profile_.broad_phase, [&] { contacts.find_pairs(); });
@@ -639,6 +645,8 @@ void World::step_with_contacts(double dt) {
   profile_.reused_pairs = contacts.reused_pairs();
   profile_.reused_manifolds = contacts.reused_manifolds();
   profile_.total = seconds_since(start);
+  profile_.threads = active_threads_;
+  governor_.record(active_threads_, profile_.total);
 }
 
 double World::deepest_penetration() const {

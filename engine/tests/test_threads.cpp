@@ -10,6 +10,7 @@
 #include <vector>
 
 #include "threads.h"
+#include "rtp/thread_governor.h"
 
 namespace {
 
@@ -68,3 +69,66 @@ TEST(Threads, SpinBarrierWithMoreThreadsThanCoresStillFinishes) {
 }
 
 }  // namespace
+
+// ---- the governor's choice of team (rtp/thread_governor.h), fed step times, no clock --------
+
+namespace {
+
+// n steps through the governor, each on the team it chose, taking `team` s on two threads and
+// `one` s on one; returns how many ran on one thread
+int steps_on_one_thread(rtp::ThreadGovernor& g, int n, double team, double one) {
+  int on_one = 0;
+  for (int i = 0; i < n; ++i) {
+    const int threads = g.next();
+    EXPECT_TRUE(threads == 1 || threads == 2) << threads;
+    on_one += threads == 1;
+    g.record(threads, threads == 1 ? one : team);
+  }
+  return on_one;
+}
+
+}  // namespace
+
+TEST(ThreadGovernor, AnIdleMachineRunsTheTeamAndProbesOneThreadRarely) {
+  rtp::ThreadGovernor g(2, true);
+  // pyramid-100's idle figures: 4.8 ms on two threads, 9.3 on one
+  const int on_one = steps_on_one_thread(g, 320, 4.8e-3, 9.3e-3);
+  // the first probe and one in every kProbeEvery after it
+  EXPECT_GE(on_one, 1);
+  EXPECT_LE(on_one, 320 / rtp::ThreadGovernor::kProbeEvery + 1);
+}
+
+TEST(ThreadGovernor, ABusyMachineRunsOneThreadAndProbesTheTeamRarely) {
+  rtp::ThreadGovernor g(2, true);
+  // beside a busy loop: 30 ms on two threads, 10 on one
+  const int on_one = steps_on_one_thread(g, 320, 30e-3, 10e-3);
+  EXPECT_GE(on_one, 320 - 320 / rtp::ThreadGovernor::kProbeEvery - rtp::ThreadGovernor::kFirstProbe);
+  // the time it costs: within 1.1 of one thread's all along
+  rtp::ThreadGovernor h(2, true);
+  double total = 0.0;
+  for (int i = 0; i < 3200; ++i) {
+    const int threads = h.next();
+    const double seconds = threads == 1 ? 10e-3 : 30e-3;
+    total += seconds;
+    h.record(threads, seconds);
+  }
+  EXPECT_LT(total / 3200, 1.1 * 10e-3);
+}
+
+TEST(ThreadGovernor, TurnsBackWhenTheMachineChanges) {
+  rtp::ThreadGovernor g(2, true);
+  steps_on_one_thread(g, 200, 30e-3, 10e-3);  // busy: one thread
+  // the other process ends: within a few probes the team is back
+  steps_on_one_thread(g, 4 * rtp::ThreadGovernor::kProbeEvery, 4.8e-3, 9.3e-3);
+  EXPECT_LE(steps_on_one_thread(g, 320, 4.8e-3, 9.3e-3), 320 / rtp::ThreadGovernor::kProbeEvery + 1);
+}
+
+TEST(ThreadGovernor, FixedOrOneThreadNeverChanges) {
+  rtp::ThreadGovernor fixed(2, false), single(1, true);
+  for (int i = 0; i < 100; ++i) {
+    EXPECT_EQ(fixed.next(), 2);
+    fixed.record(2, 1.0);
+    EXPECT_EQ(single.next(), 1);
+    single.record(1, 1.0);
+  }
+}

@@ -16,6 +16,7 @@
 
 #include "rtp/collision.h"
 #include "rtp/math.h"
+#include "rtp/thread_governor.h"
 
 namespace rtp {
 
@@ -157,6 +158,9 @@ struct ContactSettings {
                                          // computed (0: every touching pair tested each step)
   int threads = 1;  // the narrow phase and each colour of the solve (identical results at any
                     // count: a colour's contacts share no dynamic body)
+  // with threads > 1, each step runs on the team or on one thread, whichever the recent steps
+  // found faster (ThreadGovernor: a busy machine's descheduled thread stalls every colour)
+  bool adaptive_threads = true;
 };
 
 // how many manifolds the contact solver's lanes hold: the build's widest float register, at
@@ -184,6 +188,7 @@ struct StepProfile {
   std::size_t reused_manifolds = 0;  // touching pairs whose manifold was moved, not computed
   std::size_t swept_stops = 0;     // fast bodies the continuous stage stopped short
   std::size_t relax_passes = 0;    // relax solves this step, over its substeps
+  int threads = 1;                 // the team the step ran on (ThreadGovernor)
 
   // the stages above by name, in the step's order (whoever reports them reads this one list)
   static constexpr std::array<const char*, 11> kStageNames = {
@@ -269,6 +274,8 @@ class World {
   std::vector<BodyRate> k1_, k2_, k3_, k4_;
   ContactSettings contact_settings_;
   std::unique_ptr<ContactPipeline> pipeline_;  // made by the first body with a shape
+  ThreadGovernor governor_{1, false};  // this world's choice of team, step by step
+  int active_threads_ = 1;             // the team of the step being run
   // a step with contacts integrates positions in lanes: eight bodies a group, each group 56
   // doubles (position x, y, z, then orientation w, x, y, z, eight lanes each), loaded from
   // states_ at the step's first substep and stored back once the solver is done

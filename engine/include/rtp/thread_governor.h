@@ -1,0 +1,46 @@
+// Which team a contact step runs on, when the machine is not ours alone. A colour of the solve
+// ends at a barrier that waits for every thread of the team; with another process busy on one of
+// two cores, a thread is descheduled for whole time slices, and the team waits at each colour
+// (pyramid-100 beside a busy loop: 30 ms a step on two threads against 10 on one). The governor
+// times each step and keeps an estimate for the whole team and for one thread; it runs the faster,
+// and the other one step in kProbeEvery, so a change in the machine turns it around within a few
+// probes. The results are the same on any team (a colour's contacts share no dynamic body), so
+// only the time depends on it.
+#pragma once
+
+namespace rtp {
+
+class ThreadGovernor {
+ public:
+  static constexpr int kProbeEvery = 32;  // steps between two steps on the other team
+  static constexpr int kFirstProbe = 4;   // the first step on one thread (after warm-up steps)
+  static constexpr double kWeight = 0.5;  // of a new time in its team's estimate
+
+  // `most`: the threads asked for; `adaptive` false keeps them on every step
+  ThreadGovernor(int most, bool adaptive) : most_(most < 1 ? 1 : most), adaptive_(adaptive) {}
+
+  // the team for the next step
+  int next() {
+    ++step_;
+    if (most_ == 1 || !adaptive_) return most_;
+    if (team_seconds_ < 0.0) return most_;
+    if (one_seconds_ < 0.0) return step_ >= kFirstProbe ? 1 : most_;
+    const int preferred = one_seconds_ < team_seconds_ ? 1 : most_;
+    const int other = preferred == 1 ? most_ : 1;
+    return step_ % kProbeEvery == 0 ? other : preferred;
+  }
+  // the step just run on `team` took `seconds`
+  void record(int team, double seconds) {
+    if (most_ == 1 || !adaptive_ || !(seconds >= 0.0)) return;
+    double& estimate = team == 1 ? one_seconds_ : team_seconds_;
+    estimate = estimate < 0.0 ? seconds : (1.0 - kWeight) * estimate + kWeight * seconds;
+  }
+
+ private:
+  int most_;
+  bool adaptive_;
+  long step_ = 0;
+  double team_seconds_ = -1.0, one_seconds_ = -1.0;  // estimates; below zero: not measured yet
+};
+
+}  // namespace rtp
