@@ -29,13 +29,20 @@ rtp::ContactSettings settings_for(int threads) {
   return settings;
 }
 
+// base 0 stands for many-pyramids (Box3D's many_pyramids: 196 walls of base 10, 10,780 boxes)
+constexpr int kManyPyramids = 0;
+physbench::Scene scene_of(int base) {
+  return base == kManyPyramids ? physbench::many_pyramids_scene(14, 10)
+                               : physbench::pyramid_scene(base);
+}
+
 // one settled world per (base, threads), kept across Google Benchmark's calls, so it meets
 // each repetition as the last one left it and the settling is paid once
 rtp::World& settled_world(int base, int threads) {
   static std::map<std::pair<int, int>, std::unique_ptr<rtp::World>> worlds;
   auto& world = worlds[{base, threads}];
   if (!world) {
-    const physbench::Scene scene = physbench::pyramid_scene(base);
+    const physbench::Scene scene = scene_of(base);
     world = std::make_unique<rtp::World>(physbench::make_rtp_world(
         scene, rtp::Integrator::SemiImplicitEuler, settings_for(threads)));
     for (int i = 0; i < kSettleSteps; ++i) world->step(scene.dt);
@@ -92,7 +99,7 @@ void Pyramid(benchmark::State& state) {
 // totals; the runs are bit-identical (a difference in the final poses fails the benchmark).
 void ThreadScaling(benchmark::State& state) {
   const int base = int(state.range(0));
-  const physbench::Scene scene = physbench::pyramid_scene(base);
+  const physbench::Scene scene = scene_of(base);
   std::array<std::unique_ptr<rtp::World>, 2> worlds;
   for (int k = 0; k < 2; ++k) {
     worlds[std::size_t(k)] = std::make_unique<rtp::World>(physbench::make_rtp_world(
@@ -141,6 +148,20 @@ int main(int argc, char** argv) {
           ->Unit(benchmark::kMillisecond)
           ->UseRealTime()
           ->MinTime(base >= 100 ? 2.0 : 0.5);
+  // many-pyramids (the many-island scene): its own names, which the report's pyramid tables skip
+  for (int threads : {1, 2})
+    benchmark::RegisterBenchmark("ManyPyramids", Pyramid)
+        ->Args({kManyPyramids, threads})
+        ->ArgNames({"scene", "threads"})
+        ->Unit(benchmark::kMillisecond)
+        ->UseRealTime()
+        ->MinTime(2.0);
+  benchmark::RegisterBenchmark("ManyPyramidsThreadScaling", ThreadScaling)
+      ->Arg(kManyPyramids)
+      ->ArgName("scene")
+      ->Unit(benchmark::kMillisecond)
+      ->UseRealTime()
+      ->Iterations(200);
   for (int base : {50, 100})
     benchmark::RegisterBenchmark("ThreadScaling", ThreadScaling)
         ->Arg(base)

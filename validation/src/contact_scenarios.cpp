@@ -125,6 +125,43 @@ Scene pyramid_scene(int base) {
   return scene;
 }
 
+// Box3D's `many_pyramids` benchmark (its shared/benchmarks.c, at the commit the box3d worker
+// runs): 14 × 14 walls of base 10, one box deep, standing apart on one ground — many islands, the
+// case where threads and the broad phase matter. Pyramid (i, j) is centred at x = −71.5 + 11 j,
+// z = −76 + 152 i / 13, its boxes placed as pyramid_scene's. Box3D's ground is a 154 m square box
+// whose top is y = 0, here a plane; its gravity is 10 m/s², its boxes 100 kg (every box alike, so
+// the motion is the same), and it runs 100 steps at 60 Hz and 4 substeps, as here
+Scene many_pyramids_scene(int per_side, int base) {
+  constexpr double kFriction = 0.6;
+  const int count = per_side * per_side * base * (base + 1) / 2;
+  std::ostringstream description;
+  description << per_side << " x " << per_side << " pyramids of " << base * (base + 1) / 2
+              << " unit boxes (" << count << " in all; base " << base
+              << ", one box deep, 11 m apart), μ = 0.6, Box3D's many_pyramids layout: do they "
+                 "stand, and what does a step of many islands cost?";
+  Scene scene = contact_scene("many-pyramids", description.str(), 100.0 / 60.0);
+  scene.planar = false;
+  scene.bodies.push_back(ground(kFriction));
+  for (int i = 0; i < per_side; ++i)
+    for (int j = 0; j < per_side; ++j) {
+      const double centre_x = -71.5 + 11.0 * j;
+      const double z = -76.0 + 152.0 * i / (per_side - 1);
+      for (int row = 0; row < base; ++row) {
+        const int in_row = base - row;
+        for (int k = 0; k < in_row; ++k) {
+          std::ostringstream name;
+          name << 'p' << i << '.' << j << 'r' << row << 'b' << k;
+          const double x = centre_x + (k - 0.5 * (in_row - 1)) * 2.0 * kHalf;
+          scene.bodies.push_back(
+              unit_box(name.str(), Vec3(x, kHalf + row * 2.0 * kHalf, z), kFriction));
+        }
+      }
+    }
+  scene.probe.interval = 10.0 / 60.0;  // every 10 steps: 10,780 bodies
+  scene.probe.metrics = {Metric::StackDrift, Metric::Penetration, Metric::Energy};
+  return scene;
+}
+
 Scene bounce_scene(double restitution) {
   constexpr double kDrop = 1.0;  // bottom face above the ground (m)
   Scene scene =
@@ -434,6 +471,10 @@ std::vector<Scenario> contact_scenarios() {
     s.parameter = base;
     all.push_back(s);
   }
+  all.push_back({"many-pyramids",
+                 "do 196 pyramids of 55 boxes (Box3D's many_pyramids) stand, and what does a step "
+                 "of many islands cost?",
+                 [] { return many_pyramids_scene(14, 10); }});
   for (double e : {0.2, 0.5, 0.8})
     all.push_back({"bounce-e" + tag(e),
                    "do a dropped box's apexes fall as e^(2n) at e = " + tag(e) + "?",

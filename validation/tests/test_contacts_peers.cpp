@@ -59,11 +59,12 @@ std::vector<Scene> contact_scenes() {
 
 TEST(ContactScenes, EveryOneValidatesAndSurvivesJson) {
   const auto scenes = contact_scenes();
-  ASSERT_EQ(scenes.size(), 27u);
+  ASSERT_EQ(scenes.size(), 28u);
   for (const Scene& scene : scenes) {
     EXPECT_NO_THROW(validate(scene)) << scene.name;
     EXPECT_TRUE(scene.has_contacts()) << scene.name;
-    EXPECT_EQ(scene.planar, scene.name != "rain") << scene.name;  // rain is a 3D pile
+    // rain is a 3D pile; many-pyramids stands its walls side by side in z
+    EXPECT_EQ(scene.planar, scene.name != "rain" && scene.name != "many-pyramids") << scene.name;
     const Scene back = scene_from_json(to_json(scene), scene.name);
     EXPECT_EQ(back.bodies.size(), scene.bodies.size()) << scene.name;
     EXPECT_EQ(back.probe.metrics, scene.probe.metrics) << scene.name;
@@ -74,6 +75,25 @@ TEST(ContactScenes, EveryOneValidatesAndSurvivesJson) {
 TEST(ContactScenes, NamesAndShapesAreAsSpecified) {
   EXPECT_EQ(pyramid_scene(20).bodies.size(), 211u);   // 210 boxes and the ground
   EXPECT_EQ(pyramid_scene(100).bodies.size(), 5051u);
+  // Box3D's many_pyramids: 14 x 14 walls of 55 boxes, bases 1 m apart in x (11 m centre to
+  // centre), rows 152/13 m apart in z, every box on the ground or on two below it
+  const Scene many = many_pyramids_scene(14, 10);
+  ASSERT_EQ(many.bodies.size(), 10781u);
+  Vec3 lo = Vec3::Constant(1e9), hi = Vec3::Constant(-1e9);
+  for (std::size_t i = 1; i < many.bodies.size(); ++i) {
+    lo = lo.cwiseMin(many.bodies[i].position);
+    hi = hi.cwiseMax(many.bodies[i].position);
+  }
+  EXPECT_NEAR(lo.x(), -76.0, 1e-12);  // the first base box's centre: −71.5 − 4.5
+  EXPECT_NEAR(hi.x(), 76.0, 1e-12);
+  EXPECT_NEAR(lo.z(), -76.0, 1e-12);
+  EXPECT_NEAR(hi.z(), 76.0, 1e-12);
+  EXPECT_NEAR(lo.y(), 0.5, 1e-12);
+  EXPECT_NEAR(hi.y(), 9.5, 1e-12);
+  // the last base box of wall 0 (body 10) and the first of wall 1 (body 56): 1 m between faces
+  EXPECT_NEAR(many.bodies[56].position.x() - many.bodies[10].position.x(), 2.0, 1e-12);
+  EXPECT_EQ(many.dt, 1.0 / 60.0);
+  EXPECT_EQ(many.step_count(), 100);
   EXPECT_EQ(bounce_scene(0.5).name, "bounce-e0.5");
   EXPECT_EQ(mass_ratio_scene(1000).name, "mass-ratio-1000");
   EXPECT_EQ(tunnelling_scene(120).name, "tunnelling-120");

@@ -56,6 +56,7 @@ Scene planar_particles(Scene scene);
 // ground plane, dt = 1/60, every scene planar (all motion in XY) but rain
 Scene tower_scene(int boxes);                 // "tower-N": μ = 0.6, exactly touching, 10 s
 Scene pyramid_scene(int base);                // "pyramid-B": B (B + 1) / 2 boxes, μ = 0.6, 10 s
+Scene many_pyramids_scene(int per_side, int base);  // Box3D's many_pyramids: per_side² walls of base B
 Scene bounce_scene(double restitution);       // "bounce-eE": dropped flat from 1 m, e^(2n) apexes
 // "bounce-e1-box", "bounce-e1-sphere": bounce_scene at e = 1 for 20 bounces (18.5 s)
 Scene elastic_bounce_scene(ShapeKind shape);
