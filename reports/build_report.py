@@ -1,7 +1,7 @@
 #!/usr/bin/env python3
 """Build one self-contained HTML report (index.html) from a physbench results folder.
 
-Reads only files: results.csv, metadata.json, trajectories/*.csv, scenes/*.json and poses/*.bin,
+Reads only files: results.csv, metadata.json, trajectories/*.csv (or *.parquet: reports/compact.py), scenes/*.json and poses/*.bin,
 as `physbench run` writes them. The page embeds plotly.js, the replay viewer and the results
 table's script (bundled by scripts/setup.sh into reports/viewer/dist), so it opens offline. The
 report itself is the package physbench_report/ beside this file: a module a section, its

@@ -98,11 +98,20 @@ def is_nominal(meta: dict, row) -> bool:
     return own is None or abs(row["dt"] - own) <= 1e-6 * own
 
 
+def read_trajectory(folder: Path, name: str) -> pd.DataFrame:
+    """A row's trajectory as physbench wrote it (trajectories/*.csv) or as reports/compact.py keeps
+    it (the same name with .parquet: the same numbers)."""
+    path = folder / name
+    if not path.is_file() and path.with_suffix(".parquet").is_file():
+        return pd.read_parquet(path.with_suffix(".parquet"))
+    return pd.read_csv(path)
+
+
 def trajectories(folder: Path, rows: pd.DataFrame) -> dict:
-    """Each row's trajectories/*.csv, read once for every chart drawn from it, by the row's index
-    (rows without a trajectory are left out). A scenario's rows at a time: the default suite's
-    trajectories together are far larger than one scenario's."""
-    return {index: pd.read_csv(folder / row["trajectory"]) for index, row in rows.iterrows()
+    """Each row's trajectory (trajectories/*.csv or *.parquet), read once for every chart drawn
+    from it, by the row's index (rows without a trajectory are left out). A scenario's rows at a
+    time: the default suite's trajectories together are far larger than one scenario's."""
+    return {index: read_trajectory(folder, row["trajectory"]) for index, row in rows.iterrows()
             if isinstance(row.get("trajectory"), str)}
 
 
