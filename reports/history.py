@@ -54,6 +54,17 @@ def read_entry_metadata(entry: Path) -> dict:
         return json.load(f)
 
 
+def write_queryable(results: Path, metadata: dict, target: Path) -> None:
+    """The run's rows as Parquet with the run's time and commit on each, so the whole history is one
+    table to DuckDB or pandas (docs/regression.md, "Querying the history")."""
+    import pandas as pd
+
+    rows = pd.read_csv(results, dtype={"message": str, "trajectory": str})
+    rows.insert(0, "run_created", metadata.get("created", ""))
+    rows.insert(1, "run_commit", metadata.get("git_commit") or "")
+    rows.to_parquet(target, index=False, compression="zstd")
+
+
 def add(run: Path, history: Path, **compare_options) -> tuple[Path, int]:
     """Stores the run as a new entry; returns it and compare's exit code against the one before."""
     if not (run / "results.csv").exists() or not (run / "metadata.json").exists():
@@ -79,6 +90,7 @@ def add(run: Path, history: Path, **compare_options) -> tuple[Path, int]:
         out.write(rows)
     with gzip.GzipFile(partial / "metadata.json.gz", "wb", mtime=0) as out:
         out.write(json.dumps(metadata, separators=(",", ":")).encode())
+    write_queryable(run / "results.csv", metadata, partial / "results.parquet")
     code = 0
     if before:
         result = compare.compare(read_entry_rows(before[-1]), compare.read_rows(run), **compare_options)

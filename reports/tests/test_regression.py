@@ -359,3 +359,26 @@ def test_each_engine_has_one_hue_and_each_variant_one_line_style_on_every_chart(
     assert hues["rtp"] != hues["ode"]
     bars = [t for t in plotted_traces(build_report.build_report(run).read_text()) if t.get("type") == "bar"]
     assert bars and all(len(set(b["marker"]["color"])) == 2 for b in bars if len(set(b["x"])) > 3)
+
+
+def test_the_documented_history_query_reads_rtps_ratio_to_bullet_over_the_runs(tmp_path):
+    import duckdb
+    import history
+
+    docs = (Path(__file__).resolve().parents[2] / "docs" / "regression.md").read_text()
+    query = docs.split("### Querying the history", 1)[1].split("```sql\n", 1)[1].split("\n```", 1)[0]
+    store = tmp_path / "history"
+    header = "scenario,engine,variant,dt,iterations,substeps,status,steps_per_s\n"
+    for night, (rtp, bullet) in enumerate([(1000.0, 400.0), (1100.0, 400.0), (900.0, 450.0)]):
+        run = tmp_path / f"run{night}"
+        run.mkdir()
+        (run / "results.csv").write_text(
+            header + f"pyramid-20,rtp,soft-step,0.0166666667,,,ok,{rtp}\n"
+            f"pyramid-20,bullet,float,0.0166666667,,,ok,{bullet}\n"
+            f"pyramid-20,bullet,float,0.0166666667,,4,ok,{bullet / 4}\n"  # a swept row: not the default
+            f"tower-20,rtp,soft-step,0.0166666667,,,ok,9999\n")
+        (run / "metadata.json").write_text(json.dumps({"created": f"2026-12-0{night + 1}T00:00:00Z",
+                                                       "git_commit": f"c{night}"}))
+        history.add(run, store)
+    rows = duckdb.sql(query.replace("'history/", f"'{store}/")).fetchall()
+    assert [(commit, round(ratio, 6)) for _, commit, ratio in rows] == [("c2", 2.0), ("c1", 2.75), ("c0", 2.5)]
