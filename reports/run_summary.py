@@ -17,6 +17,7 @@ import pandas as pd
 sys.path.insert(0, str(Path(__file__).resolve().parent))
 from physbench_report.contacts import best_configurations  # noqa: E402
 from physbench_report.load import ReportError, is_nominal, load_results  # noqa: E402
+from physbench_report.rounds import PairedRatios, load_rounds  # noqa: E402
 
 
 # the closed-form contact scenes' measures, in this order where a scenario has them
@@ -66,16 +67,18 @@ def summary(folders: list[Path], title: str) -> str:
                   f"{machine.get('cpu', '?')}, {machine.get('logical_cores', '?')} logical cores, "
                   f"{machine.get('memory_gib', '?')} GiB, {machine.get('os', '?')}"]
         nominal = results[[is_nominal(meta, r) for _, r in results.iterrows()]]
-        tables += best_configurations(nominal)
+        tables += best_configurations(nominal, PairedRatios(load_rounds(folder)))
         closed_form += verdict_tables(nominal)
     if not tables:
         return "\n".join(lines + [""] + closed_form)
     lines += ["", "Each engine's rows: its default variant at its own settings, and every configuration it ran "
               "(variants, and each swept substep count). \"Cheapest that stands\" is the fastest whose verdict is "
               "`stands`; \"rtp faster ×\" its ms per step over rtp's cheapest standing configuration's (below 1: "
-              "rtp is slower); the last column is the least drift within the ms per step of rtp's default. The "
-              "jobs ran one after another, not interleaved: a ratio is one run's, on a machine whose speed "
-              "drifts, not a promise.", ""]
+              "rtp is slower); the last column is the least drift within the ms per step of rtp's default. A "
+              "scene step's jobs were timed in interleaved rounds (docs/metrics.md, \"Interleaved timing\"): a "
+              "ratio with an interval is the median of its per-round ratios with their bootstrap 95 % interval; "
+              "one without comes from jobs timed in one round only (a run over 3 s) or a run from before "
+              "rounds: one run's ratio, on a machine whose speed drifts.", ""]
     for t in tables:
         lines += [f"## {t['scenario']} (rtp's default {t['rtp_ms']} ms per step)", "",
                   "| engine | its defaults | cheapest that stands | ms per step | drift max (m) | rtp faster × "

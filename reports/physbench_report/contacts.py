@@ -184,7 +184,8 @@ def best_configurations(results: pd.DataFrame, paired=None) -> list[dict]:
             table.append(dict(
                 engine=engine,
                 default=(f"{default['label']}: {default.get('contact_verdict') or default['status']}, "
-                         f"{fmt(default['ms'])} ms") if default is not None else "",
+                         f"{fmt(default['ms'])} ms, drift {fmt(default.get('stack_drift_max'))} m")
+                if default is not None else "",
                 best=best["label"] if best is not None else "none stands",
                 best_ms=fmt(best["ms"]) if best is not None else "",
                 best_drift=fmt(best["stack_drift_max"]) if best is not None else "",

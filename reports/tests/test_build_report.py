@@ -396,7 +396,7 @@ def test_best_configurations_read_every_knob_and_name_the_cheapest_that_stands()
     by_engine = {r["engine"]: r for r in section["rows"]}
     assert section["rtp_ms"] == "2"
     assert by_engine["rtp"]["best"] == "rtp/soft-step substeps=4"
-    assert by_engine["bullet"]["default"] == "bullet/float: collapsed, 1 ms"
+    assert by_engine["bullet"]["default"] == "bullet/float: collapsed, 1 ms, drift 30 m"
     assert by_engine["bullet"]["best"] == "bullet/float substeps=4"
     assert by_engine["bullet"]["ratio"] == "3.2"  # 4 ms against rtp's cheapest standing 1.25 ms
     # within rtp's default 2 ms: Bullet's 2-substep row is its least drift
