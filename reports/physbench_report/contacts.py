@@ -183,9 +183,10 @@ def best_configurations(results: pd.DataFrame, paired=None) -> list[dict]:
                         if paired is not None and ratio is not None else None)
             table.append(dict(
                 engine=engine,
-                default=(f"{default['label']}: {default.get('contact_verdict') or default['status']}, "
-                         f"{fmt(default['ms'])} ms, drift {fmt(default.get('stack_drift_max'))} m")
-                if default is not None else "",
+                default=("" if default is None else
+                         f"{default['label']}: {default['status']}" if default["status"] != "ok" else
+                         f"{default['label']}: {default.get('contact_verdict')}, {fmt(default['ms'])} ms, "
+                         f"drift {fmt(default.get('stack_drift_max'))} m"),
                 best=best["label"] if best is not None else "none stands",
                 best_ms=fmt(best["ms"]) if best is not None else "",
                 best_drift=fmt(best["stack_drift_max"]) if best is not None else "",
