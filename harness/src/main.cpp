@@ -136,6 +136,11 @@ int main(int argc, char** argv) {
                   "each round, so a slow spell falls on every engine alike (1: no interleaving)")
       ->capture_default_str()
       ->check(CLI::Range(1, 50));
+  run->add_option("--round-cap", options.round_cap_seconds,
+                  "a job whose one run takes longer (s) is timed in its first round only (the "
+                  "rounds would multiply the suite's slowest jobs)")
+      ->capture_default_str()
+      ->check(CLI::PositiveNumber);
   std::string sweep_iterations, sweep_substeps;
   run->add_option("--sweep-iterations", sweep_iterations,
                   "run every engine variant once more per value, with its solver's iterations "

@@ -261,7 +261,7 @@ ResultsFolder::ResultsFolder(const fs::path& out, const Plan& plan, const RunOpt
   metadata["timing"] = {
       {"budget_s", options.timing_budget},
       {"rounds", options.rounds},
-      {"round_cap_s", 3.0},
+      {"round_cap_s", options.round_cap_seconds},
       {"note",
        "a scene step's jobs are timed in rounds: the first runs each job once in plan order "
        "(the sampled run, then timed repeats on a fresh world, at least 3, until budget/rounds "

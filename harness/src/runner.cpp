@@ -224,10 +224,6 @@ struct RanJob {
   int rounds = 1;  // the timing rounds its time comes from
 };
 
-// a job whose one run takes longer than this is timed in its first round only (the rounds would
-// multiply the suite's slowest jobs); its row says so
-constexpr double kRoundCapSeconds = 3.0;
-
 double median_of(std::vector<double> v) {
   std::sort(v.begin(), v.end());
   const std::size_t n = v.size();
@@ -249,11 +245,11 @@ void run_timing_rounds(std::vector<RanJob>& ran, const Plan& plan, const SceneSt
   for (std::size_t i = 0; i < ran.size(); ++i) {
     const RunResult& r = ran[i].result;
     if (r.status == Status::Ok && !r.wall_seconds.empty() &&
-        median_of(r.wall_seconds) <= kRoundCapSeconds)
+        median_of(r.wall_seconds) <= options.round_cap_seconds)
       timed.push_back(i);
     else if (r.status == Status::Ok && !r.wall_seconds.empty() && options.rounds > 1)
       note(ran[i].result.message, "timed in one round only (a run takes over " +
-                                      number(kRoundCapSeconds) + " s)");
+                                      number(options.round_cap_seconds) + " s: --round-cap)");
   }
   const auto record = [&](const RanJob& job, int round, int order, const RunResult& r) {
     const EngineVariant& ev = plan.engines[job.planned.engine];

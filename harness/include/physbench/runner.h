@@ -76,6 +76,8 @@ struct RunOptions {
   // --rounds: a scene step's jobs are timed in this many rounds, each job once a round in a fresh
   // order (docs/metrics.md, "Interleaved timing"); the first round also samples the trajectory
   int rounds = 5;
+  // --round-cap: a job whose one run takes longer (s) is timed in its first round only
+  double round_cap_seconds = 3.0;
   // --shard K/N: the K-th of N disjoint slices of the planned jobs (K from 1), a stride over the
   // plan's scene steps (steps K−1, K−1+N, …, each with all its engine variants), so a scene's
   // engines are timed on one machine; `physbench merge` joins the N folders (docs/regression.md)
