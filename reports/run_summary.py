@@ -72,7 +72,8 @@ def summary(folders: list[Path], title: str) -> str:
     if not tables:
         return "\n".join(lines + [""] + closed_form)
     lines += ["", "Each engine's rows: its default variant at its own settings, and every configuration it ran "
-              "(variants, and each swept substep count). \"Cheapest that stands\" is the fastest whose verdict is "
+              "(variants, and each swept substep count), one thread each (rtp's two-thread variants are left "
+              "out). \"Cheapest that stands\" is the fastest whose verdict is "
               "`stands`; \"rtp faster ×\" its ms per step over rtp's cheapest standing configuration's (below 1: "
               "rtp is slower); the last column is the least drift within the ms per step of rtp's default. A "
               "scene step's jobs were timed in interleaved rounds (docs/metrics.md, \"Interleaved timing\"): a "

@@ -149,7 +149,8 @@ def best_configurations(results: pd.DataFrame, paired=None) -> list[dict]:
     every swept substep or iteration count. Per engine: its defaults' verdict and ms per step; the
     cheapest configuration whose verdict is `stands`, its ms and drift, and how many times rtp's
     cheapest standing configuration is faster (below 1: slower); and the least drift it reaches
-    within the ms of rtp's default. Engines with no standing configuration say so. With `paired`
+    within the ms of rtp's default. Engines with no standing configuration say so. One thread
+    each: rtp's two-thread variants are left out, as every peer runs on one. With `paired`
     (rounds.PairedRatios) the ratio is read round by round, with its 95 % interval."""
     defaults = CONTACT_VIEWS["each engine's defaults"]
     sections = []
@@ -159,7 +160,8 @@ def best_configurations(results: pd.DataFrame, paired=None) -> list[dict]:
         rows = rows.copy()
         speed = rows["steps_per_s"] if "steps_per_s" in rows else pd.Series(float("nan"), index=rows.index)
         rows["ms"] = 1e3 / speed.where(speed > 0)
-        ok = rows[(rows["status"] == "ok") & rows["ms"].notna()]
+        # one thread each: every peer runs on one, so rtp's two-thread variants take no part here
+        ok = rows[(rows["status"] == "ok") & rows["ms"].notna() & ~rows["variant"].str.endswith("-2t")]
         stands = ok[ok.get("contact_verdict", pd.Series("", index=ok.index)) == "stands"]
 
         def cheapest(engine: str):
