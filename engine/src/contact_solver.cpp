@@ -1,5 +1,6 @@
 // The contact pipeline's solver half: per-step constants, warm start, the velocity solves,
-// restitution (docs/solver.md has the method, its sources and what was measured).
+// restitution (docs/solver.md has the method, its sources and what was measured). The colouring
+// is in constraint_graph.cpp, the seed's solver in seed_solver.cpp.
 //
 // Every solver here works on velocities at the contact points, v_rel = (v_b + ω_b × r_b) −
 // (v_a + ω_a × r_a), and applies impulses P at the anchors: v_a −= P / m_a, ω_a −= I_a⁻¹ (r_a × P),
@@ -14,8 +15,7 @@
 // array (as records, transposed) and written back once per block and pass. Since a colour's
 // contacts are independent, the lane count, the thread count and which block a contact lands in
 // change no result. The colour past the last (contacts that found no free colour) holds one
-// contact a block and is solved in order. The seed's solver is lab 5 as written, one contact at
-// a time, in double.
+// contact a block and is solved in order.
 //
 // Over 500 lines because the lane helpers (V3, NormalRow, LanePair, NormalMotion) are private to
 // the kernels that use them; moved to a header they would be the solver's internals in two places.
@@ -342,15 +342,6 @@ Softness make_soft(double hertz, double damping_ratio, double h) {
   return {omega / a1, a2 * a3, a3};
 }
 
-// 1 / (the velocity change along d at the anchors per unit impulse), in double
-double effective_mass(const Vec3& ra, const Vec3& rb, const Vec3& d, const SolverMass& a,
-                      const SolverMass& b) {
-  const Vec3 ja = ra.cross(d), jb = rb.cross(d);
-  const double k = a.inverse_mass + b.inverse_mass + ja.dot(a.inverse_inertia * ja) +
-                   jb.dot(b.inverse_inertia * jb);
-  return k > 0.0 ? 1.0 / k : 0.0;
-}
-
 }  // namespace
 
 std::size_t contact_block_lanes() { return W; }
@@ -411,140 +402,6 @@ static_assert(offsetof(ContactPointConstraint, anchor_b) == 12 &&
 // the records read past the header and each point stay inside the contact
 static_assert((kNormalFloat + 16) * sizeof(float) <= sizeof(ContactConstraint) &&
               kPointFloat + 3 * kPointFloats + 8 <= kContactFloats);
-
-// a colour's blocks go to threads only past this many contacts: below it the barrier costs more
-constexpr std::size_t kParallelColour = 256;
-
-// colours beyond the 63rd are one last group, solved one contact a block, in order
-constexpr int kColours = 64;
-
-void ContactPipeline::colour_greedily() {
-  // Greedy, in pair order: each contact takes a colour neither dynamic body holds. Taking the
-  // first such colour, a colour's contacts run across the scene from the low body indices to the
-  // high (a pyramid's rows, left to right), and the passes, colour by colour, lean a stack that
-  // way: a 5,050-box pyramid swayed toward its low indices and drifted 9–12 mm in 10 s as the
-  // settings moved at round-off. So a first pass finds how many colours the first free one
-  // needs, and the second starts each contact's search at a colour drawn from a hash of its key
-  // among those, wrapping round (beyond them only where none is free): the same number of
-  // colours, as evenly filled, and no direction in them (6–7 mm; docs/solver.md, "The lean")
-  std::array<std::uint32_t, kColours + 1> counts{};
-  std::vector<std::uint8_t>& colour_of = colour_scratch_;
-  colour_of.resize(contacts_.size());
-  int spread = 0;  // the colours the first pass used
-  for (const bool scrambled : {false, true}) {
-    body_colours_.assign(bodies_.size(), 0);
-    const std::uint64_t in_spread = (std::uint64_t{1} << spread) - 1;  // spread < kColours
-    for (std::size_t i = 0; i < contacts_.size(); ++i) {
-      const std::uint64_t key = contact_keys_[i];
-      const BodyId a = BodyId(key >> 32), b = BodyId(key & 0xffffffffu);
-      const bool dynamic_a = masses_[a].inverse_mass > 0.0;
-      const bool dynamic_b = masses_[b].inverse_mass > 0.0;
-      const std::uint64_t taken =
-          (dynamic_a ? body_colours_[a] : 0) | (dynamic_b ? body_colours_[b] : 0);
-      int colour = std::countr_one(taken);
-      if (scrambled && spread > 1) {
-        // a colour to start from, in [0, spread)
-        const int first = int(detail::mix64(key + 0x9e3779b97f4a7c15ull) % std::uint64_t(spread));
-        const std::uint64_t free = ~taken & in_spread;
-        const std::uint64_t from_first = free & (~std::uint64_t{0} << first);
-        if (from_first != 0)
-          colour = std::countr_zero(from_first);
-        else if (free != 0)
-          colour = std::countr_zero(free);
-      }
-      // the last colour is the overflow group and takes anything
-      colour = std::min(colour, kColours - 1);
-      if (colour < kColours - 1) {
-        if (dynamic_a) body_colours_[a] |= std::uint64_t{1} << colour;
-        if (dynamic_b) body_colours_[b] |= std::uint64_t{1} << colour;
-      }
-      if (!scrambled) {
-        spread = std::max(spread, std::min(colour + 1, kColours - 1));
-        continue;
-      }
-      colour_of[i] = std::uint8_t(colour | contact_class_[i]);
-      ++counts[colour + 1];
-    }
-  }
-  colour_start_.assign(counts.begin(), counts.end());
-  for (int k = 0; k < kColours; ++k) colour_start_[k + 1] += colour_start_[k];
-  // each colour's contacts in pair order
-  std::vector<std::uint32_t>& by_colour = colour_scratch_order_;
-  by_colour.resize(contacts_.size());
-  std::array<std::uint32_t, kColours> next{};
-  for (int k = 0; k < kColours; ++k) next[k] = colour_start_[k];
-  for (std::size_t i = 0; i < contacts_.size(); ++i)
-    by_colour[next[colour_of[i] & ~(kColdContact | kQuietContact)]++] = std::uint32_t(i);
-}
-
-void ContactPipeline::colour_contacts() {
-  // each contact's colour, and its class (contact_class_) in the top bits; read from the keys
-  // and the classes alone, not the contacts (a 5,050-box pyramid's are 3.4 MB)
-  constexpr std::uint8_t kCold = kColdContact, kQuiet = kQuietContact;
-  static_assert(kColours <= kQuiet && (kCold & kQuiet) == 0);
-  constexpr std::uint8_t kClass = kCold | kQuiet;
-  std::vector<std::uint8_t>& colour_of = colour_scratch_;
-  // the same touching pairs as last step's (a resting scene's every step), which were coloured
-  // then, take the same colours: only the classes are new
-  const bool same_pairs = lanes_ && contact_keys_ == previous_keys_;
-  if (!same_pairs) colour_greedily();
-  // within a colour, the cold contacts (a point that may push with no warm start) first: a block
-  // holding one solves its points several times in a row (solve()), and spread by pair order
-  // they put one in most blocks. The quiet ones last: a block of them alone has no warm start
-  // to apply, and while its points push nothing the solve skips their responses and friction.
-  // On threads, each takes a contiguous share of a colour's blocks (for_each_block), and the
-  // packing is done within each share: the shares then hold the same bodies from colour to colour
-  // in pair order, so a body's lines stay with one core (packed across the whole colour, two
-  // threads took 10 % longer a step at base 100). A colour's contacts share no dynamic body, so
-  // their order in it, and which block each lands in, changes no result
-  // (each colour in pair order first, then each share packed from there into colour_order_, by
-  // the thread that solves it: on one thread this took 0.08 ms of a base-100 step)
-  const std::vector<std::uint32_t>& by_colour = colour_scratch_order_;
-  const std::size_t count = contacts_.size();
-  colour_order_.resize(count);
-  const int threads = std::max(1, threads_);
-#pragma omp parallel num_threads(threads) if (threads > 1 && count >= 2048)
-  {
-    const int size = team_size(), index = team_index();
-    if (same_pairs) {
-      const auto [first, last] = share_of(count, size, index);
-      for (std::size_t i = first; i < last; ++i)
-        colour_of[i] = std::uint8_t((colour_of[i] & ~kClass) | contact_class_[i]);
-#pragma omp barrier
-    }
-    for (int k = 0; k < kColours; ++k) {
-      const std::size_t first = colour_start_[k], n = colour_start_[k + 1] - first;
-      if (k + 1 == kColours) {  // the overflow, solved in order: left in pair order
-        if (index == 0)
-          std::copy_n(by_colour.begin() + std::ptrdiff_t(first), n,
-                      colour_order_.begin() + std::ptrdiff_t(first));
-        continue;
-      }
-      const std::size_t blocks = (n + W - 1) / W;
-      const int parts = blocks >= kParallelColour / W ? threads : 1;  // as for_each_block's
-      for (int part = index; part < parts; part += size) {
-        const auto [begin, end] = share_of(blocks, parts, part);
-        const std::size_t from = first + begin * W, to = first + std::min(end * W, n);
-        std::size_t at = from;
-        for (const std::uint8_t pass : {kCold, std::uint8_t(0), kQuiet})
-          for (std::size_t j = from; j < to; ++j)
-            if ((colour_of[by_colour[j]] & kClass) == pass) colour_order_[at++] = by_colour[j];
-      }
-    }
-  }
-
-  // the blocks: each colour's contacts W at a time, the overflow one at a time
-  if (!lanes_) lanes_ = std::make_unique<ContactLanes>();
-  std::vector<std::uint32_t>& block_start = lanes_->colour_start;
-  block_start.assign(kColours + 1, 0);
-  for (int k = 0; k < kColours; ++k) {
-    const std::size_t n = colour_start_[k + 1] - colour_start_[k];
-    block_start[k + 1] = block_start[k] + std::uint32_t(k + 1 < kColours ? (n + W - 1) / W : n);
-  }
-  lanes_->blocks.resize(block_start[kColours]);
-  lanes_->rest.resize(block_start[kColours]);
-  lanes_->isotropic.resize(block_start[kColours]);
-}
 
 template <class Kernel>
 void ContactPipeline::for_each_block(Kernel&& kernel, bool backwards) {
@@ -1312,83 +1169,6 @@ void ContactPipeline::store_impulses() {
       stored.friction = {block.friction_impulse[0][i], block.friction_impulse[1][i]};
       stored.twist = block.twist_impulse[i];
     }
-  }
-}
-
-void ContactPipeline::solve_seed(double dt) {
-  // The seed's lab 5 as it is written: each iteration applies at every penetrating point the
-  // impulse magnitude j = (−(1 + e) v_n + β/dt · max(depth − slop, 0)) / (n·K n) when it is
-  // positive (Hecker, "Physics, Part 3: Collision Response", 1997; the penetration "penalty"
-  // impulse), and a friction impulse against the sliding velocity up to μ j. Nothing
-  // accumulates and nothing is carried to the next step: this is the weakness the seed admits.
-  const double penalty_rate = settings_.baumgarte / dt;
-  // a pair has converged when no impulse of an iteration changes a velocity by 10 µm/s
-  const double converged_velocity = 1e-5;
-  std::vector<bool>& converged = seed_converged_;
-  converged.assign(contacts_.size(), false);
-  for (int iteration = 0; iteration < settings_.velocity_iterations; ++iteration) {
-    bool any = false;
-    for (std::uint32_t index : colour_order_) {
-      if (converged[index]) continue;
-      const ContactConstraint& c = contacts_[index];
-      const SolverMass& mass_a = masses_[c.body_a];
-      const SolverMass& mass_b = masses_[c.body_b];
-      // the pair's velocities in double while its points are solved
-      Vec3 va = bodies_[c.body_a].linear_velocity.cast<double>();
-      Vec3 wa = bodies_[c.body_a].angular_velocity.cast<double>();
-      Vec3 vb = bodies_[c.body_b].linear_velocity.cast<double>();
-      Vec3 wb = bodies_[c.body_b].angular_velocity.cast<double>();
-      // the contact's numbers in double too (they are kept in single precision)
-      const Vec3 normal = c.normal.cast<double>();
-      const Vec3 tangent[2] = {c.tangent[0].cast<double>(), c.tangent[1].cast<double>()};
-      Vec3 ra, rb;  // the point's anchors
-      auto velocity = [&](const Vec3& d) {
-        return d.dot((vb + wb.cross(rb)) - (va + wa.cross(ra)));
-      };
-      auto apply = [&](const Vec3& impulse) {
-        va -= mass_a.inverse_mass * impulse;
-        wa -= mass_a.inverse_inertia * ra.cross(impulse);
-        vb += mass_b.inverse_mass * impulse;
-        wb += mass_b.inverse_inertia * rb.cross(impulse);
-      };
-      double largest_change = 0.0;
-      for (std::uint8_t i = 0; i < c.count; ++i) {
-        const ContactPointConstraint& p = c.points[i];
-        const double depth = -p.base_separation;
-        // the seed's narrow phase reports touching shapes only: no speculative points
-        if (depth < 0.0) continue;
-        ra = p.anchor_a.cast<double>();
-        rb = p.anchor_b.cast<double>();
-        const double normal_mass = effective_mass(ra, rb, normal, mass_a, mass_b);
-        const double vn = velocity(normal);
-        const double j =
-            normal_mass * (-(1.0 + c.restitution) * vn +
-                           penalty_rate * std::max(depth - settings_.linear_slop, 0.0));
-        if (j <= 0.0) continue;
-        apply(j * normal);
-        largest_change = std::max(largest_change, j / std::max(normal_mass, 1e-300));
-        // friction against the sliding velocity, at most μ j
-        const double v0 = velocity(tangent[0]);
-        const double v1 = velocity(tangent[1]);
-        const double speed = std::sqrt(v0 * v0 + v1 * v1);
-        if (speed > 0.0) {
-          const Vec3 direction = (v0 * tangent[0] + v1 * tangent[1]) / speed;
-          const double mass = effective_mass(ra, rb, direction, mass_a, mass_b);
-          apply(-std::min(speed * mass, double(c.friction) * j) * direction);
-        }
-      }
-      if (mass_a.inverse_mass > 0.0) {
-        bodies_[c.body_a].linear_velocity = va.cast<float>();
-        bodies_[c.body_a].angular_velocity = wa.cast<float>();
-      }
-      if (mass_b.inverse_mass > 0.0) {
-        bodies_[c.body_b].linear_velocity = vb.cast<float>();
-        bodies_[c.body_b].angular_velocity = wb.cast<float>();
-      }
-      if (largest_change < converged_velocity) converged[index] = true;
-      any = true;
-    }
-    if (!any) break;
   }
 }
 

@@ -90,6 +90,22 @@ static_assert(sizeof(ContactConstraint) == 228);
 // its side neighbours press on each other). The colouring packs each class together
 inline constexpr std::uint8_t kColdContact = 0x80, kQuietContact = 0x40;
 
+// 1 / (the velocity change along d at the anchors per unit impulse), in double
+inline double effective_mass(const Vec3& ra, const Vec3& rb, const Vec3& d, const SolverMass& a,
+                             const SolverMass& b) {
+  const Vec3 ja = ra.cross(d), jb = rb.cross(d);
+  const double k = a.inverse_mass + b.inverse_mass + ja.dot(a.inverse_inertia * ja) +
+                   jb.dot(b.inverse_inertia * jb);
+  return k > 0.0 ? 1.0 / k : 0.0;
+}
+
+// a colour's blocks go to threads only past this many contacts: below it the barrier costs more
+inline constexpr std::size_t kParallelColour = 256;
+
+// colours beyond the 63rd are one last group, solved one contact a block, in order
+inline constexpr int kColours = 64;
+
+
 class ContactPipeline {
  public:
   explicit ContactPipeline(const ContactSettings& settings);
