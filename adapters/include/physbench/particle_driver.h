@@ -15,7 +15,7 @@
 namespace physbench {
 
 // peers run particle sets up to this size: beyond it a rigid-body engine's run of a seed scene
-// takes minutes (Bullet steps about 3e5 particle-steps/s at 1e5 particles, PEERS.md)
+// takes minutes (Bullet float steps 6.0e4 particle-steps/s at 1e5 particles: docs/particles.md)
 inline constexpr long kMaxPeerParticles = 100000;
 
 // why a rigid-body engine cannot run this scene's particles, or nullopt when it can
