@@ -144,7 +144,8 @@ class BulletEngine final : public Engine {
 
   // particles: one rigid sphere each (the scene's radius and mass), sharing one shape; planes as
   // static plane bodies. Collision groups let a particle meet planes only — Bullet still finds
-  // particle pairs in its broad phase and rejects them there (the filter runs on found pairs), which it pays for.
+  // particle pairs in its broad phase and rejects them there (its filter runs on the pairs it
+  // found), which it pays for.
   void create_particles() {
     constexpr int kPlaneGroup = 2, kParticleGroup = 4;
     const ParticleSetSpec& p = *scene_.particles;
