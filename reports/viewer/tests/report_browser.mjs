@@ -329,4 +329,6 @@ async function main() {
   }
 }
 
-main().catch((error) => { console.error(error); process.exit(1); });
+// run as a program (another script may import openReport without running the checks)
+if (import.meta.url === pathToFileURL(process.argv[1]).href)
+  main().catch((error) => { console.error(error); process.exit(1); });
