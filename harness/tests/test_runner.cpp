@@ -851,8 +851,9 @@ TEST(Runner, EveryJobIsTimedOnceARoundInAFreshOrder) {
   for (const auto& row : rows) {
     plan_order.push_back(row.at("variant"));
     EXPECT_EQ(row.at("timing_rounds"), "4") << row.at("variant");
-    // the first round's at least 3 repeats and at least one in each later round
-    EXPECT_GE(std::stoi(row.at("repeats")), 6) << row.at("variant");
+    // at least one repeat a round (the first round's sampled run is its one repeat when it takes
+    // longer than the round's share of the budget, as under the sanitizers)
+    EXPECT_GE(std::stoi(row.at("repeats")), 4) << row.at("variant");
   }
   const auto rounds = read_rows(dir / "r" / "timing_rounds.csv");
   ASSERT_EQ(rounds.size(), 16u) << "four jobs, four rounds";

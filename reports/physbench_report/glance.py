@@ -33,7 +33,8 @@ def at_a_glance(results: pd.DataFrame, meta: dict) -> list[dict]:
         verdicts = rows["contact_verdict"] if "contact_verdict" in rows else pd.Series("", index=rows.index)
         failed_verdict = verdicts.isin(FAILED_VERDICTS)
         passed = rows[(rows["status"] == "ok") & ~failed_verdict]
-        nominal = passed[[is_nominal(meta, r) for _, r in passed.iterrows()]]
+        # a mask with the rows' index: an empty list would select no columns, not no rows
+        nominal = passed[pd.Series([is_nominal(meta, r) for _, r in passed.iterrows()], index=passed.index, dtype=bool)]
         ok = nominal[nominal["steps_per_s"].notna()]
         entry = dict(name=name, anchor=anchor_of(name), fastest="", accurate="", metric="", front="", budget="",
                      budget_rows=[], failures=[], unsupported=int((rows["status"] == "unsupported").sum()))

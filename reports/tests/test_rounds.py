@@ -56,3 +56,20 @@ def test_the_bootstrap_interval_holds_the_median_and_widens_with_spread():
     assert lo2 <= m2 <= hi2 and hi2 - lo2 > 5 * (hi - lo)
     # the same interval every time (a fixed seed)
     assert bootstrap_median(wide) == (m2, lo2, hi2)
+
+
+def test_the_glance_lists_a_scenario_where_every_run_failed():
+    # a scenario with no run that passed (every stack collapsed) once broke the front page: an
+    # empty row mask selected no columns
+    import pandas as pd
+    from physbench_report.glance import at_a_glance
+
+    rows = pd.DataFrame([
+        dict(scenario="tower-20", engine="bullet", variant="float", label="bullet/float", dt=1 / 60, status="ok",
+             contact_verdict="collapsed", steps_per_s=1000.0, message="collapsed (toppled)"),
+        dict(scenario="tower-20", engine="jolt", variant="default", label="jolt/default", dt=1 / 60, status="crashed",
+             contact_verdict=None, steps_per_s=None, message="killed by signal 11"),
+    ])
+    (entry,) = at_a_glance(rows, {"scenarios": {"tower-20": {"dt": 1 / 60}}})
+    assert entry["fastest"] == ""
+    assert len(entry["failures"]) == 2, entry["failures"]
