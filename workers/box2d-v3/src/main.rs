@@ -86,16 +86,7 @@ impl Engine for Box2dV3 {
     /// substeps: b2World_Step's subStepCount; v3 has no iteration count (one biased solve and
     /// one relax pass a substep)
     fn tune(&self, _variant: &str, knobs: &Knobs) -> Result<Vec<Setting>, String> {
-        if knobs.iterations > 0 {
-            return Err("Box2D v3 has no iteration count: one solve and one relax pass a substep \
-                        (sweep its substeps)".into());
-        }
-        Ok(if knobs.substeps > 0 {
-            vec![setting("subStepCount", knobs.substeps,
-                         "the sweep's substeps (--sweep-substeps), passed to b2World_Step")]
-        } else {
-            Vec::new()
-        })
+        physbench_worker::tune_substeps_only("Box2D v3", "b2World_Step", knobs)
     }
     fn create(&self, scene: &Scene, variant: &str, knobs: &Knobs)
         -> Result<Box<dyn World>, String> {

@@ -171,16 +171,7 @@ impl Engine for Box3d {
     /// substeps: b3World_Step's subStepCount; Box3D has no iteration count (one biased solve and
     /// one relax pass a substep)
     fn tune(&self, _variant: &str, knobs: &Knobs) -> Result<Vec<Setting>, String> {
-        if knobs.iterations > 0 {
-            return Err("Box3D has no iteration count: one solve and one relax pass a substep \
-                        (sweep its substeps)".into());
-        }
-        Ok(if knobs.substeps > 0 {
-            vec![setting("subStepCount", knobs.substeps,
-                         "the sweep's substeps (--sweep-substeps), passed to b3World_Step")]
-        } else {
-            Vec::new()
-        })
+        physbench_worker::tune_substeps_only("Box3D", "b3World_Step", knobs)
     }
     fn create(&self, scene: &Scene, variant: &str, knobs: &Knobs)
         -> Result<Box<dyn World>, String> {

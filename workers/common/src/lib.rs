@@ -308,6 +308,22 @@ pub trait Engine {
         -> Result<Box<dyn World>, String>;
 }
 
+/// `Engine::tune` of an engine whose only solver knob is its substep count (Box2D v3 and Box3D: one
+/// biased solve and one relax pass a substep): substeps go to `step_call`, iterations are refused
+pub fn tune_substeps_only(engine: &str, step_call: &str, knobs: &Knobs)
+    -> Result<Vec<Setting>, String> {
+    if knobs.iterations > 0 {
+        return Err(format!("{engine} has no iteration count: one solve and one relax pass a \
+                            substep (sweep its substeps)"));
+    }
+    Ok(if knobs.substeps > 0 {
+        vec![setting("subStepCount", knobs.substeps,
+                     &format!("the sweep's substeps (--sweep-substeps), passed to {step_call}"))]
+    } else {
+        Vec::new()
+    })
+}
+
 fn rotate(q: [f64; 4], v: [f64; 3]) -> [f64; 3] {
     let (w, x, y, z) = (q[0], q[1], q[2], q[3]);
     // v + 2 w (u × v) + 2 u × (u × v), u = (x, y, z)
