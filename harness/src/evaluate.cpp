@@ -5,6 +5,8 @@
 #include <optional>
 #include <sstream>
 
+#include "text.h"
+
 namespace physbench {
 
 namespace {
@@ -12,16 +14,6 @@ namespace {
 // a finished run whose energy in play grew by more than this fraction reads `diverged`
 constexpr double kDivergedEnergyGrowth = 1.0;
 
-double median(std::vector<double> values) {
-  if (values.empty()) return std::nan("");
-  std::sort(values.begin(), values.end());
-  const std::size_t n = values.size();
-  return n % 2 ? values[n / 2] : 0.5 * (values[n / 2 - 1] + values[n / 2]);
-}
-
-void append(std::string& message, const std::string& more) {
-  message += (message.empty() ? "" : "; ") + more;
-}
 
 // the speed columns from the timed repeats
 void put_speed(ResultRow& row, const Scene& scene, const RunResult& r, int dynamic_bodies) {

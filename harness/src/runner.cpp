@@ -224,15 +224,6 @@ struct RanJob {
   int rounds = 1;  // the timing rounds its time comes from
 };
 
-double median_of(std::vector<double> v) {
-  std::sort(v.begin(), v.end());
-  const std::size_t n = v.size();
-  return n % 2 ? v[n / 2] : 0.5 * (v[n / 2 - 1] + v[n / 2]);
-}
-
-void note(std::string& message, const std::string& more) {
-  message += (message.empty() ? "" : "; ") + more;
-}
 
 // The scene step's timing rounds 2…R (docs/metrics.md, "Interleaved timing"): every job that ran
 // ok takes one more timed run a round, in its own process, in an order shuffled afresh each round
@@ -245,17 +236,17 @@ void run_timing_rounds(std::vector<RanJob>& ran, const Plan& plan, const SceneSt
   for (std::size_t i = 0; i < ran.size(); ++i) {
     const RunResult& r = ran[i].result;
     if (r.status == Status::Ok && !r.wall_seconds.empty() &&
-        median_of(r.wall_seconds) <= options.round_cap_seconds)
+        median(r.wall_seconds) <= options.round_cap_seconds)
       timed.push_back(i);
     else if (r.status == Status::Ok && !r.wall_seconds.empty() && options.rounds > 1)
-      note(ran[i].result.message, "timed in one round only (a run takes over " +
+      append(ran[i].result.message, "timed in one round only (a run takes over " +
                                       number(options.round_cap_seconds) + " s: --round-cap)");
   }
   const auto record = [&](const RanJob& job, int round, int order, const RunResult& r) {
     const EngineVariant& ev = plan.engines[job.planned.engine];
     ResultsFolder::Round row{scene.scene.name, ev.engine, ev.variant, step.dt, job.planned.knobs, round,
                              order, static_cast<int>(r.wall_seconds.size()),
-                             median_of(r.wall_seconds) / static_cast<double>(r.steps)};
+                             median(r.wall_seconds) / static_cast<double>(r.steps)};
     folder.add_round(row);
   };
   for (std::size_t i = 0; i < ran.size(); ++i)
@@ -279,7 +270,7 @@ void run_timing_rounds(std::vector<RanJob>& ran, const Plan& plan, const SceneSt
                                    options.timeout_seconds, job.planned.knobs, true);
       if (r.status != Status::Ok || r.wall_seconds.empty()) {
         job.result.status = r.status == Status::Ok ? Status::Error : r.status;
-        note(job.result.message, "timing round " + std::to_string(round) + ": " +
+        append(job.result.message, "timing round " + std::to_string(round) + ": " +
                                      to_string(r.status) + (r.message.empty() ? "" : ", ") +
                                      r.message);
         continue;

@@ -1,14 +1,29 @@
 // Small text helpers the runner's stages share: numbers as results.csv writes them, file names.
 #pragma once
 
+#include <algorithm>
 #include <cctype>
 #include <cmath>
 #include <cstdint>
 #include <iomanip>
 #include <sstream>
 #include <string>
+#include <vector>
 
 namespace physbench {
+
+// the median of the values (NaN for none)
+inline double median(std::vector<double> values) {
+  if (values.empty()) return std::nan("");
+  std::sort(values.begin(), values.end());
+  const std::size_t n = values.size();
+  return n % 2 ? values[n / 2] : 0.5 * (values[n / 2 - 1] + values[n / 2]);
+}
+
+// a message's parts, joined by "; "
+inline void append(std::string& message, const std::string& more) {
+  message += (message.empty() ? "" : "; ") + more;
+}
 
 // 9 significant digits; NaN (a value that could not be computed) is empty
 inline std::string number(double value) {
