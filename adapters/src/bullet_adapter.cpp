@@ -323,6 +323,9 @@ EngineInfo bullet_engine_info() {
          "constraints"},
     };
   };
+  state_instruction_set(info, "x86-64 baseline: SSE2 (Debian's libbullet, generic build)",
+                        "Debian builds for the architecture's baseline; rtp's -x86-64 variants "
+                        "are the equal-instruction-set comparison");
   return info;
 }
 

@@ -685,6 +685,15 @@ EngineInfo mujoco_engine_info() {
          "velocity fraction"},
     };
   };
+#if mjVERSION_HEADER >= 4000000
+  state_instruction_set(info, "AVX, no FMA (PyPI's mujoco wheel, as built by MuJoCo's release)",
+                        "MuJoCo's own build enables AVX on x86-64 (objdump of libmujoco.so: "
+                        "ymm registers, no vfmadd)");
+#else
+  state_instruction_set(info, "x86-64 baseline: SSE2 (Debian's libmujoco, generic build)",
+                        "Debian builds for the architecture's baseline; rtp's -x86-64 variants "
+                        "are the equal-instruction-set comparison");
+#endif
   return info;
 }
 

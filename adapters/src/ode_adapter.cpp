@@ -425,6 +425,9 @@ EngineInfo ode_engine_info() {
                       "the scene's spring law from the state at the start of the step"},
     };
   };
+  state_instruction_set(info, "x86-64 baseline: SSE2 (Debian's libode, generic build)",
+                        "Debian builds for the architecture's baseline; rtp's -x86-64 variants "
+                        "are the equal-instruction-set comparison");
   return info;
 }
 

@@ -3,10 +3,39 @@
 
 namespace physbench {
 
+#ifdef PHYSBENCH_RTP_ISA_SUFFIX
+namespace {
+
+// rtp's default variants (the contact step and the rigid-body integrator) under names that say
+// the instruction set, for physbench-rtp-baseline; every call strips the suffix again
+EngineInfo with_isa_suffix(EngineInfo rtp, const std::string& suffix) {
+  const EngineInfo inner = rtp;
+  auto strip = [suffix](const std::string& variant) {
+    return variant.ends_with(suffix) ? variant.substr(0, variant.size() - suffix.size()) : variant;
+  };
+  rtp.variants = {"soft-step" + suffix, "rk4" + suffix};
+  rtp.unsupported = [inner, strip](const Scene& scene, const std::string& variant) {
+    return inner.unsupported(scene, strip(variant));
+  };
+  rtp.create = [inner, strip](const std::string& variant) { return inner.create(strip(variant)); };
+  rtp.applies = [inner, strip](const Scene& scene, const std::string& variant) {
+    return inner.applies(scene, strip(variant));
+  };
+  rtp.settings = [inner, strip](const std::string& variant) {
+    return inner.settings(strip(variant));
+  };
+  return rtp;
+}
+
+}  // namespace
+#endif
+
 const std::vector<EngineInfo>& linked_engines() {
   static const std::vector<EngineInfo> engines = [] {
     std::vector<EngineInfo> list;
-#ifdef PHYSBENCH_HAVE_RTP
+#if defined(PHYSBENCH_HAVE_RTP) && defined(PHYSBENCH_RTP_ISA_SUFFIX)
+    list.push_back(with_isa_suffix(rtp_engine_info(), PHYSBENCH_RTP_ISA_SUFFIX));
+#elif defined(PHYSBENCH_HAVE_RTP)
     list.push_back(rtp_engine_info());
 #endif
 #ifdef PHYSBENCH_HAVE_BULLET

@@ -306,6 +306,9 @@ EngineInfo rtp_engine_info() {
          "OpenMP threads of the particle update (-2t: two)"},
     };
   };
+  state_instruction_set(info, rtp::instruction_set(),
+                        "as compiled: physbench's bench preset -march=native, its release preset "
+                        "and the -x86-64 variants the baseline");
   return info;
 }
 

@@ -345,6 +345,7 @@ Softness make_soft(double hertz, double damping_ratio, double h) {
 }  // namespace
 
 std::size_t contact_block_lanes() { return W; }
+const char* instruction_set() { return simd::kInstructionSet; }
 
 namespace {
 // The next block's cache lines, asked for a few at a time while this one is solved: a pass

@@ -57,6 +57,22 @@
 
 namespace rtp::simd {
 
+// the instruction set the build targets, in words (rtp::instruction_set())
+inline constexpr const char* kInstructionSet =
+#if defined(RTP_DISABLE_SIMD)
+    "no vector code (RTP_DISABLE_SIMD: simd.h's scalar fallbacks)";
+#elif defined(__AVX512F__) && defined(__FMA__)
+    "AVX-512F, AVX2, FMA";
+#elif defined(__AVX2__) && defined(__FMA__)
+    "AVX2, FMA";
+#elif defined(__AVX__)
+    "AVX";
+#elif defined(__x86_64__)
+    "x86-64 baseline (SSE2)";
+#else
+    "the target's baseline";
+#endif
+
 // the integer of a lane's width: what a mask lane holds
 template <typename T>
 using LaneInt = std::conditional_t<sizeof(T) == 8, std::int64_t, std::int32_t>;

@@ -637,6 +637,41 @@ TEST(Runner, IterationSweepIsARowPerValueWithTheSolverSetAndSaysWhereAVariantHas
     }
 }
 
+#ifdef PHYSBENCH_HAVE_RTP_BASELINE
+TEST(Runner, RtpAtTheBaselineInstructionSetRunsBesideTheBuildsOwn) {
+  // physbench-rtp-baseline: the same engine compiled without -march, its default contact variant
+  // listed as soft-step-x86-64 (soft-step-baseline off x86). It must load the scene as the main build
+  // does (its scene library is compiled again too: Eigen's alignment follows the instruction
+  // set), take the swept knobs, and say its instruction set in its settings table
+  const fs::path dir = fresh_dir("baseline-isa");
+  const std::string baseline = std::string("soft-step") + PHYSBENCH_RTP_ISA_SUFFIX;
+  const Invocation inv = physbench({"run", "-s", "tower-10", "-e", "rtp", "--variant",
+                                    "soft-step," + baseline, "--duration",
+                                    "1", "--budget", "0", "--sweep-substeps", "4", "--out",
+                                    (dir / "r").string()},
+                                   dir);
+  ASSERT_EQ(inv.outcome.exit_code, 0) << inv.output;
+  const auto rows = read_rows(dir / "r" / "results.csv");
+  std::map<std::string, const std::map<std::string, std::string>*> by;  // variant.substeps
+  for (const auto& row : rows) by[row.at("variant") + "." + row.at("substeps")] = &row;
+  for (const std::string substeps : {"", "4"}) {
+    const auto* own = by[std::string("soft-step.") + substeps];
+    const auto* base = by[baseline + "." + substeps];
+    ASSERT_TRUE(own && base) << "substeps " << substeps << "\n" << inv.output;
+    EXPECT_EQ(base->at("status"), "ok") << base->at("message");
+    EXPECT_EQ(base->at("contact_verdict"), own->at("contact_verdict"));
+    // the same arithmetic up to fused multiply-adds: the same tower to a millimetre
+    EXPECT_NEAR(std::stod(base->at("stack_drift_max")), std::stod(own->at("stack_drift_max")), 1e-3);
+  }
+  std::ifstream meta_file(dir / "r" / "metadata.json");
+  const nlohmann::json rtp = nlohmann::json::parse(meta_file)["engines"]["rtp"];
+  ASSERT_TRUE(rtp["variants"].contains(baseline)) << rtp.dump(1);
+  const auto& first = rtp["variants"][baseline][0];
+  EXPECT_EQ(first["name"], "instruction set");
+  EXPECT_NE(first["value"].get<std::string>().find("baseline"), std::string::npos) << first.dump();
+}
+#endif
+
 #ifdef PHYSBENCH_HAVE_BULLET
 // a swept substep count reaches a peer: Bullet at four steps of dt/4 a frame holds the 10-box
 // tower its single step lets drift half a metre, and its settings table says what ran; an
@@ -903,3 +938,4 @@ TEST(Runner, AJobThatCrashesInALaterTimingRoundIsCrashed) {
 }
 
 }  // namespace
+

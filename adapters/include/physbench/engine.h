@@ -140,4 +140,16 @@ struct EngineInfo {
   bool test_only = false;
 };
 
+// every settings table of info opens with how the engine was built ("instruction set"): the
+// instruction set is half of any speed ratio, so each table states it (docs/engines.md, "Equal
+// instruction set")
+inline void state_instruction_set(EngineInfo& info, std::string value, std::string why) {
+  info.settings = [table_of = info.settings, row = Setting{"instruction set", std::move(value),
+                                                           std::move(why)}](const std::string& v) {
+    std::vector<Setting> table = table_of ? table_of(v) : std::vector<Setting>{};
+    table.insert(table.begin(), row);
+    return table;
+  };
+}
+
 }  // namespace physbench

@@ -167,6 +167,10 @@ struct ContactSettings {
 // least 8 (it changes no result: a block's manifolds share no dynamic body)
 std::size_t contact_block_lanes();
 
+// the instruction set this build of rtp was compiled for, in words ("AVX-512F, AVX2 and FMA
+// (-march=native)", "x86-64 baseline: SSE2", …): what a settings table states
+const char* instruction_set();
+
 // wall time of each stage of the last step (s)
 struct StepProfile {
   double integrate = 0.0;  // forces and velocities (all of it in a world without contacts)

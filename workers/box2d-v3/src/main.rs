@@ -57,7 +57,7 @@ impl Engine for Box2dV3 {
                     "v3 has no polygon skin: boxes are the scene's exact size"),
             setting("springs", "external force at the attachment points, from the state at the \
                      start of each step", "the same method as the other peers' springs"),
-            setting("build", "float, SSE2 (the crate's simd-avx2 feature off), -O2, NDEBUG",
+            setting("instruction set", "float, SSE2 (the crate's simd-avx2 feature off), -O2, NDEBUG",
                     "Box2D's default x86-64 path; NDEBUG (workers/.cargo/config.toml) as in its \
                      own release build: the crate's cc build defines none, so every internal \
                      assertion would run in the timed step"),

@@ -139,7 +139,7 @@ impl Engine for Box3d {
                     "no pair is ever made: no collision detection"),
             setting("contact storage", "Box3D's growable arrays",
                     "Box3D has no fixed-size contact buffer to size from the scene or overflow"),
-            setting("SIMD", simd_path(), "what the crate's build compiles (no disable-simd \
+            setting("instruction set", simd_path(), "what the crate's build compiles (no disable-simd \
                      feature; Box3D picks the path from the target, and has no AVX2 path)"),
             setting("assertions", "off: NDEBUG (workers/.cargo/config.toml); any that remain are \
                      recorded, not trapped", "as Box3D's own release build; the crate's cc build \

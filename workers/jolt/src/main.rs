@@ -96,6 +96,10 @@ impl Engine for Jolt {
     }
     fn settings(&self, _variant: &str) -> Vec<Setting> {
         vec![
+            setting("instruction set",
+                    "AVX2, FMA, LZCNT, TZCNT, F16C, SSE4.2 (Jolt's CMake defaults, as oxijolt-sys \
+                     builds it; no AVX-512), float",
+                    "Jolt's own default build; beside rtp's native build, not its -x86-64 one"),
             setting("allowSleeping", "false (world and every body)", "sleeping off in every engine"),
             setting("numVelocitySteps / numPositionSteps", "10 / 2 (Jolt's defaults)",
                     "Jolt's default already is 10 velocity iterations, the equal-iterations \

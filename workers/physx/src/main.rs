@@ -238,7 +238,7 @@ impl Engine for PhysX {
                     "every worker steps on one thread: with no workers PhysX runs every task on \
                      the thread that calls simulate; no GPU (the crate builds with \
                      DISABLE_CUDA_PHYSX)"),
-            setting("build", "physx-sys 0.11.5's build script through the cc crate: clang++ \
+            setting("instruction set", "physx-sys 0.11.5's build script through the cc crate: clang++ \
                      -O3 (the release profile) -ffunction-sections -fdata-sections -fPIC -m64 \
                      -std=c++14 -w -fno-strict-aliasing; NDEBUG, PX_PHYSX_STATIC_LIB, \
                      DISABLE_CUDA_PHYSX, PX_SUPPORT_PVD=1 (none connected); no -march",

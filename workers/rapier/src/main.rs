@@ -22,6 +22,11 @@ impl Engine for Rapier {
     }
     fn settings(&self, variant: &str) -> Vec<Setting> {
         let mut s = vec![
+            setting("instruction set",
+                    "x86-64 baseline: SSE2 (Rust's default target; rapier3d without simd-stable), \
+                     f32",
+                    "the crate's default features; rtp's -x86-64 variants are the \
+                     equal-instruction-set comparison"),
             setting("sleeping", "off (can_sleep false on every body)",
                     "sleeping off in every engine"),
             setting("mass properties", "from the scene, colliders at density 0",
