@@ -3,9 +3,11 @@
     load         results.csv (checked against harness/results-schema.json), metadata.json,
                  trajectories (each read once), benchmarks/*.json
     style        hues, line styles, number format, anchors, a figure as a page fragment
-    glance       the front page, "At a glance"
+    front        the first screen: each key question's chart, every engine's own Pareto front
+    glance       the scoreboard, "At a glance"
     table        the full results table
-    scenarios    one section per scenario: error over time, throughput, speed against error
+    scenarios    one section per scenario: error over time (a contact scene's energy in J),
+                 throughput, speed against error, each chart under its question
     speed        speed against error: measured orders, the Pareto front
     contacts     contact tables, the verdicts, stacks' drift against cost
     stability    stability maps of the swept families

@@ -47,6 +47,13 @@ CONTACT_VIEWS = {
 DRIFT_FLOOR = 1e-6
 
 
+def passed(rows: pd.DataFrame) -> pd.Series:
+    """Which rows passed: status ok and, where the row has a contact verdict, not a failing one
+    (collapsed, drifts, settles, sinks, …). Only these are named fastest or best, or drawn on a front."""
+    verdicts = rows["contact_verdict"] if "contact_verdict" in rows else pd.Series("", index=rows.index)
+    return (rows["status"] == "ok") & ~verdicts.isin(FAILED_VERDICTS)
+
+
 def has_contact_metrics(rows: pd.DataFrame) -> bool:
     """Whether these rows come from a contact scene (they carry a penetration or drift column)."""
     return any(c in rows and rows[c].notna().any() for c in ("penetration_max", "stack_drift_max"))

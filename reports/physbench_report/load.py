@@ -14,7 +14,7 @@ SERIES = [
     ("orientation_err", "Orientation error against the reference", "rad", "orientation_err_max"),
     ("stack_drift", "Stack drift: largest horizontal displacement of any body", "m", "stack_drift_max"),
     ("penetration", "Deepest penetration (rtp's narrow phase on the true shapes)", "m", "penetration_max"),
-    ("energy_drift", "Relative energy drift |E − E₀| / KE₀", "", "energy_drift_max"),
+    ("energy_drift", "Relative energy drift |E − E₀| / (KE₀ + spring PE₀)", "", "energy_drift_max"),
     ("linear_momentum_drift", "Linear momentum drift |P − P₀|", "kg m/s", "linear_momentum_drift_max"),
     ("angular_momentum_drift", "Relative angular momentum drift |L − L₀| / |L₀|", "", "angular_momentum_drift_max"),
 ]

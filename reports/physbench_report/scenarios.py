@@ -1,66 +1,197 @@
 """One section per scenario: its contact table, replay, error over time for every engine on one
-chart (drift and penetration on contact scenes), error per body along a chain, throughput, and
-speed against error with its Pareto front."""
+chart (drift, penetration and energy in joules on contact scenes), error per body along a chain,
+throughput, and speed against error with its Pareto front; each chart under its question, each
+engine's default variant shown and its others behind the legend."""
 from __future__ import annotations
 
+import json
 from pathlib import Path
 
+import numpy as np
 import pandas as pd
 import plotly.graph_objects as go
 
 from .contacts import contact_table, has_contact_metrics
 from .load import SERIES, is_nominal, trajectories
 from .speed import speed_error
-from .style import anchor_of, figure_html, fmt, hue, trace_style
+from .style import anchor_of, default_labels, figure_html, fmt, hue, trace_style
 
 
-def error_over_time(rows: pd.DataFrame, series: dict, column: str, title: str, unit: str) -> str | None:
-    """One error column of the trajectories (series: load.trajectories of these rows) over time,
-    the worst probed body at each sample, one line per engine variant on a log axis."""
-    fig = go.Figure()
-    for index, row in rows.iterrows():
-        if index not in series:
-            continue
-        traj = series[index]
-        if column not in traj or traj[column].isna().all():
-            continue
-        per_time = traj.groupby("time", sort=True)[column].max()
-        # a log axis cannot show zeros: exact values sit at the floor
-        fig.add_trace(go.Scatter(x=per_time.index, y=per_time.clip(lower=1e-16).values, mode="lines",
-                                 name=row["label"], **trace_style(row["label"])))
-    if not fig.data:
+# the question above each chart over time, by the trajectory column it draws
+QUESTIONS = {
+    "position_err": "How far from the reference does each engine put the bodies, as time goes on?",
+    "orientation_err": "How far does each engine turn the bodies from the reference, as time goes on?",
+    "stack_drift": "How far sideways does each engine let the stack drift, as time goes on?",
+    "penetration": "How deep do each engine's bodies sink into each other, as time goes on?",
+    "energy_drift": "How far does each engine let the energy stray from its start, against the energy in play?",
+    "energy_joules": "How many joules does each engine add to the scene or take from it, as time goes on?",
+    "linear_momentum_drift": "Does each engine keep the linear momentum, as time goes on?",
+    "angular_momentum_drift": "Does each engine keep the angular momentum, as time goes on?",
+}
+
+
+def mechanical_energy(traj: pd.DataFrame, scene: dict) -> pd.Series:
+    """E(t) in J of the probed bodies, by sample time, as the harness computes it for energy drift
+    (validation/src/metrics.cpp, invariants_of): kinetic, linear and about the centre of mass with
+    the world inertia R I Rᵀ, plus gravitational −m g·x, plus the springs whose moving ends are probed."""
+    bodies = scene.get("bodies", [])
+    gravity = np.asarray(scene.get("gravity", [0.0, 0.0, 0.0]), float)
+    index = traj["body"].to_numpy(int)
+    known = index < len(bodies)  # particles (past the bodies) are not on a contact scene's chart
+    traj, index = traj[known], index[known]
+    # per scene body, then per row: a pyramid's trajectory has millions of rows
+    masses = np.array([float(b["mass"]) for b in bodies])
+    moments = np.array([principal_inertia(b.get("shape", {}), m) for b, m in zip(bodies, masses)]).reshape(-1, 3)
+    mass, inertia = masses[index], moments[index]
+    speed2 = sum(traj[c].to_numpy(float) ** 2 for c in ("vx", "vy", "vz"))
+    height = sum(-g * traj[c].to_numpy(float) for g, c in zip(gravity, ("px", "py", "pz")))
+    energy = 0.5 * mass * speed2 + spin_energy(traj, inertia) + mass * height
+    energy = np.where(mass > 0, energy, 0.0)
+    total = pd.Series(energy, index=traj.index).groupby(traj["time"].to_numpy()).sum()
+    for spring in scene.get("springs", []):
+        stored = spring_energy(traj, spring)
+        if stored is not None:
+            total = total.add(stored, fill_value=0.0)
+    return total
+
+
+def principal_inertia(shape: dict, mass: float) -> list[float]:
+    """A shape's principal moments (kg m²), as the adapters' scene.cpp gives them."""
+    if shape.get("type") == "box":
+        a, b, c = (float(h) ** 2 for h in shape.get("half_extents", [0.5, 0.5, 0.5]))
+        return [mass / 3.0 * (b + c), mass / 3.0 * (a + c), mass / 3.0 * (a + b)]
+    if shape.get("type") == "sphere":
+        return [0.4 * mass * float(shape.get("radius", 0.5)) ** 2] * 3
+    return [0.0, 0.0, 0.0]
+
+
+def rotate(q: np.ndarray, v: np.ndarray) -> np.ndarray:
+    """Each vector v rotated by its unit quaternion q (w, x, y, z), row by row."""
+    u, w = q[:, 1:], q[:, :1]
+    t = 2.0 * np.cross(u, v)
+    return v + w * t + np.cross(u, t)
+
+
+def spin_energy(traj: pd.DataFrame, inertia: np.ndarray) -> np.ndarray:
+    """½ ωᵀ R I Rᵀ ω of each row: ½ Σ I_k (a_k · ω)², a_k the body's k-th axis in the world, a
+    column of R, from the quaternion column by column (a pyramid's millions of rows)."""
+    w, x, y, z = (traj[c].to_numpy(float) for c in ("qw", "qx", "qy", "qz"))
+    norm = np.sqrt(w * w + x * x + y * y + z * z)
+    w, x, y, z = w / norm, x / norm, y / norm, z / norm
+    ox, oy, oz = (traj[c].to_numpy(float) for c in ("wx", "wy", "wz"))
+    axes = [(1 - 2 * (y * y + z * z), 2 * (x * y + w * z), 2 * (x * z - w * y)),
+            (2 * (x * y - w * z), 1 - 2 * (x * x + z * z), 2 * (y * z + w * x)),
+            (2 * (x * z + w * y), 2 * (y * z - w * x), 1 - 2 * (x * x + y * y))]
+    return 0.5 * sum(inertia[:, k] * (a[0] * ox + a[1] * oy + a[2] * oz) ** 2 for k, a in enumerate(axes))
+
+
+def spring_energy(traj: pd.DataFrame, spring: dict) -> pd.Series | None:
+    """½ k (|pa − pb| − rest)² by sample time, or None when an end's body is not probed."""
+    def end(body: int, local) -> tuple[np.ndarray, np.ndarray] | None:
+        """The spring's end on this body, in the world, and the sample times; None if not probed."""
+        mine = traj[traj["body"] == body].sort_values("time")
+        if mine.empty:
+            return None
+        q = mine[["qw", "qx", "qy", "qz"]].to_numpy(float)
+        q = q / np.linalg.norm(q, axis=1, keepdims=True)
+        point = np.broadcast_to(np.asarray(local, float), (len(mine), 3))
+        return mine[["px", "py", "pz"]].to_numpy(float) + rotate(q, point), mine["time"].to_numpy()
+    a = end(int(spring.get("body_a", 0)), spring.get("local_point_a", [0, 0, 0]))
+    if a is None:
         return None
-    if column in ("stack_drift", "penetration"):
+    pa, times = a
+    if int(spring.get("body_b", -1)) >= 0:
+        b = end(int(spring["body_b"]), spring.get("point_b", [0, 0, 0]))
+        if b is None:
+            return None
+        pb = b[0]
+    else:
+        pb = np.asarray(spring.get("point_b", [0, 0, 0]), float)
+    stretch = np.linalg.norm(pa - pb, axis=1) - float(spring.get("rest_length", 0.0))
+    return pd.Series(0.5 * float(spring.get("stiffness", 0.0)) * stretch ** 2, index=times)
+
+
+def per_time(traj: pd.DataFrame, column: str, scene: dict | None) -> pd.Series | None:
+    """A chart's series by sample time: the worst probed body's value of an error column, or, for
+    energy on a contact scene (scene given), |E − E₀| in J from the probed states."""
+    if column == "energy_drift" and scene is not None:
+        if not {"qw", "vx", "wx", "px"} <= set(traj.columns):
+            return None
+        energy = mechanical_energy(traj, scene).sort_index()
+        return energy - energy.iloc[0] if len(energy) else None
+    if column not in traj or traj[column].isna().all():
+        return None
+    return traj.groupby("time", sort=True)[column].max()
+
+
+def error_over_time(rows: pd.DataFrame, series: dict, column: str, title: str, unit: str,
+                    scene: dict | None = None) -> dict | None:
+    """One error column of the trajectories (series: load.trajectories of these rows) over time, on
+    a log axis from the first sample after the start: the worst probed body at each sample, one
+    line per engine shown (its default variant), its other variants behind the legend. With the
+    scene of a contact scenario, energy is drawn as the joules gained or lost, |E − E₀|."""
+    joules = column == "energy_drift" and scene is not None
+    lines = {}
+    for index in rows.index:
+        values = per_time(series[index], column, scene if joules else None) if index in series else None
+        if values is None:
+            continue
+        # a log axis has no zero: the start (where every error is 0) and exact samples are left out
+        values = values.abs()
+        values = values[(values.index > 0) & (values > 0) & np.isfinite(values)]
+        if not values.empty:
+            lines[index] = values
+    if not lines:
+        return None
+    # each engine's default among the runs drawn, so that every engine with a line shows one
+    shown = default_labels(rows.loc[list(lines)])
+    fig = go.Figure()
+    for index, values in lines.items():
+        label = rows.at[index, "label"]
+        fig.add_trace(go.Scatter(x=values.index, y=values.values, mode="lines", name=label,
+                                 visible=True if label in shown else "legendonly", **trace_style(label)))
+    if joules:
+        title, axis, question = "Energy gained or lost |E − E₀| (J)", "|E − E₀| (J)", QUESTIONS["energy_joules"]
+    elif column in ("stack_drift", "penetration"):
         axis = f"{title.split(':')[0].split(' (')[0].lower()} ({unit})"
+    elif column == "energy_drift":
+        axis = "|E − E₀| / energy in play"
     else:
         axis = f"{title.split(' ')[0].lower()} error ({unit})" if unit else "relative drift"
     fig.update_layout(title=title, xaxis_title="time (s)", yaxis_title=axis)
     fig.update_yaxes(type="log", exponentformat="power")
-    return figure_html(fig)
+    return dict(question=question if joules else QUESTIONS.get(column, ""), html=figure_html(fig))
 
 
-def error_by_body(rows: pd.DataFrame, series: dict) -> str | None:
+def error_by_body(rows: pd.DataFrame, series: dict) -> dict | None:
     """Max position error of each probed body over the run, against its index: how error grows
-    along a chain. Only for scenes with more than one probed body and a reference."""
-    fig = go.Figure()
-    for index, row in rows.iterrows():
-        if index not in series:
-            continue
-        traj = series[index]
-        if "body_position_err" not in traj or traj["body"].nunique() < 2 or traj["body_position_err"].isna().all():
+    along a chain, one line per engine shown (its default variant), the others behind the legend.
+    Only for scenes with more than one probed body and a reference."""
+    lines = {}
+    for index in rows.index:
+        traj = series.get(index)
+        if traj is None or "body_position_err" not in traj or traj["body"].nunique() < 2:
             continue
         per_body = traj.groupby("body", sort=True)["body_position_err"].max()
-        fig.add_trace(go.Scatter(x=per_body.index, y=per_body.clip(lower=1e-16).values, mode="lines+markers",
-                                 name=row["label"], **trace_style(row["label"])))
-    if not fig.data:
+        per_body = per_body[per_body > 0]  # a log axis has no zero
+        if not per_body.empty:
+            lines[index] = per_body
+    if not lines:
         return None
+    shown = default_labels(rows.loc[list(lines)])
+    fig = go.Figure()
+    for index, per_body in lines.items():
+        label = rows.at[index, "label"]
+        fig.add_trace(go.Scatter(x=per_body.index, y=per_body.values, mode="lines+markers", name=label,
+                                 visible=True if label in shown else "legendonly", **trace_style(label)))
     fig.update_layout(title="Max position error of each body (body index along the scene)",
-                      xaxis_title="body", yaxis_title="max position error (m)")
+                      xaxis_title="body (index in the scene)", yaxis_title="max position error (m)")
     fig.update_yaxes(type="log", exponentformat="power")
-    return figure_html(fig)
+    return dict(question="How does the error grow along the chain, body by body?", html=figure_html(fig))
 
 
-def throughput_chart(rows: pd.DataFrame) -> str | None:
+def throughput_chart(rows: pd.DataFrame) -> dict | None:
+    """Median steps/s of every engine variant at the scene's own step, bars from min to max."""
     ok = rows[rows["steps_per_s"].notna()]
     if ok.empty:
         return None
@@ -73,7 +204,7 @@ def throughput_chart(rows: pd.DataFrame) -> str | None:
         marker_color=[hue(e) for e in ok["engine"]]))
     fig.update_layout(title="Throughput: median steps/s (bars: min to max over repeats)", yaxis_title="steps/s")
     fig.update_yaxes(type="log", exponentformat="power")
-    return figure_html(fig)
+    return dict(question="How many steps per second does each engine variant take?", html=figure_html(fig))
 
 
 def drawn_as_family(results: pd.DataFrame, meta: dict) -> set[str]:
@@ -94,10 +225,21 @@ def reference_error(info: dict) -> float | None:
     return self_errors if isinstance(self_errors, (int, float)) else None
 
 
-def scenario_sections(folder: Path, results: pd.DataFrame, meta: dict, replays: dict) -> list[dict]:
+def scene_of(folder: Path, info: dict) -> dict | None:
+    """The scene file a scenario ran at its own step (scenes/*.json), or None when it is absent."""
+    own = info.get("dt")
+    for dt, path in (info.get("scene_file") or {}).items():
+        if (own is None or abs(float(dt) - own) <= 1e-6 * own) and (folder / path).is_file():
+            return json.loads((folder / path).read_text())
+    return None
+
+
+def scenario_sections(folder: Path, results: pd.DataFrame, meta: dict, replays: dict,
+                      replayed_above: set[str] = frozenset()) -> list[dict]:
     """Each scenario's section but the family members', in the order of results.csv: its
-    description, reference, contact table, replay (replays: replay.replays) and charts, the
-    charts over time drawn at the scene's own step, speed against error over the whole sweep."""
+    description, reference, contact table, replay (replays: replay.replays; those in
+    replayed_above are drawn higher up the page, and linked) and charts, each with its question,
+    the charts over time drawn at the scene's own step, speed against error over the whole sweep."""
     family = drawn_as_family(results, meta)
     sections = []
     for name, rows in results.groupby("scenario", sort=False):
@@ -106,14 +248,18 @@ def scenario_sections(folder: Path, results: pd.DataFrame, meta: dict, replays: 
             continue
         own = rows[[is_nominal(meta, r) for _, r in rows.iterrows()]]
         series = trajectories(folder, own)
-        charts = [error_over_time(own, series, column, title, unit) for column, title, unit, summary in SERIES
+        # a contact scene's energy in joules, from its scene's masses and shapes
+        scene = scene_of(folder, info) if has_contact_metrics(own) else None
+        charts = [error_over_time(own, series, column, title, unit, scene) for column, title, unit, summary in SERIES
                   if summary in own and own[summary].notna().any()]
         charts += [error_by_body(own, series), throughput_chart(own)]
         del series  # the next scenario's trajectories take their place
         self_errors = info.get("reference_self_error")
         floors = {float(k): v for k, v in self_errors.items()} if isinstance(self_errors, dict) else None
         chart, front = speed_error(rows, floors)
-        charts.append(chart)
+        if chart:
+            charts.append(dict(question="Which engine and step give the least error for the time they take?",
+                               html=chart))
         self_error = reference_error(info)
         sweep = sorted(info.get("sweep_dt", []))
         sections.append(dict(
@@ -123,6 +269,7 @@ def scenario_sections(folder: Path, results: pd.DataFrame, meta: dict, replays: 
             reference_failures=[dict(dt=fmt(float(dt)), why=why)
                                 for dt, why in (info.get("reference_failure") or {}).items()],
             sweep=", ".join(f"1/{1 / dt:.0f}" for dt in sweep) if len(sweep) > 1 else "",
-            charts=[c for c in charts if c], front=front, contact=contact_table(own), replay=replays.get(name),
+            charts=[c for c in charts if c], front=front, contact=contact_table(own),
+            replay=None if name in replayed_above else replays.get(name), replayed_above=name in replayed_above,
             unsupported=[f"{r['label']}: {r['message']}" for _, r in own.iterrows() if r["status"] == "unsupported"]))
     return sections

@@ -8,7 +8,7 @@ import pandas as pd
 import plotly.graph_objects as go
 
 from .load import SERIES
-from .style import figure_html, fmt, trace_style
+from .style import default_labels, figure_html, fmt, trace_style
 
 
 def headline_metric(rows: pd.DataFrame) -> tuple[str, str] | None:
@@ -51,8 +51,9 @@ def pareto_front(points: pd.DataFrame, error_column: str) -> pd.DataFrame:
 
 
 def speed_error(rows: pd.DataFrame, floors: dict[float, float] | None = None) -> tuple[str | None, list[dict]]:
-    """Error against cost (wall s per simulated s), one curve per engine/variant over the dt sweep,
-    the Pareto front dashed, each curve's measured order in its legend; and the front as a table."""
+    """Error against cost (wall s per simulated s), one curve per engine/variant over the dt sweep
+    (each engine's default variant shown, the others behind the legend), the Pareto front dashed,
+    each curve's measured order in its legend; and the front as a table."""
     metric = headline_metric(rows)
     if metric is None:
         return None, []
@@ -62,18 +63,21 @@ def speed_error(rows: pd.DataFrame, floors: dict[float, float] | None = None) ->
         return None, []
     points["cost"] = points["wall_s_median"] / points["duration"]
     swept = points["dt"].nunique() > 1
+    shown = default_labels(points)
     fig = go.Figure()
     for label, curve in points.groupby("label", sort=False):
         curve = curve.sort_values("cost")
         order = convergence_order(curve, error_column, floors) if swept else None
         name = f"{label} (order {order:.2f})" if order is not None else label
+        curve = curve[curve[error_column] > 0]  # a log axis has no zero
         fig.add_trace(go.Scatter(
-            x=curve["cost"], y=curve[error_column].clip(lower=1e-16), mode="lines+markers", name=name,
-            **trace_style(label),
+            x=curve["cost"], y=curve[error_column], mode="lines+markers", name=name,
+            visible=True if label in shown else "legendonly", **trace_style(label),
             text=[f"dt = 1/{1 / dt:.0f} s" for dt in curve["dt"]],
             hovertemplate="%{text}<br>cost %{x:.3g}<br>error %{y:.3g}"))
     front = pareto_front(points, error_column)
-    fig.add_trace(go.Scatter(x=front["cost"], y=front[error_column].clip(lower=1e-16), mode="lines",
+    drawn = front[front[error_column] > 0]
+    fig.add_trace(go.Scatter(x=drawn["cost"], y=drawn[error_column], mode="lines",
                              name="Pareto front", line=dict(dash="dash", color="black", width=1)))
     fig.update_layout(title=f"Speed against error: max {error_title.lower()} against cost",
                       xaxis_title="wall s per simulated s (lower is faster)", yaxis_title="max error")

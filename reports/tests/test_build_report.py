@@ -405,8 +405,8 @@ def test_best_configurations_read_every_knob_and_name_the_cheapest_that_stands()
 
 
 def test_front_page_never_names_a_failed_run_fastest_or_most_accurate():
-    # bullet collapses the stack fastest of all, jolt drifts: neither may be named fastest, most
-    # accurate or be on the front; both are failures in words
+    # bullet collapses the stack fastest of all, jolt drifts: neither may be named fastest or most
+    # accurate; both are failures in words, with their reasons
     rows = pd.DataFrame([
         contact_row("bullet", "float", 5000, 30.0, verdict="collapsed"),
         contact_row("jolt", "default", 4000, 0.2, verdict="drifts"),
@@ -419,10 +419,8 @@ def test_front_page_never_names_a_failed_run_fastest_or_most_accurate():
     (entry,) = glance.at_a_glance(rows, {"scenarios": {"tower-10": {"dt": 1 / 60}}})
     assert entry["fastest"].startswith("rtp/soft-step")
     assert entry["accurate"].startswith("ode/quickstep")
-    assert "bullet" not in entry["front"] and "jolt" not in entry["front"]
-    assert [r["label"] for r in entry["budget_rows"]] == ["ode/quickstep", "rtp/soft-step"]
-    assert any(f.startswith("bullet/float collapsed") and "drift 30 m" in f for f in entry["failures"])
-    assert any(f.startswith("jolt/default drifts") for f in entry["failures"])
+    assert any(f["text"] == "bullet/float collapsed" and "drift 30 m" in f["why"] for f in entry["failures"])
+    assert any(f["text"] == "jolt/default drifts" for f in entry["failures"])
 
 
 def test_a_scene_without_drift_has_no_drift_chart():
@@ -605,3 +603,23 @@ def test_run_summary_names_a_folder_that_is_not_a_run(tmp_path):
                             capture_output=True, text=True)
     assert result.returncode == 2 and "nothing" in result.stderr
     assert not (tmp_path / "s.md").exists()
+
+
+def test_the_page_opens_with_the_answers_then_the_verdicts_and_the_stacks_replayed(contact_results):
+    page = build_report.build_report(contact_results).read_text()
+    order = [page.index(marker) for marker in ('<section id="first">', '<section id="verdicts">',
+                                                '<section id="stack-replays">', '<section id="glance">',
+                                                '<section id="results">', '<section id="s-tower-10">')]
+    assert order == sorted(order)
+    first = page[order[0]:order[1]]
+    assert "Which engine keeps a stack standing for the least time per step?" in first
+    assert "ms per step, median" in first and "max drift (m)" in first
+    # the tower's replay is up with the stacks, once; its section links to it
+    replays = page[order[2]:order[3]]
+    assert replays.count('class="replay" data-replay=') == 1 and '<a href="#s-tower-10">tower-10</a>' in replays
+    tower = page[order[5]:].split("</section>")[0]
+    assert "data-replay=" not in tower and 'href="#stack-replays"' in tower
+    # every chart of the scenario has its question above it
+    assert tower.count('<p class="question">') == tower.count("Plotly.newPlot(")
+    assert "How many joules does each engine add to the scene or take from it" in tower
+    assert "Relative energy drift" not in tower

@@ -8,7 +8,13 @@
 // page; a click on a number column's header puts its least value first, a second click its
 // largest, empty cells last both times; a click on a text column's header orders the rows by it;
 // the text, engine and status filters show exactly the rows that match.
-// Screenshots go to PHYSBENCH_ARTIFACTS (viewer.png, viewer-tumbling-box.png, viewer-contacts.png).
+// The first screen, in a window 1,400 pixels wide: each of its small charts drew (an svg with a
+// trace's path or point), and no chart's legend or title overlaps another chart, a heading, a
+// question or a table; its screenshot (the top 1,400 x 1,000 pixels) goes to PHYSBENCH_ARTIFACTS,
+// and with PHYSBENCH_SCREENSHOT_DOCS=1 also to docs/report-first-screen.png, which the README shows
+// (made from a full run's folder; a test run leaves the repository's copy alone).
+// Screenshots go to PHYSBENCH_ARTIFACTS (viewer.png, viewer-tumbling-box.png, viewer-contacts.png,
+// report-first-screen.png).
 //
 //   node reports/viewer/tests/report_browser.mjs            (CTest sets the environment)
 //   node reports/viewer/tests/report_browser.mjs PAGE.html  (the page checks on any built report)
@@ -35,8 +41,8 @@ function check(ok, what) {
 
 // ---- any page: load it, collect every error ------------------------------------------------
 
-export async function openReport(browser, page_path) {
-  const page = await browser.newPage({ viewport: { width: 1280, height: 900 } });
+export async function openReport(browser, page_path, viewport = { width: 1280, height: 900 }) {
+  const page = await browser.newPage({ viewport });
   const errors = [];
   page.on('pageerror', (e) => errors.push(`page error: ${e.message}`));
   page.on('console', (m) => { if (m.type() === 'error') errors.push(`console error: ${m.text()}`); });
@@ -124,6 +130,78 @@ async function tableChecks(page) {
   await page.locator('#results-controls select[name=status]').selectOption('');
   check((await tableRows(page)).length === all.length, 'clearing the filters shows every row again');
   console.log(`table checks: ${Date.now() - started} ms`);
+}
+
+// ---- the first screen: small charts that drew, nothing overlapping ---------------------------
+
+const FIRST_SCREEN = { width: 1400, height: 1000 };
+
+async function firstScreenChecks(browser, pagePath) {
+  const { page, errors } = await openReport(browser, pagePath, FIRST_SCREEN);
+  // plotly draws as the page loads; each chart is done when its svg holds its traces
+  await page.waitForFunction(() => [...document.querySelectorAll('.js-plotly-plot')]
+    .every((d) => d.querySelector('svg.main-svg')), null, { timeout: 30000 });
+  const charts = await page.evaluate(() => [...document.querySelectorAll('#first figure.small')].map((f) => ({
+    question: f.querySelector('.question')?.textContent ?? '',
+    drawn: f.querySelectorAll('.js-plotly-plot svg.main-svg .trace path, .js-plotly-plot svg.main-svg .trace .point').length,
+  })));
+  check(charts.length > 0, `the first screen has its small charts (${charts.length})`);
+  for (const c of charts)
+    check(c.drawn > 0 && c.question.endsWith('?'), `first screen "${c.question}": drew ${c.drawn} paths or points`);
+  const top = await page.evaluate(() => {
+    const first = document.querySelector('#first');
+    return first ? first.getBoundingClientRect().top + window.scrollY : Infinity;
+  });
+  check(top < FIRST_SCREEN.height / 2, `the charts open the page (${Math.round(top)} px from its top)`);
+  // every chart's legend and title against every other chart, heading, question and table on the
+  // page, by their boxes in the page (a box that contains the chart, or that it contains, is its own)
+  const overlaps = await page.evaluate(() => {
+    const area = (b) => Math.max(0, b.x1 - b.x0) * Math.max(0, b.y1 - b.y0);
+    const cut = (a, b) => ({ x0: Math.max(a.x0, b.x0), y0: Math.max(a.y0, b.y0), x1: Math.min(a.x1, b.x1), y1: Math.min(a.y1, b.y1) });
+    const meet = (a, b) => area(cut(a, b));
+    const rect = (el) => { const r = el.getBoundingClientRect(); return { x0: r.left + scrollX, y0: r.top + scrollY, x1: r.right + scrollX, y1: r.bottom + scrollY }; };
+    // what is seen of an element: its box within every scrolling box around it (the full table
+    // scrolls in one)
+    const box = (el) => {
+      let seen = rect(el);
+      for (let up = el.parentElement; up; up = up.parentElement)
+        if (up instanceof HTMLElement && getComputedStyle(up).overflow !== 'visible') seen = cut(seen, rect(up));
+      return seen;
+    };
+    const name = (el) => `${el.tagName.toLowerCase()}${el.id ? '#' + el.id : ''} "${el.textContent.trim().slice(0, 40)}"`;
+    const plots = [...document.querySelectorAll('.js-plotly-plot')];
+    const others = [...plots, ...document.querySelectorAll('h1, h2, h3, p.question, table, figcaption')];
+    const found = [];
+    for (const plot of plots) {
+      // a legend's background is what it covers (its entries past it scroll, clipped)
+      const parts = [...plot.querySelectorAll('g.legend > rect.bg, text.gtitle')].filter((el) => area(box(el)) > 0);
+      for (const part of parts) {
+        for (const other of others) {
+          // a closed <details> keeps its contents' boxes, unseen
+          if (other === plot || other.contains(plot) || plot.contains(other) || !other.checkVisibility() ||
+              area(box(other)) === 0) continue;
+          const shared = meet(box(part), box(other));
+          if (shared > 1) found.push(`${part.closest('.legend') ? 'legend' : 'title'} of the chart in ${name(plot.closest('section') ?? plot)} overlaps ${name(other)} (${Math.round(shared)} px²)`);
+        }
+      }
+    }
+    // and the charts themselves, side by side, never on one another
+    for (const [i, a] of plots.entries())
+      for (const b of plots.slice(i + 1))
+        if (meet(box(a), box(b)) > 1) found.push(`two charts overlap in ${name(a.closest('section') ?? a)}`);
+    return { found, parts: plots.length };
+  });
+  check(overlaps.found.length === 0,
+    `no legend or title overlaps another element (${overlaps.parts} charts)${overlaps.found.length ? ':\n  ' + overlaps.found.slice(0, 10).join('\n  ') : ''}`);
+  const wide = await page.evaluate(() => document.documentElement.scrollWidth);
+  check(wide <= FIRST_SCREEN.width, `nothing widens the page past the window (${wide} px)`);
+  mkdirSync(artifacts, { recursive: true });
+  const clip = { x: 0, y: 0, ...FIRST_SCREEN };
+  await page.screenshot({ path: join(artifacts, 'report-first-screen.png'), clip });
+  if (process.env.PHYSBENCH_SCREENSHOT_DOCS === '1')
+    await page.screenshot({ path: join(root, 'docs', 'report-first-screen.png'), clip });
+  check(errors.length === 0, `the first screen loads with no error${errors.length ? ':\n  ' + errors.join('\n  ') : ''}`);
+  await page.close();
 }
 
 // ---- the viewer: pixels of one engine's viewport -------------------------------------------
@@ -224,6 +302,14 @@ async function contactChecks(page, replays) {
   await root.locator('select').nth(1).selectOption('speed');
 }
 
+// the scene file a scenario ran at its own step, as metadata.json names it
+function sceneFile(results, name) {
+  const info = JSON.parse(readFileSync(join(results, 'metadata.json'), 'utf8')).scenarios?.[name] ?? {};
+  const files = Object.entries(info.scene_file ?? {});
+  const own = files.find(([dt]) => Math.abs(Number(dt) - info.dt) <= 1e-6 * info.dt) ?? files[0];
+  return own ? own[1] : join('scenes', `${name}.json`);
+}
+
 async function viewerChecks(page, results) {
   const replays = await page.evaluate(() => window.physbenchReplays.map((r) => ({
     name: r.data.name, labels: r.runs.map((run) => run.label), frames: r.runs.map((run) => run.frames),
@@ -237,7 +323,7 @@ async function viewerChecks(page, results) {
       check(coloured > 0.002, `${replay.name} ${replay.labels[v]}: bodies drawn (${(100 * coloured).toFixed(2)} % coloured pixels)`);
     }
     // the decoded poses put body 0 where the scene file starts it
-    const scene = JSON.parse(readFileSync(join(results, 'scenes', `${replay.name}.json`), 'utf8'));
+    const scene = JSON.parse(readFileSync(join(results, sceneFile(results, replay.name)), 'utf8'));
     const firstDynamic = scene.bodies.findIndex((b) => b.mass > 0);
     if (firstDynamic >= 0) {
       const decoded = await page.evaluate(([r, body]) => {
@@ -315,6 +401,7 @@ async function main() {
       return [divs.length, divs.filter((d) => d.querySelector('svg.main-svg') && d.querySelector('.trace')).length];
     });
     check(drawn === plots, `every chart drew (${drawn} of ${plots})`);
+    await firstScreenChecks(browser, pagePath);
     await tableChecks(page);
     if (results) await viewerChecks(page, results);
     check(errors.length === 0, `no error while the table and the viewer were driven${errors.length ? ':\n  ' + errors.join('\n  ') : ''}`);
