@@ -60,6 +60,10 @@ class PairedRatios:
         return dict(median=median, lo=lo, hi=hi, rounds=len(both))
 
 
+# the variant suffixes of rtp at the baseline instruction set (physbench-rtp-baseline)
+BASELINE_SUFFIXES = ("-x86-64", "-baseline")
+
+
 def format_ratio(r: dict | None) -> str:
     """"2.31× (2.20–2.45)" or "" when the pair was not timed in enough common rounds."""
     if r is None:
@@ -69,7 +73,8 @@ def format_ratio(r: dict | None) -> str:
 
 def rtp_against_peers(results: pd.DataFrame, paired: PairedRatios, defaults: dict[str, str]) -> list[dict]:
     """Per contact scenario at its own step: each peer's defaults against rtp's, as the peer's time
-    per step over rtp's, paired by round (above 1: rtp is faster), with both verdicts."""
+    per step over rtp's, paired by round (above 1: rtp is faster), with both verdicts; and the same
+    against rtp's default at the baseline instruction set where the run has it (ratio_baseline)."""
     table = []
     for name, rows in results.groupby("scenario", sort=False):
         if "contact_verdict" not in rows or rows["contact_verdict"].isna().all():
@@ -79,6 +84,10 @@ def rtp_against_peers(results: pd.DataFrame, paired: PairedRatios, defaults: dic
         if rtp.empty:
             continue
         rtp = rtp.iloc[0]
+        # rtp's default at the baseline instruction set (physbench-rtp-baseline), where the run has it
+        base = own[(own["engine"] == "rtp") & own["variant"].isin(
+            [defaults["rtp"] + suffix for suffix in BASELINE_SUFFIXES])]
+        base = base.iloc[0] if not base.empty else None
         peers = []
         for engine, variant in defaults.items():
             mine = own[(own["engine"] == engine) & (own["variant"] == variant)]
@@ -86,10 +95,13 @@ def rtp_against_peers(results: pd.DataFrame, paired: PairedRatios, defaults: dic
                 continue
             peer = mine.iloc[0]
             r = paired.ratio(name, float(rtp["dt"]), peer["label"], rtp["label"])
+            at_baseline = (format_ratio(paired.ratio(name, float(rtp["dt"]), peer["label"], base["label"]))
+                           or "not timed in rounds") if base is not None else "not run"
             peers.append(dict(peer=peer["label"], ratio=format_ratio(r) or "not timed in rounds",
+                              ratio_baseline=at_baseline,
                               verdict=peer.get("contact_verdict") if pd.notna(peer.get("contact_verdict"))
                               else peer["status"]))
-        table.append(dict(scenario=name, rtp=rtp["label"],
+        table.append(dict(scenario=name, rtp=rtp["label"], rtp_baseline=base["label"] if base is not None else None,
                           rtp_verdict=rtp.get("contact_verdict") if pd.notna(rtp.get("contact_verdict"))
                           else rtp["status"], peers=peers))
     return table
