@@ -75,19 +75,21 @@ def summary(folders: list[Path], title: str) -> str:
               "(variants, and each swept substep count), one thread each (rtp's two-thread variants are left "
               "out). \"Cheapest that stands\" is the fastest whose verdict is "
               "`stands`; \"rtp faster ×\" its ms per step over rtp's cheapest standing configuration's (below 1: "
-              "rtp is slower); the last column is the least drift within the ms per step of rtp's default. A "
+              "rtp is slower), and \"rtp-x86-64 faster ×\", where the run has it, the same against rtp compiled "
+              "for the baseline instruction set, as the peers' generic builds are; the last column is the least drift within the ms per step of rtp's default. A "
               "scene step's jobs were timed in interleaved rounds (docs/metrics.md, \"Interleaved timing\"): a "
               "ratio with an interval is the median of its per-round ratios with their bootstrap 95 % interval; "
               "one without comes from jobs timed in one round only (a run over 3 s) or a run from before "
               "rounds: one run's ratio, on a machine whose speed drifts.", ""]
     for t in tables:
+        base = t.get("baseline")
         lines += [f"## {t['scenario']} (rtp's default {t['rtp_ms']} ms per step)", "",
                   "| engine | its defaults | cheapest that stands | ms per step | drift max (m) | rtp faster × "
-                  "| least drift within rtp's default ms |",
-                  "|---|---|---|---|---|---|---|"]
+                  + (f"| {base} faster × " if base else "") + "| least drift within rtp's default ms |",
+                  "|---|---|---|---|---|---|---|" + ("---|" if base else "")]
         for r in t["rows"]:
             lines.append(f"| {r['engine']} | {r['default']} | {r['best']} | {r['best_ms']} | {r['best_drift']} "
-                         f"| {r['ratio']} | {r['within']} |")
+                         f"| {r['ratio']} " + (f"| {r['ratio_baseline']} " if base else "") + f"| {r['within']} |")
         lines.append("")
     return "\n".join(lines + closed_form)
 

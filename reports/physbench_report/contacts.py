@@ -7,7 +7,7 @@ import pandas as pd
 import plotly.graph_objects as go
 from plotly.subplots import make_subplots
 
-from .rounds import format_ratio
+from .rounds import BASELINE_SUFFIXES, format_ratio
 from .speed import pareto_front
 from .style import figure_html, fmt, hue
 
@@ -167,31 +167,46 @@ def best_configurations(results: pd.DataFrame, paired=None) -> list[dict]:
         rows = rows.copy()
         speed = rows["steps_per_s"] if "steps_per_s" in rows else pd.Series(float("nan"), index=rows.index)
         rows["ms"] = 1e3 / speed.where(speed > 0)
+        # rtp at the baseline instruction set (physbench-rtp-baseline) is read as an engine of its own:
+        # the equal-instruction-set comparison with the peers' generic builds
+        baseline = (rows["engine"] == "rtp") & rows["variant"].str.endswith(BASELINE_SUFFIXES)
+        rows["who"] = rows["engine"].where(~baseline, "rtp" + rows["variant"].str.extract(
+            "(" + "|".join(BASELINE_SUFFIXES) + ")$", expand=False).fillna(""))
         # one thread each: every peer runs on one, so rtp's two-thread variants take no part here
         ok = rows[(rows["status"] == "ok") & rows["ms"].notna() & ~rows["variant"].str.endswith("-2t")]
         stands = ok[ok.get("contact_verdict", pd.Series("", index=ok.index)) == "stands"]
 
-        def cheapest(engine: str):
-            mine = stands[stands["engine"] == engine]
+        def cheapest(who: str):
+            mine = stands[stands["who"] == who]
             return None if mine.empty else mine.loc[mine["ms"].idxmin()]
+
+        def faster(best, against):
+            """best's ms over against's, paired by round where both were timed in rounds"""
+            if best is None or against is None:
+                return ""
+            interval = paired.ratio(name, float(best["dt"]), best["label"], against["label"]) if paired else None
+            if interval is not None and best["label"] != against["label"]:
+                return format_ratio(interval)
+            return fmt(best["ms"] / against["ms"])
 
         swept = rows.apply(lambda r: pd.notna(r.get("iterations")) or pd.notna(r.get("substeps")), axis=1)
         rtp_default = rows[(rows["engine"] == "rtp") & (rows["variant"] == defaults["rtp"]) & ~swept]
         rtp_ms = rtp_default["ms"].iloc[0] if not rtp_default.empty else float("nan")
         rtp_best = cheapest("rtp")
+        rtp_base_whos = [w for w in rows["who"].unique() if w != "rtp" and w.startswith("rtp-")]
+        rtp_base_best = cheapest(rtp_base_whos[0]) if rtp_base_whos else None
         table = []
-        for engine in rows["engine"].unique():
-            mine = rows[rows["engine"] == engine]
-            own = mine[(mine["variant"] == defaults.get(engine)) & ~swept[mine.index]]
+        for who in rows["who"].unique():
+            mine = rows[rows["who"] == who]
+            engine = mine["engine"].iloc[0]
+            wanted = defaults.get(engine) if who == engine else defaults.get(engine, "") + who[len(engine):]
+            own = mine[(mine["variant"] == wanted) & ~swept[mine.index]]
             default = own.iloc[0] if not own.empty else None
-            best = cheapest(engine)
-            within = ok[(ok["engine"] == engine) & (ok["ms"] <= rtp_ms) & ok["stack_drift_max"].notna()]
+            best = cheapest(who)
+            within = ok[(ok["who"] == who) & (ok["ms"] <= rtp_ms) & ok["stack_drift_max"].notna()]
             least = within.loc[within["stack_drift_max"].idxmin()] if not within.empty else None
-            ratio = (best["ms"] / rtp_best["ms"]) if best is not None and rtp_best is not None else None
-            interval = (paired.ratio(name, float(best["dt"]), best["label"], rtp_best["label"])
-                        if paired is not None and ratio is not None else None)
             table.append(dict(
-                engine=engine,
+                engine=who,
                 default=("" if default is None else
                          f"{default['label']}: {default['status']}" if default["status"] != "ok" else
                          f"{default['label']}: {default.get('contact_verdict')}, {fmt(default['ms'])} ms, "
@@ -199,8 +214,9 @@ def best_configurations(results: pd.DataFrame, paired=None) -> list[dict]:
                 best=best["label"] if best is not None else "none stands",
                 best_ms=fmt(best["ms"]) if best is not None else "",
                 best_drift=fmt(best["stack_drift_max"]) if best is not None else "",
-                ratio=(format_ratio(interval) if interval is not None and engine != "rtp"
-                       else fmt(ratio) if ratio is not None else ""),
+                ratio=faster(best, rtp_best),
+                ratio_baseline=faster(best, rtp_base_best) if rtp_base_best is not None else "",
                 within=(f"{fmt(least['stack_drift_max'])} m ({least['label']})" if least is not None else "")))
-        sections.append(dict(scenario=name, rows=table, rtp_ms=fmt(rtp_ms)))
+        sections.append(dict(scenario=name, rows=table, rtp_ms=fmt(rtp_ms),
+                             baseline=rtp_base_best["who"] if rtp_base_best is not None else None))
     return sections

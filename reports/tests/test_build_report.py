@@ -404,6 +404,32 @@ def test_best_configurations_read_every_knob_and_name_the_cheapest_that_stands()
     assert by_engine["jolt"]["best"] == "none stands" and by_engine["jolt"]["ratio"] == ""
 
 
+def test_rtp_at_the_baseline_instruction_set_is_read_apart_from_its_native_build():
+    # rtp's native build stands at 1 ms, its baseline build (soft-step-x86-64) at 3 ms, Bullet at 2:
+    # rtp's own cheapest stays the native one (the baseline row, faster or slower, is never
+    # mixed in), the baseline build is a row of its own, and every engine's ratio is given
+    # against both builds
+    def row(engine, variant, ms, drift, verdict, substeps=float("nan")):
+        r = contact_row(engine, variant, 1e3 / ms, drift, verdict=verdict)
+        r.update(substeps=substeps, iterations=float("nan"),
+                 label=f"{engine}/{variant}" + (f" substeps={int(substeps)}" if substeps == substeps else ""))
+        return r
+    rows = pd.DataFrame([
+        row("rtp", "soft-step", 1.0, 1e-3, "stands"),
+        row("rtp", "soft-step-x86-64", 3.0, 1e-3, "stands"),
+        row("rtp", "soft-step-x86-64", 0.5, 2e-3, "stands", substeps=1),
+        row("bullet", "float", 2.0, 4e-3, "stands"),
+    ])
+    (section,) = contacts.best_configurations(rows)
+    by_engine = {r["engine"]: r for r in section["rows"]}
+    assert section["baseline"] == "rtp-x86-64"
+    assert by_engine["rtp"]["best"] == "rtp/soft-step"
+    assert by_engine["rtp-x86-64"]["best"] == "rtp/soft-step-x86-64 substeps=1"
+    assert by_engine["rtp-x86-64"]["default"].startswith("rtp/soft-step-x86-64: stands, 3 ms")
+    assert by_engine["bullet"]["ratio"] == "2"  # 2 ms against the native build's 1 ms
+    assert by_engine["bullet"]["ratio_baseline"] == "4"  # against the baseline build's cheapest 0.5 ms
+
+
 def test_front_page_never_names_a_failed_run_fastest_or_most_accurate():
     # bullet collapses the stack fastest of all, jolt drifts: neither may be named fastest or most
     # accurate; both are failures in words, with their reasons
