@@ -331,6 +331,37 @@ Scene overlap_recovery_scene() {
   return scene;
 }
 
+// Boxes spawned into one another, as a spawner does by accident: a 4 × 4 × 4 block of 64 unit
+// boxes 0.6 m apart centre to centre, so each is 0.4 m into each neighbour along every axis,
+// tilted a little, the bottom layer 0.2 m into the ground, μ = 0.6. Every engine must push them
+// apart: what does a step cost while it does, and how much speed and energy does it add?
+Scene overlap_heap_scene() {
+  constexpr double kFriction = 0.6, kSpacing = 0.6, kSunk = 0.2, kTilt = 0.1;
+  constexpr int kSide = 4;
+  Scene scene = contact_scene(
+      "overlap-heap",
+      "64 unit boxes spawned 0.6 m apart (0.4 m into each neighbour), the bottom layer 0.2 m into "
+      "the ground, μ = 0.6: what does a step cost while each engine pushes them apart, and how much "
+      "speed and energy does that add?",
+      3.0);
+  scene.planar = false;
+  scene.bodies.push_back(ground(kFriction));
+  std::uint64_t counter = 64;
+  for (int layer = 0; layer < kSide; ++layer)
+    for (int i = 0; i < kSide; ++i)
+      for (int k = 0; k < kSide; ++k) {
+        const Vec3 at((i - 0.5 * (kSide - 1)) * kSpacing, kHalf - kSunk + layer * kSpacing,
+                      (k - 0.5 * (kSide - 1)) * kSpacing);
+        BodySpec b = unit_box("h" + std::to_string(layer) + "." + std::to_string(i) + "." +
+                                  std::to_string(k),
+                              at, kFriction);
+        b.orientation = tilt(counter++ * 0x100, kTilt, false);
+        scene.bodies.push_back(b);
+      }
+  scene.probe.metrics = {Metric::Penetration, Metric::Energy};
+  return scene;
+}
+
 Scene tunnelling_scene(double hz) {
   constexpr double kSpeed = 50.0, kHalfSize = 0.05, kWallHalfThickness = 0.025, kWallX = 2.0;
   Scene scene = contact_scene(
@@ -514,6 +545,10 @@ std::vector<Scenario> contact_scenarios() {
                  "boxes started 5 cm into each other: how much speed and energy does the "
                  "correction add?",
                  overlap_recovery_scene});
+  all.push_back({"overlap-heap",
+                 "64 boxes spawned deep into one another: what does pushing them apart cost a "
+                 "step, and how much speed and energy does it add?",
+                 overlap_heap_scene});
   for (double hz : {30.0, 60.0, 120.0})
     all.push_back({"tunnelling-" + tag(hz),
                    "does a small box at 50 m/s pass through a 5 cm wall at " + tag(hz) + " Hz?",
