@@ -1,5 +1,5 @@
 // stack_probe: one contact scenario on rtp with chosen solver settings, and what the stack did —
-// the tool behind docs/solver.md's "what was tried" figures. Prints, every simulated second (or
+// the tool behind the solver figures in docs/history.md ("Solver"). Prints, every simulated second (or
 // every `every` seconds), the drift and the top box's sideways and height change (stderr), and one
 // summary line (stdout): drift as the harness defines it (the largest horizontal displacement of
 // any box, over the run so far), the top's height change, the deepest penetration the narrow
