@@ -73,3 +73,31 @@ def test_the_glance_lists_a_scenario_where_every_run_failed():
     (entry,) = at_a_glance(rows, {"scenarios": {"tower-20": {"dt": 1 / 60}}})
     assert entry["fastest"] == ""
     assert len(entry["failures"]) == 2, entry["failures"]
+
+
+def test_each_peer_is_given_against_rtp_at_both_instruction_sets(tmp_path):
+    # rtp's native build takes 1, its baseline build 4 and Bullet 2 (x 1e-4 s) in every round, the
+    # machine's speed changing from round to round: Bullet is 2x the native build and 0.5x the
+    # baseline one; a run without the baseline build says "not run"
+    import pandas as pd
+    from physbench_report.rounds import rtp_against_peers
+
+    lines = []
+    for k, scale in enumerate([1.0, 1.3, 0.8], start=1):
+        lines.append(f"tower-20,0.0166666667,rtp,soft-step,,,{k},1,3,{1e-4 * scale}")
+        lines.append(f"tower-20,0.0166666667,rtp,soft-step-x86-64,,,{k},2,3,{4e-4 * scale}")
+        lines.append(f"tower-20,0.0166666667,bullet,float,,,{k},3,3,{2e-4 * scale}")
+    write_rounds(tmp_path, lines)
+    paired = PairedRatios(load_rounds(tmp_path))
+    rows = pd.DataFrame([
+        dict(scenario="tower-20", engine=e, variant=v, label=f"{e}/{v}", dt=1 / 60, status="ok",
+             contact_verdict="stands", iterations=float("nan"), substeps=float("nan"))
+        for e, v in [("rtp", "soft-step"), ("rtp", "soft-step-x86-64"), ("bullet", "float")]])
+    defaults = {"rtp": "soft-step", "bullet": "float"}
+    (scene,) = rtp_against_peers(rows, paired, defaults)
+    (bullet,) = scene["peers"]
+    assert scene["rtp_baseline"] == "rtp/soft-step-x86-64"
+    assert bullet["ratio"] == "2× (2–2)"
+    assert bullet["ratio_baseline"] == "0.5× (0.5–0.5)"
+    (scene,) = rtp_against_peers(rows[rows["variant"] != "soft-step-x86-64"], paired, defaults)
+    assert scene["rtp_baseline"] is None and scene["peers"][0]["ratio_baseline"] == "not run"
