@@ -11,6 +11,7 @@ import plotly.graph_objects as go
 
 from .contacts import DRIFT_FLOOR, passed
 from .load import is_nominal
+from .rounds import BASELINE_SUFFIXES
 from .speed import headline_metric, pareto_front
 from .style import figure_html, hue
 
@@ -40,8 +41,14 @@ HEIGHT, TOP = 270, 20
 
 
 def one_thread(rows: pd.DataFrame) -> pd.DataFrame:
-    """Every peer runs on one thread: rtp's two-thread variants take no part in a front."""
-    return rows[~rows["variant"].str.endswith("-2t")]
+    """Every peer runs on one thread: rtp's two-thread variants take no part in a front. rtp
+    compiled for the baseline instruction set (physbench-rtp-baseline) is a front of its own,
+    rtp-x86-64: the equal-footing line beside the native build's."""
+    rows = rows[~rows["variant"].str.endswith("-2t")].copy()
+    for suffix in BASELINE_SUFFIXES:
+        baseline = (rows["engine"] == "rtp") & rows["variant"].str.endswith(suffix)
+        rows.loc[baseline, "engine"] = "rtp" + suffix
+    return rows
 
 
 def stack_points(rows: pd.DataFrame, meta: dict) -> pd.DataFrame:
@@ -139,6 +146,18 @@ def stack_chart(name: str, rows: pd.DataFrame, meta: dict, question: dict) -> di
                 chart=figure_html(fig, height=HEIGHT, top=TOP),
                 note=f"{name} at its own step, runs that stand (drift under {DRIFT_FLOOR:g} m drawn at it)"
                      + missing_note(rows, points))
+
+
+def scene_fronts_chart(rows: pd.DataFrame, meta: dict) -> str | None:
+    """A stack scene's every engine's own front over all its configurations at the scene's own
+    step (variants and swept knobs), drawn full width for the scene's section; None when no run
+    passed."""
+    points = stack_points(rows, meta)
+    if points.empty:
+        return None
+    fig = front_figure(engine_fronts(points), "ms per step, median", "max drift (m)", "ms per step", "m drift")
+    fig.update_layout(showlegend=True)
+    return figure_html(fig, height=360, top=TOP)
 
 
 def error_chart(name: str, rows: pd.DataFrame, question: dict) -> dict | None:

@@ -11,7 +11,7 @@ from . import replay
 from .benchmarks import broadphase_benchmark, contacts_benchmark, narrowphase_benchmark, particle_benchmark
 from .comparison import comparison_section
 from .contacts import CONTACT_VIEWS, best_configurations, drift_cost_views, verdict_table
-from .front import first_screen
+from .front import first_screen, scene_fronts_chart
 from .glance import at_a_glance
 from .rounds import PairedRatios, load_rounds, rtp_against_peers
 from .load import is_nominal, load_results
@@ -49,6 +49,9 @@ def build_report(folder: Path, compare_with: Path | None = None) -> Path:
     broadphase, narrowphase = broadphase_benchmark(folder), narrowphase_benchmark(folder)
     nominal = results[[is_nominal(meta, r) for _, r in results.iterrows()]]
     paired = PairedRatios(load_rounds(folder))
+    drift_cost = drift_cost_views(nominal)
+    for d in drift_cost:  # above each stack's two views: every engine's own front over all it ran
+        d["engine_fronts"] = scene_fronts_chart(results[results["scenario"] == d["scenario"]], meta)
     # in page order
     page = TEMPLATES.get_template("page.html.j2").render(
         meta=meta, plotlyjs=plotly.offline.get_plotlyjs(), comparison=comparison,
@@ -56,7 +59,7 @@ def build_report(folder: Path, compare_with: Path | None = None) -> Path:
         table=results_table(results, meta), tablejs=table_script(), scenarios=scenarios,
         verdicts=verdict_table(nominal),
         stack_replays=[dict(name=n, anchor=anchor_of(n), replay=replays[n]) for n in stacks],
-        drift_cost=drift_cost_views(nominal), contact_views=CONTACT_VIEWS,
+        drift_cost=drift_cost, contact_views=CONTACT_VIEWS,
         best_configurations=best_configurations(nominal, paired),
         rtp_against=rtp_against_peers(nominal, paired, CONTACT_VIEWS["each engine's defaults"]),
         contacts=contacts, profiles=stage_profiles(results, meta), families=stability_maps(results, meta),

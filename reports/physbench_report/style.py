@@ -13,7 +13,7 @@ import plotly.offline
 # one hue an engine and one line style and marker a variant, the same on every chart of a page
 ENGINE_HUES = {"rtp": "#d62728", "bullet": "#1f77b4", "ode": "#2ca02c", "box2d": "#9467bd",
                "box2d-v3": "#8c564b", "mujoco": "#ff7f0e", "mujoco-2.2": "#bcbd22", "jolt": "#17becf",
-               "rapier": "#e377c2", "test-fault": "#7f7f7f"}
+               "rapier": "#e377c2", "test-fault": "#7f7f7f", "rtp-x86-64": "#ff9896"}
 SPARE_HUES = ["#393b79", "#637939", "#8c6d31", "#843c39", "#7b4173"]
 DASHES = ["solid", "dash", "dot", "dashdot", "longdash", "longdashdot"]
 SYMBOLS = ["circle", "square", "diamond", "triangle-up", "x", "star", "cross", "pentagon", "hexagon", "triangle-down"]

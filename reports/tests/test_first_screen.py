@@ -202,3 +202,21 @@ def test_the_benchmarks_broad_and_narrow_phase_join_the_first_screen_where_the_r
     assert all(c["question"].endswith("?") for c in screen["charts"])
     # without the benchmark files, no such chart
     assert [c["topic"] for c in front.first_screen(tower_rows(), TOWER)["charts"]] == ["stacking"]
+
+
+def test_rtp_at_the_baseline_instruction_set_is_a_front_of_its_own():
+    # a front mixing rtp's two builds would hide the baseline build behind the native one: the
+    # baseline rows become rtp-x86-64, and two-thread rows take no part
+    from physbench_report.front import engine_fronts, one_thread
+
+    rows = pd.DataFrame([
+        dict(engine="rtp", variant="soft-step", label="rtp/soft-step", cost=1.0, error=1e-3, dt=1 / 60),
+        dict(engine="rtp", variant="soft-step-2t", label="rtp/soft-step-2t", cost=0.5, error=1e-3, dt=1 / 60),
+        dict(engine="rtp", variant="soft-step-x86-64", label="rtp/soft-step-x86-64", cost=3.0, error=1e-3,
+             dt=1 / 60),
+        dict(engine="bullet", variant="float", label="bullet/float", cost=2.0, error=1e-2, dt=1 / 60),
+    ])
+    fronts = engine_fronts(one_thread(rows))
+    assert set(fronts) == {"rtp", "rtp-x86-64", "bullet"}
+    assert list(fronts["rtp"]["label"]) == ["rtp/soft-step"]
+    assert list(fronts["rtp-x86-64"]["label"]) == ["rtp/soft-step-x86-64"]
