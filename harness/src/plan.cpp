@@ -51,6 +51,7 @@ std::vector<PlannedScene> planned_scenes(const RunOptions& options) {
     PlannedScene p{scenario->build(),  scenario->question,       scenario->sweep_dt,
                    scenario->family,   scenario->parameter_name, scenario->parameter,
                    {}};
+    for (int n : scenario->sweep_iterations) p.knobs.push_back({n, 0});
     for (int n : scenario->sweep_substeps) p.knobs.push_back({0, n});
     scenes.push_back(std::move(p));
   }

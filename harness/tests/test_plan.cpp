@@ -6,6 +6,7 @@
 #include <algorithm>
 #include <map>
 #include <set>
+#include <utility>
 
 #include "physbench/plan.h"
 
@@ -149,21 +150,20 @@ TEST(Plan, AKnobSweepRunsEveryVariantOncePerValueWithinItsSceneStep) {
   EXPECT_NE(plan.fingerprint, physbench::plan_run(other, catalog()).fingerprint);
 }
 
-// tower-20 carries its own substep grid: every engine variant at its own settings and at 1, 2,
-// 4 and 8 substeps, in the default suite; tower-10 none; a run's own sweep replaces the grid and
-// --no-sweep drops it
+// tower-20 carries its own knob grid: every engine variant at its own settings, at 20 iterations
+// and at 1, 2, 4 and 8 substeps, in the default suite; tower-10 none; a run's own sweep replaces
+// the grid and --no-sweep drops it
 TEST(Plan, AScenariosOwnSubstepGridRunsUnlessARunSweepsOrSaysNoSweep) {
   RunOptions towers = options();
   towers.scenarios = {"tower-10", "tower-20"};
   const Plan plan = physbench::plan_run(towers, catalog());
   ASSERT_EQ(plan.steps.size(), 2u);
-  std::map<std::size_t, std::vector<int>> substeps_of_step;
-  for (const PlannedJob& job : plan.jobs) {
-    if (job.engine == 0) substeps_of_step[job.step].push_back(job.knobs.substeps);
-    EXPECT_EQ(job.knobs.iterations, 0);
-  }
-  EXPECT_EQ(substeps_of_step[0], (std::vector<int>{0}));              // tower-10: its own only
-  EXPECT_EQ(substeps_of_step[1], (std::vector<int>{0, 1, 2, 4, 8}));  // tower-20: and the grid
+  std::map<std::size_t, std::vector<std::pair<int, int>>> knobs_of_step;  // (iterations, substeps)
+  for (const PlannedJob& job : plan.jobs)
+    if (job.engine == 0) knobs_of_step[job.step].push_back({job.knobs.iterations, job.knobs.substeps});
+  using Knobs = std::vector<std::pair<int, int>>;
+  EXPECT_EQ(knobs_of_step[0], (Knobs{{0, 0}}));  // tower-10: its own only
+  EXPECT_EQ(knobs_of_step[1], (Knobs{{0, 0}, {20, 0}, {0, 1}, {0, 2}, {0, 4}, {0, 8}}));  // tower-20
   for (std::size_t i = 0; i < plan.jobs.size(); ++i) EXPECT_EQ(plan.jobs[i].number, i);
   RunOptions none = towers;
   none.no_sweep = true;

@@ -25,6 +25,7 @@ struct Scenario {
   // contact stacks: each engine's best knobs, not only its defaults); `--sweep-substeps` or
   // `--sweep-iterations` replace it, `--no-sweep` drops it
   std::vector<int> sweep_substeps = {};
+  std::vector<int> sweep_iterations = {};  // iteration counts, likewise
 };
 
 // 1/30 … 1/960 s: the sweep of the integrator scenarios
