@@ -143,13 +143,7 @@ def error_over_time(rows: pd.DataFrame, series: dict, column: str, title: str, u
             lines[index] = values
     if not lines:
         return None
-    # each engine's default among the runs drawn, so that every engine with a line shows one
-    shown = default_labels(rows.loc[list(lines)])
-    fig = go.Figure()
-    for index, values in lines.items():
-        label = rows.at[index, "label"]
-        fig.add_trace(go.Scatter(x=values.index, y=values.values, mode="lines", name=label,
-                                 visible=True if label in shown else "legendonly", **trace_style(label)))
+    fig = one_line_per_engine(rows, lines, "lines")
     if joules:
         title, axis, question = "Energy gained or lost |E − E₀| (J)", "|E − E₀| (J)", QUESTIONS["energy_joules"]
     elif column in ("stack_drift", "penetration"):
@@ -161,6 +155,19 @@ def error_over_time(rows: pd.DataFrame, series: dict, column: str, title: str, u
     fig.update_layout(title=title, xaxis_title="time (s)", yaxis_title=axis)
     fig.update_yaxes(type="log", exponentformat="power")
     return dict(question=question if joules else QUESTIONS.get(column, ""), html=figure_html(fig))
+
+
+def one_line_per_engine(rows: pd.DataFrame, lines: dict, mode: str) -> go.Figure:
+    """A figure of each row's series (lines: row index → a Series against its x), each engine's
+    default among the runs drawn shown and every other variant behind the legend, so that every
+    engine with a line shows one."""
+    shown = default_labels(rows.loc[list(lines)])
+    fig = go.Figure()
+    for index, values in lines.items():
+        label = rows.at[index, "label"]
+        fig.add_trace(go.Scatter(x=values.index, y=values.values, mode=mode, name=label,
+                                 visible=True if label in shown else "legendonly", **trace_style(label)))
+    return fig
 
 
 def error_by_body(rows: pd.DataFrame, series: dict) -> dict | None:
@@ -178,12 +185,7 @@ def error_by_body(rows: pd.DataFrame, series: dict) -> dict | None:
             lines[index] = per_body
     if not lines:
         return None
-    shown = default_labels(rows.loc[list(lines)])
-    fig = go.Figure()
-    for index, per_body in lines.items():
-        label = rows.at[index, "label"]
-        fig.add_trace(go.Scatter(x=per_body.index, y=per_body.values, mode="lines+markers", name=label,
-                                 visible=True if label in shown else "legendonly", **trace_style(label)))
+    fig = one_line_per_engine(rows, lines, "lines+markers")
     fig.update_layout(title="Max position error of each body (body index along the scene)",
                       xaxis_title="body (index in the scene)", yaxis_title="max position error (m)")
     fig.update_yaxes(type="log", exponentformat="power")

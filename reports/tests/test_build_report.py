@@ -377,12 +377,16 @@ def test_drift_against_cost_has_a_front_per_view():
     assert "box2d\\u002fdefault: settles" in section["chart"]
 
 
+def knob_row(engine, variant, ms, drift, verdict, substeps=float("nan")):
+    """A stack row at ms per step, at the variant's own settings or at a swept substep count."""
+    r = contact_row(engine, variant, 1e3 / ms, drift, verdict=verdict)
+    r.update(substeps=substeps, iterations=float("nan"),
+             label=f"{engine}/{variant}" + (f" substeps={int(substeps)}" if substeps == substeps else ""))
+    return r
+
+
 def test_best_configurations_read_every_knob_and_name_the_cheapest_that_stands():
-    def row(engine, variant, ms, drift, verdict, substeps=float("nan")):
-        r = contact_row(engine, variant, 1e3 / ms, drift, verdict=verdict)
-        r.update(substeps=substeps, iterations=float("nan"),
-                 label=f"{engine}/{variant}" + (f" substeps={int(substeps)}" if substeps == substeps else ""))
-        return r
+    row = knob_row
     rows = pd.DataFrame([
         row("rtp", "soft-step", 2.0, 1e-3, "stands"),
         row("rtp", "soft-step", 1.25, 2e-3, "stands", substeps=4),
@@ -409,11 +413,7 @@ def test_rtp_at_the_baseline_instruction_set_is_read_apart_from_its_native_build
     # rtp's own cheapest stays the native one (the baseline row, faster or slower, is never
     # mixed in), the baseline build is a row of its own, and every engine's ratio is given
     # against both builds
-    def row(engine, variant, ms, drift, verdict, substeps=float("nan")):
-        r = contact_row(engine, variant, 1e3 / ms, drift, verdict=verdict)
-        r.update(substeps=substeps, iterations=float("nan"),
-                 label=f"{engine}/{variant}" + (f" substeps={int(substeps)}" if substeps == substeps else ""))
-        return r
+    row = knob_row
     rows = pd.DataFrame([
         row("rtp", "soft-step", 1.0, 1e-3, "stands"),
         row("rtp", "soft-step-x86-64", 3.0, 1e-3, "stands"),
