@@ -27,6 +27,7 @@ import plotly.offline
 
 import build_report
 import compare
+from physbench_report.style import plotly_js
 
 # a row's main error: the first of these it has (the scenario's own question)
 MAIN_ERROR = ["position_err_max", "orientation_err_max", "stack_drift_max", "apex_rel_err_max",
@@ -168,7 +169,7 @@ def report(history: Path, out: Path) -> int:
     total = sum(p.stat().st_size for e in runs for p in e.iterdir())
     parts = [
         "<!doctype html><html><head><meta charset='utf-8'><title>physbench history</title>",
-        f"<script>{plotly.offline.get_plotlyjs()}</script>",
+        f"<script>{plotly_js()}</script>",
         "<style>body{font-family:sans-serif;margin:1em 2em}pre{background:#f4f4f4;padding:.5em;overflow-x:auto}</style>",
         "</head><body><h1>physbench: the history</h1>",
         f"<p>{len(runs)} runs, {total:,} bytes in all ({total // len(runs):,} a run on average), "

@@ -5,7 +5,6 @@ from __future__ import annotations
 from pathlib import Path
 
 import jinja2
-import plotly.offline
 
 from . import replay
 from .benchmarks import broadphase_benchmark, contacts_benchmark, narrowphase_benchmark, particle_benchmark
@@ -20,7 +19,7 @@ from .scaling import scaling_charts
 from .scenarios import scenario_sections
 from .settings import engine_settings
 from .stability import stability_maps
-from .style import anchor_of, learn_styles
+from .style import LAZY_CHARTS, anchor_of, learn_styles, plotly_js
 from .table import results_table, table_script
 
 # the page and its sections (templates/*.html.j2, report.css), escaped unless marked safe
@@ -54,7 +53,7 @@ def build_report(folder: Path, compare_with: Path | None = None) -> Path:
         d["engine_fronts"] = scene_fronts_chart(results[results["scenario"] == d["scenario"]], meta)
     # in page order
     page = TEMPLATES.get_template("page.html.j2").render(
-        meta=meta, plotlyjs=plotly.offline.get_plotlyjs(), comparison=comparison,
+        meta=meta, plotlyjs=plotly_js(), lazycharts=LAZY_CHARTS, comparison=comparison,
         front=first_screen(results, meta, broadphase, narrowphase), glance=glance,
         table=results_table(results, meta), tablejs=table_script(), scenarios=scenarios,
         verdicts=verdict_table(nominal),

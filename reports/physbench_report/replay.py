@@ -15,14 +15,14 @@ import numpy as np
 REPLAY_SCENES = ["tower-20", "pyramid-20", "rain", "tumbling-box", "spring-cube", "particles-attractors",
                  "particles-plume", "particles-snow", "tower-10", "pyramid-10"]
 # compressed pose bytes one scene's viewer may embed (frames are dropped evenly to fit)
-SCENE_BYTES = 1_500_000
+SCENE_BYTES = 600_000
 # all the viewers of one page; a scene past it gets a note instead of a viewer
-PAGE_BYTES = 8_000_000
+PAGE_BYTES = 2_200_000
 # the contacts' own budgets, on top of the poses' (contact points compress worse than poses: a
 # pyramid-20's every contact point is 3.4 MB for nine engines), so contacts never cost a pose frame
 # or a scene its viewer, and a full page of poses still leaves them room
-CONTACT_SCENE_BYTES = 500_000
-CONTACT_PAGE_BYTES = 2_500_000
+CONTACT_SCENE_BYTES = 250_000
+CONTACT_PAGE_BYTES = 700_000
 # the variant each engine is shown in (its default); an engine not named shows its first row
 SHOWN_VARIANTS = {"rtp": ["soft-step", "rk4", "midpoint"], "bullet": ["float"], "ode": ["quickstep"], "box2d": ["default"],
                   "mujoco": ["euler"], "box2d-v3": ["default"], "rapier": ["default"]}

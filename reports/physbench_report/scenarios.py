@@ -157,6 +157,40 @@ def error_over_time(rows: pd.DataFrame, series: dict, column: str, title: str, u
     return dict(question=question if joules else QUESTIONS.get(column, ""), html=figure_html(fig))
 
 
+def at_own_knobs(rows: pd.DataFrame) -> pd.DataFrame:
+    """The rows run at their engine's own substeps and iterations (none swept), or all of them
+    when every row swept a knob."""
+    knobs = [c for c in ("substeps", "iterations") if c in rows]
+    own = rows[rows[knobs].isna().all(axis=1)] if knobs else rows
+    return own if len(own) else rows
+
+
+# a time series longer than this is drawn as this many equal spans of time, each its largest value;
+# a variant behind the legend (a click away, drawn by the few who ask) with fewer
+DRAWN_SPANS = 150
+HIDDEN_SPANS = 50
+
+
+def drawn_points(values: pd.Series, spans: int = DRAWN_SPANS) -> dict:
+    """A line chart's x and y for `values` (sorted by its index) at a page's width, as float32
+    (which a chart a few hundred pixels high cannot tell from float64): a short series whole; a
+    longer one as `spans` equal spans of its time, each drawn at its middle with its largest value
+    (the worst error in it, so every peak is drawn), a span without samples left a gap. Evenly
+    spaced x is given as a start and a step instead of an array."""
+    t = values.index.to_numpy(float)
+    if len(values) <= spans:
+        y = values.to_numpy(np.float32)
+        step = np.diff(t)
+        if len(t) > 2 and np.allclose(step, step[0], rtol=1e-6, atol=0):
+            return dict(x0=float(t[0]), dx=float(step[0]), y=y)
+        return dict(x=t.astype(np.float32), y=y)
+    width = (t[-1] - t[0]) / spans
+    which = np.minimum(((t - t[0]) / width).astype(int), spans - 1)
+    top = np.full(spans, np.nan)
+    np.fmax.at(top, which, values.to_numpy(float))
+    return dict(x0=float(t[0] + width / 2), dx=float(width), y=top.astype(np.float32))
+
+
 def one_line_per_engine(rows: pd.DataFrame, lines: dict, mode: str) -> go.Figure:
     """A figure of each row's series (lines: row index → a Series against its x), each engine's
     default among the runs drawn shown and every other variant behind the legend, so that every
@@ -165,8 +199,9 @@ def one_line_per_engine(rows: pd.DataFrame, lines: dict, mode: str) -> go.Figure
     fig = go.Figure()
     for index, values in lines.items():
         label = rows.at[index, "label"]
-        fig.add_trace(go.Scatter(x=values.index, y=values.values, mode=mode, name=label,
-                                 visible=True if label in shown else "legendonly", **trace_style(label)))
+        visible = label in shown
+        fig.add_trace(go.Scatter(**drawn_points(values, DRAWN_SPANS if visible else HIDDEN_SPANS), mode=mode,
+                                 name=label, visible=True if visible else "legendonly", **trace_style(label)))
     return fig
 
 
@@ -249,12 +284,15 @@ def scenario_sections(folder: Path, results: pd.DataFrame, meta: dict, replays: 
         if name in family:
             continue
         own = rows[[is_nominal(meta, r) for _, r in rows.iterrows()]]
-        series = trajectories(folder, own)
+        # the charts over time draw each configuration at its engine's own knobs; the swept
+        # substeps and iterations are the fronts' and the best-knobs table's
+        drawn = at_own_knobs(own)
+        series = trajectories(folder, drawn)
         # a contact scene's energy in joules, from its scene's masses and shapes
         scene = scene_of(folder, info) if has_contact_metrics(own) else None
-        charts = [error_over_time(own, series, column, title, unit, scene) for column, title, unit, summary in SERIES
-                  if summary in own and own[summary].notna().any()]
-        charts += [error_by_body(own, series), throughput_chart(own)]
+        charts = [error_over_time(drawn, series, column, title, unit, scene) for column, title, unit, summary in SERIES
+                  if summary in drawn and drawn[summary].notna().any()]
+        charts += [error_by_body(drawn, series), throughput_chart(own)]
         del series  # the next scenario's trajectories take their place
         self_errors = info.get("reference_self_error")
         floors = {float(k): v for k, v in self_errors.items()} if isinstance(self_errors, dict) else None

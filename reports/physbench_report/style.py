@@ -2,13 +2,38 @@
 number formatting, section anchors, and a plotly figure as a page fragment."""
 from __future__ import annotations
 
+import base64
+import gzip
 import html
+import itertools
 import math
+import sys
+from pathlib import Path
 
 import pandas as pd
 import plotly.graph_objects as go
 import plotly.io
 import plotly.offline
+
+# plotly.js's partial bundle with the trace types the pages draw (scatter and bar), from npm beside
+# the viewer's packages (scripts/setup.sh installs them): a quarter of the full bundle's bytes
+PLOTLY_BASIC = Path(__file__).resolve().parents[1] / "viewer" / "node_modules" / "plotly.js-basic-dist-min" / "plotly-basic.min.js"
+
+
+def plotly_js() -> str:
+    """plotly.js for a page: the basic bundle at the version the plotly package writes figures for,
+    or the package's full bundle (with a warning) when the basic one is not installed or differs."""
+    version = plotly.offline.get_plotlyjs_version()
+    if PLOTLY_BASIC.is_file():
+        text = PLOTLY_BASIC.read_text(encoding="utf-8")
+        if f" v{version}\n" in text[:200]:
+            return text
+        why = f"{PLOTLY_BASIC} is not plotly.js {version}, the version the plotly package writes for"
+    else:
+        why = f"{PLOTLY_BASIC} is missing (scripts/setup.sh installs it)"
+    print(f"report: {why}; the page carries plotly's full bundle instead", file=sys.stderr)
+    return plotly.offline.get_plotlyjs()
+
 
 # one hue an engine and one line style and marker a variant, the same on every chart of a page
 ENGINE_HUES = {"rtp": "#d62728", "bullet": "#1f77b4", "ode": "#2ca02c", "box2d": "#9467bd",
@@ -93,8 +118,44 @@ def page_template() -> go.layout.Template:
 TEMPLATE = page_template()
 
 
+_figures = itertools.count(1)
+
+
 def figure_html(fig: go.Figure, height: int = 420, top: int = 50) -> str:
-    """The figure as a div for the page (top: the margin above the plot, room for a title)."""
+    """The figure as a div for the page (top: the margin above the plot, room for a title): an
+    empty div and the figure's JSON beside it, gzipped and in base64 (a third of its bytes), which
+    the page's script (LAZY_CHARTS) draws when the div comes near the window, so a page of two
+    hundred charts opens as fast as its first screen."""
     fig.update_layout(template=TEMPLATE, margin=dict(l=60, r=20, t=top, b=50), height=height,
                       legend=dict(font=dict(size=11)))
-    return plotly.offline.plot(fig, output_type="div", include_plotlyjs=False, config={"displaylogo": False})
+    name = f"chart-{next(_figures)}"
+    spec = gzip.compress(plotly.io.to_json(fig, validate=False, pretty=False).encode(), compresslevel=9, mtime=0)
+    return (f'<div id="{name}" class="plotly-graph-div chart-lazy" style="height:{height}px; width:100%;"></div>'
+            f'<script type="text/plain" class="chart-spec" data-for="{name}">'
+            f'{base64.b64encode(spec).decode()}</script>')
+
+
+# the page's one script that draws the charts: each when it comes within two windows' height of
+# the view (or at once where IntersectionObserver is missing); window.physbenchDrawCharts() draws
+# every one now (the browser test, a reader who prints the page)
+LAZY_CHARTS = """(() => {
+  const spec = async (div) => {
+    const text = document.querySelector(`script.chart-spec[data-for="${div.id}"]`).textContent;
+    const bytes = Uint8Array.from(atob(text), (c) => c.charCodeAt(0));
+    return JSON.parse(await new Response(new Blob([bytes]).stream().pipeThrough(new DecompressionStream('gzip'))).text());
+  };
+  const draw = async (div) => {
+    if (div.dataset.drawn) return;
+    div.dataset.drawn = '1';
+    const { data, layout } = await spec(div);
+    await Plotly.newPlot(div, data, layout, { displaylogo: false, responsive: true });
+  };
+  const charts = [...document.querySelectorAll('.chart-lazy')];
+  window.physbenchDrawCharts = () => Promise.all(charts.map(draw));
+  if (!('IntersectionObserver' in window)) return window.physbenchDrawCharts();
+  const near = new IntersectionObserver((seen) => seen.forEach((e) => {
+    if (e.isIntersecting) { near.unobserve(e.target); draw(e.target); }
+  }), { rootMargin: '200% 0px' });
+  charts.forEach((c) => near.observe(c));
+  window.addEventListener('beforeprint', window.physbenchDrawCharts);
+})();"""

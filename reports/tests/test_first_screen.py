@@ -220,3 +220,29 @@ def test_rtp_at_the_baseline_instruction_set_is_a_front_of_its_own():
     assert set(fronts) == {"rtp", "rtp-x86-64", "bullet"}
     assert list(fronts["rtp"]["label"]) == ["rtp/soft-step"]
     assert list(fronts["rtp-x86-64"]["label"]) == ["rtp/soft-step-x86-64"]
+
+
+def test_a_long_series_is_drawn_as_its_largest_value_in_each_span_and_a_short_one_whole():
+    t = np.arange(1, 1001) / 100.0  # 10 s, a sample every 0.01 s
+    y = np.full(1000, 1e-6)
+    y[537] = 3e-2  # one spike: it must be drawn, at its height
+    y[800:850] = np.nan  # dropped samples (zeros on a log axis) leave a gap, not a line through them
+    drawn = scenarios.drawn_points(pd.Series(y, index=t), spans=100)
+    assert "x" not in drawn and drawn["x0"] == pytest.approx(t[0] + 0.0999 / 2) and drawn["dx"] == pytest.approx(0.0999)
+    assert len(drawn["y"]) == 100 and drawn["y"].dtype == np.float32
+    assert np.nanmax(drawn["y"]) == pytest.approx(3e-2) and np.nanargmax(drawn["y"]) == int((t[537] - t[0]) / 0.0999)
+    # spans 80 to 84 (8.002 to 8.5015 s) hold only dropped samples (8.01 to 8.50 s)
+    assert list(np.flatnonzero(np.isnan(drawn["y"]))) == [80, 81, 82, 83, 84]
+    # a short, evenly spaced series keeps every sample, its x a start and a step
+    short = scenarios.drawn_points(pd.Series([1.0, 2.0, 3.0], index=[0.5, 1.0, 1.5]), spans=100)
+    assert short["x0"] == 0.5 and short["dx"] == pytest.approx(0.5) and list(short["y"]) == [1.0, 2.0, 3.0]
+    uneven = scenarios.drawn_points(pd.Series([1.0, 2.0, 3.0], index=[0.5, 1.0, 2.5]), spans=100)
+    assert list(uneven["x"]) == [0.5, 1.0, 2.5]
+
+
+def test_the_charts_over_time_draw_each_engine_at_its_own_knobs():
+    rows = pd.DataFrame([stack_row("rtp", "soft-step", 1.0, 1e-3), stack_row("bullet", "float", 1.0, 1e-3),
+                         stack_row("bullet", "float", 2.0, 1e-4, substeps=4)])
+    assert list(scenarios.at_own_knobs(rows).index) == [0, 1]
+    swept = rows.iloc[[2]]
+    assert list(scenarios.at_own_knobs(swept).index) == [2]  # nothing at its own knobs: what there is

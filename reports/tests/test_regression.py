@@ -5,12 +5,13 @@ from __future__ import annotations
 import csv
 import json
 import os
+import re
 import subprocess
 from pathlib import Path
 
 import pytest
 
-from support import PHYSBENCH, physbench_run
+from support import PHYSBENCH, figure_specs, physbench_run, readable
 
 import compare
 import merge
@@ -252,13 +253,13 @@ def test_the_report_opens_with_what_changed_since_an_earlier_run(tmp_path):
         writer = csv.DictWriter(f, fieldnames=list(rows[0].keys()), lineterminator="\n")
         writer.writeheader()
         writer.writerows(rows)
-    page = build_report.build_report(new, old).read_text()
+    page = readable(build_report.build_report(new, old).read_text())
     section = page[page.index("<section id=\"compare\">"):page.index('<section id="results">')]
     assert "1 regression(s)" in section
     assert "less accurate" in section and "tumbling-box" in section and "rtp/rk4" in section
     # without --compare there is no such section, and the same run against itself has no change
-    assert "id=\"compare\"" not in build_report.build_report(new).read_text()
-    same = build_report.build_report(old, old).read_text()
+    assert "id=\"compare\"" not in readable(build_report.build_report(new).read_text())
+    same = readable(build_report.build_report(old, old).read_text())
     assert "no regression" in same and "No change beyond the noise." in same
 
 
@@ -311,7 +312,7 @@ def test_the_front_page_names_the_fastest_the_most_accurate_and_the_failures(tmp
     run = physbench_run(tmp_path / "run", "-s", "tumbling-box,projectile", "-e", "rtp,test-fault",
                         "--variant", "rk4,euler,midpoint,abort", "--timeout", "20")
     # --budget 0 times one pass: enough to rank, and the page must rank as the file says
-    page = build_report.build_report(run).read_text()
+    page = readable(build_report.build_report(run).read_text())
     glance = page[page.index('<section id="glance">'):page.index('<section id="results">')]
     rows = [r for r in rows_of(run) if r["scenario"] == "tumbling-box" and r["status"] == "ok"
             and abs(float(r["dt"]) - 1 / 60) < 1e-9]
@@ -327,14 +328,13 @@ def test_the_front_page_names_the_fastest_the_most_accurate_and_the_failures(tmp
 
 
 def plotted_traces(page: str) -> list[dict]:
-    """Every trace of every plotly chart in the page, as plotly was given it."""
+    """Every trace of every chart in the page, as plotly is given it (the history's page draws
+    with plotly's own scripts, the report's from each chart's JSON)."""
     decoder = json.JSONDecoder()
-    traces, at = [], 0
-    while (at := page.find("Plotly.newPlot(", at)) >= 0:
-        start = page.index("[", page.index(",", at))
-        data, _ = decoder.raw_decode(page, start)
+    traces = [t for spec in figure_specs(page) for t in spec["data"]]
+    for call in re.finditer(r'Plotly\.newPlot\(\s*"', page):  # plotly's own: the div's id, then the data
+        data, _ = decoder.raw_decode(page, page.index("[", page.index(",", call.start())))
         traces.extend(data)
-        at = start
     return traces
 
 

@@ -617,19 +617,54 @@ async function start(root) {
   return new Replay(root, data, runs);
 }
 
-async function startAll() {
-  const replays = [];
-  for (const root of document.querySelectorAll('.replay[data-replay]')) {
-    try {
-      replays.push(await start(root));
-    } catch (error) {
+// each replay starts (decodes its poses, makes its WebGL canvas) when it comes within two windows'
+// height of the view, so a page of replays opens as fast as its first screen; the ready flag
+// says the replays near the window at load have started, and window.physbenchStartReplays()
+// starts every one (the browser test) and resolves to them all, in page order
+const started = new Map();
+
+function startOne(root) {
+  if (!started.has(root)) {
+    started.set(root, start(root).catch((error) => {
       root.textContent = `The replay could not start: ${error.message}`;
       console.error('replay', root.dataset.replay, error);
-    }
+      return null;
+    }));
   }
+  return started.get(root);
+}
+
+function roots() {
+  return [...document.querySelectorAll('.replay[data-replay]')];
+}
+
+async function startAll() {
+  const replays = (await Promise.all(roots().map(startOne))).filter(Boolean);
   window.physbenchReplays = replays;
+  return replays;
+}
+
+async function startNear() {
+  window.physbenchStartReplays = startAll;
+  const all = roots();
+  if (!('IntersectionObserver' in window)) {
+    await startAll();
+  } else {
+    const near = new IntersectionObserver((seen) => seen.forEach((e) => {
+      if (e.isIntersecting) {
+        near.unobserve(e.target);
+        startOne(e.target);
+      }
+    }), { rootMargin: '200% 0px' });
+    const reach = 3 * window.innerHeight;
+    for (const root of all) {
+      if (root.getBoundingClientRect().top < reach) startOne(root);
+      else near.observe(root);
+    }
+    window.physbenchReplays = (await Promise.all([...started.values()])).filter(Boolean);
+  }
   window.physbenchReplaysReady = true;
 }
 
-if (document.readyState === 'loading') document.addEventListener('DOMContentLoaded', startAll);
-else startAll();
+if (document.readyState === 'loading') document.addEventListener('DOMContentLoaded', startNear);
+else startNear();

@@ -138,9 +138,11 @@ const FIRST_SCREEN = { width: 1400, height: 1000 };
 
 async function firstScreenChecks(browser, pagePath) {
   const { page, errors } = await openReport(browser, pagePath, FIRST_SCREEN);
-  // plotly draws as the page loads; each chart is done when its svg holds its traces
-  await page.waitForFunction(() => [...document.querySelectorAll('.js-plotly-plot')]
+  // the first screen's charts draw as the page opens, the rest as they come near the window: the
+  // checks below need them all
+  await page.waitForFunction(() => [...document.querySelectorAll('#first .plotly-graph-div')]
     .every((d) => d.querySelector('svg.main-svg')), null, { timeout: 30000 });
+  await page.evaluate(() => window.physbenchDrawCharts());
   const charts = await page.evaluate(() => [...document.querySelectorAll('#first figure.small')].map((f) => ({
     question: f.querySelector('.question')?.textContent ?? '',
     drawn: f.querySelectorAll('.js-plotly-plot svg.main-svg .trace path, .js-plotly-plot svg.main-svg .trace .point').length,
@@ -311,11 +313,14 @@ function sceneFile(results, name) {
 }
 
 async function viewerChecks(page, results) {
-  const replays = await page.evaluate(() => window.physbenchReplays.map((r) => ({
+  // a replay starts as it comes near the window; the checks start them all
+  const atLoad = await page.evaluate(() => window.physbenchReplays.length);
+  const replays = await page.evaluate(async () => (await window.physbenchStartReplays()).map((r) => ({
     name: r.data.name, labels: r.runs.map((run) => run.label), frames: r.runs.map((run) => run.frames),
   })));
   const wanted = await page.locator('.replay[data-replay]').count();
-  check(replays.length === wanted && wanted > 0, `every replay on the page started (${replays.length} of ${wanted})`);
+  check(replays.length === wanted && wanted > 0,
+    `every replay on the page started (${replays.length} of ${wanted}; ${atLoad} near the window at load)`);
   for (const [i, replay] of replays.entries()) {
     check(replay.labels.length >= 2, `${replay.name}: two engines or more (${replay.labels.join(', ')})`);
     for (let v = 0; v < replay.labels.length; v++) {
@@ -396,10 +401,17 @@ async function main() {
     }
     const { page, errors } = await openReport(browser, pagePath);
     check(errors.length === 0, `the page loads with no JavaScript or console error${errors.length ? ':\n  ' + errors.join('\n  ') : ''}`);
-    const [plots, drawn] = await page.evaluate(() => {
+    // the charts are drawn as they come near the window: at load only those near the top are
+    const drawnNow = () => page.evaluate(() => {
       const divs = [...document.querySelectorAll('.plotly-graph-div')];
-      return [divs.length, divs.filter((d) => d.querySelector('svg.main-svg') && d.querySelector('.trace')).length];
+      return [divs.length, divs.filter((d) => d.querySelector('svg.main-svg') && d.querySelector('.trace')).length,
+        divs.length ? divs[divs.length - 1].getBoundingClientRect().top : 0];
     });
+    const [total, atLoad, lastTop] = await drawnNow();
+    if (lastTop > 3 * 900)
+      check(atLoad < total, `charts far below the window wait until they are near (${atLoad} of ${total} drawn at load)`);
+    await page.evaluate(() => window.physbenchDrawCharts());
+    const [plots, drawn] = await drawnNow();
     check(drawn === plots, `every chart drew (${drawn} of ${plots})`);
     await firstScreenChecks(browser, pagePath);
     await tableChecks(page);
