@@ -672,6 +672,42 @@ TEST(Runner, RtpAtTheBaselineInstructionSetRunsBesideTheBuildsOwn) {
 }
 #endif
 
+#ifdef PHYSBENCH_WORKERS_BUILT
+// the peers that compile from source here run a native-instruction-set build beside their generic
+// one (workers/catalog.tsv): Rapier for this machine's CPU, Box2D v3 with its AVX2 path. Each is the
+// same engine at the same settings, so it holds the tower as the generic build does, and its
+// settings table says which instruction set it was compiled for
+TEST(Runner, ThePeersNativeBuildsRunBesideTheirGenericOnes) {
+  const fs::path dir = fresh_dir("peers-native");
+  const Invocation inv = physbench({"run", "-s", "tower-10", "-e", "rapier,box2d-v3", "--variant",
+                                    "default,default-native,default-avx2", "--duration", "1",
+                                    "--budget", "0", "--no-sweep", "--out", (dir / "r").string()},
+                                   dir);
+  ASSERT_EQ(inv.outcome.exit_code, 0) << inv.output;
+  std::map<std::string, std::map<std::string, std::string>> by;  // engine/variant
+  for (const auto& row : read_rows(dir / "r" / "results.csv"))
+    by[row.at("engine") + "/" + row.at("variant")] = row;
+  std::ifstream meta_file(dir / "r" / "metadata.json");
+  const nlohmann::json engines = nlohmann::json::parse(meta_file)["engines"];
+  for (const auto& [engine, native, says] :
+       {std::tuple{"rapier", "default-native", "target-cpu=native"},
+        std::tuple{"box2d-v3", "default-avx2", "AVX2"}}) {
+    const std::string generic = std::string(engine) + "/default", built = std::string(engine) + "/" + native;
+    ASSERT_TRUE(by.count(generic) && by.count(built)) << inv.output;
+    EXPECT_EQ(by[built].at("status"), "ok") << by[built].at("message");
+    EXPECT_EQ(by[built].at("contact_verdict"), by[generic].at("contact_verdict"));
+    EXPECT_NEAR(std::stod(by[built].at("stack_drift_max")), std::stod(by[generic].at("stack_drift_max")), 1e-3);
+    const auto instruction_set = [&](const char* variant) {
+      for (const auto& row : engines[engine]["variants"][variant])
+        if (row["name"] == "instruction set") return row["value"].get<std::string>();
+      return std::string("(no instruction set row)");
+    };
+    EXPECT_NE(instruction_set(native).find(says), std::string::npos) << instruction_set(native);
+    EXPECT_EQ(instruction_set("default").find(says), std::string::npos) << instruction_set("default");
+  }
+}
+#endif
+
 #ifdef PHYSBENCH_HAVE_BULLET
 // a swept substep count reaches a peer: Bullet at four steps of dt/4 a frame holds the 10-box
 // tower its single step lets drift half a metre, and its settings table says what ran; an

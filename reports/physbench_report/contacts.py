@@ -7,7 +7,7 @@ import pandas as pd
 import plotly.graph_objects as go
 from plotly.subplots import make_subplots
 
-from .rounds import BASELINE_SUFFIXES, format_ratio
+from .rounds import BASELINE_SUFFIXES, NATIVE_SUFFIXES, format_ratio
 from .speed import pareto_front
 from .style import figure_html, fmt, hue
 
@@ -167,11 +167,14 @@ def best_configurations(results: pd.DataFrame, paired=None) -> list[dict]:
         rows = rows.copy()
         speed = rows["steps_per_s"] if "steps_per_s" in rows else pd.Series(float("nan"), index=rows.index)
         rows["ms"] = 1e3 / speed.where(speed > 0)
-        # rtp at the baseline instruction set (physbench-rtp-baseline) is read as an engine of its own:
-        # the equal-instruction-set comparison with the peers' generic builds
-        baseline = (rows["engine"] == "rtp") & rows["variant"].str.endswith(BASELINE_SUFFIXES)
-        rows["who"] = rows["engine"].where(~baseline, "rtp" + rows["variant"].str.extract(
-            "(" + "|".join(BASELINE_SUFFIXES) + ")$", expand=False).fillna(""))
+        # a build at another instruction set is read as an engine of its own: rtp at the baseline
+        # (physbench-rtp-baseline), the equal-instruction-set comparison with the peers' generic
+        # builds, and a peer built for this machine (rapier-native, box2d-v3-avx2), the native one
+        # with rtp's own build
+        other = ((rows["engine"] == "rtp") & rows["variant"].str.endswith(BASELINE_SUFFIXES)) | \
+            ((rows["engine"] != "rtp") & rows["variant"].str.endswith(NATIVE_SUFFIXES))
+        rows["who"] = rows["engine"].where(~other, rows["engine"] + rows["variant"].str.extract(
+            "(" + "|".join(BASELINE_SUFFIXES + NATIVE_SUFFIXES) + ")$", expand=False).fillna(""))
         # one thread each: every peer runs on one, so rtp's two-thread variants take no part here
         ok = rows[(rows["status"] == "ok") & rows["ms"].notna() & ~rows["variant"].str.endswith("-2t")]
         stands = ok[ok.get("contact_verdict", pd.Series("", index=ok.index)) == "stands"]

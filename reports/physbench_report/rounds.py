@@ -62,6 +62,9 @@ class PairedRatios:
 
 # the variant suffixes of rtp at the baseline instruction set (physbench-rtp-baseline)
 BASELINE_SUFFIXES = ("-x86-64", "-baseline")
+# the variant suffixes of a peer built for this machine's instruction set beside its generic build
+# (workers/catalog.tsv: Rapier for the native CPU, Box2D v3 with its AVX2 path)
+NATIVE_SUFFIXES = ("-native", "-avx2")
 
 
 def format_ratio(r: dict | None) -> str:

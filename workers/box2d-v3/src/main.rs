@@ -18,6 +18,9 @@ const PLANE_HALF_LENGTH: f32 = 1000.0;
 // the scenes' speeds stay below 1e5 m/s (docs/scene-format.md); the default clamp is 400 m/s
 const MAXIMUM_LINEAR_SPEED: f32 = 1.0e5;
 
+// built with Box2D's AVX2 path (this package's feature `avx2`)
+const AVX2: bool = cfg!(feature = "avx2");
+
 fn substeps(variant: &str) -> i32 {
     if variant == "iterations-10" { EQUAL_SUBSTEPS } else { DEFAULT_SUBSTEPS }
 }
@@ -38,7 +41,9 @@ impl Engine for Box2dV3 {
                 &boxdd_sys::UPSTREAM_SHA[..8], v.major, v.minor, v.revision)
     }
     fn variants(&self) -> &'static [&'static str] {
-        &["default", "iterations-10"]
+        // the build with Box2D's AVX2 path (feature `avx2`, physbench-box2d-v3-avx2) runs the
+        // defaults under a name that says so, beside the SSE2 build's variants
+        if AVX2 { &["default-avx2"] } else { &["default", "iterations-10"] }
     }
     fn settings(&self, variant: &str) -> Vec<Setting> {
         let mut s = vec![
@@ -57,10 +62,17 @@ impl Engine for Box2dV3 {
                     "v3 has no polygon skin: boxes are the scene's exact size"),
             setting("springs", "external force at the attachment points, from the state at the \
                      start of each step", "the same method as the other peers' springs"),
-            setting("instruction set", "float, SSE2 (the crate's simd-avx2 feature off), -O2, NDEBUG",
-                    "Box2D's default x86-64 path; NDEBUG (workers/.cargo/config.toml) as in its \
-                     own release build: the crate's cc build defines none, so every internal \
-                     assertion would run in the timed step"),
+            if AVX2 {
+                setting("instruction set", "float, AVX2 (the crate's simd-avx2 feature: BOX2D_AVX2, \
+                         -mavx2), -O2, NDEBUG",
+                        "Box2D's own AVX2 path, the native-instruction-set comparison beside rtp's \
+                         native build; NDEBUG as in the SSE2 build")
+            } else {
+                setting("instruction set", "float, SSE2 (the crate's simd-avx2 feature off), -O2, NDEBUG",
+                        "Box2D's default x86-64 path; NDEBUG (workers/.cargo/config.toml) as in its \
+                         own release build: the crate's cc build defines none, so every internal \
+                         assertion would run in the timed step")
+            },
         ];
         s.push(setting("subStepCount on springs without contacts", 1,
                        "the spring force is held over the step, so one substep makes it \

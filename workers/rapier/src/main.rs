@@ -6,6 +6,18 @@ use rapier3d::prelude::*;
 
 struct Rapier;
 
+// compiled for this machine's instruction set (-C target-cpu=native reaches AVX2 on every machine
+// this runs on; the default target never does)
+const NATIVE: bool = cfg!(target_feature = "avx2");
+
+/// The SIMD target features this build was compiled with.
+fn target_features() -> String {
+    let features = [("avx512f", cfg!(target_feature = "avx512f")), ("avx2", cfg!(target_feature = "avx2")),
+                    ("fma", cfg!(target_feature = "fma")), ("sse4.2", cfg!(target_feature = "sse4.2"))];
+    let on: Vec<&str> = features.iter().filter(|(_, on)| *on).map(|(name, _)| *name).collect();
+    if on.is_empty() { "SSE2".into() } else { on.join(", ") }
+}
+
 // equal iterations: Rapier's solver iterations are substeps of its soft-step solver (one PGS and
 // one stabilisation pass each), the nearest equivalent of 10 velocity iterations
 const EQUAL_ITERATIONS: usize = 10;
@@ -18,15 +30,24 @@ impl Engine for Rapier {
         format!("{} (f32)", rapier3d::VERSION)
     }
     fn variants(&self) -> &'static [&'static str] {
-        &["default", "iterations-10"]
+        // the build for this machine's instruction set (physbench-rapier-native, built with
+        // -C target-cpu=native) runs the defaults under a name that says so
+        if NATIVE { &["default-native"] } else { &["default", "iterations-10"] }
     }
     fn settings(&self, variant: &str) -> Vec<Setting> {
         let mut s = vec![
-            setting("instruction set",
-                    "x86-64 baseline: SSE2 (Rust's default target; rapier3d without simd-stable), \
-                     f32",
-                    "the crate's default features; rtp's -x86-64 variants are the \
-                     equal-instruction-set comparison"),
+            if NATIVE {
+                setting("instruction set",
+                        format!("this machine's (-C target-cpu=native): {}, f32", target_features()),
+                        "the native-instruction-set comparison beside rtp's native build; the \
+                         crate's default features")
+            } else {
+                setting("instruction set",
+                        "x86-64 baseline: SSE2 (Rust's default target; rapier3d's default \
+                         features), f32",
+                        "the crate's default features; rtp's -x86-64 variants are the \
+                         equal-instruction-set comparison")
+            },
             setting("sleeping", "off (can_sleep false on every body)",
                     "sleeping off in every engine"),
             setting("mass properties", "from the scene, colliders at density 0",
