@@ -27,6 +27,7 @@ struct Pass {
   double stepping_seconds = 0.0;
   bool exploded = false;
   double explosion_time = 0.0;
+  long capped_at = 0;  // steps taken when the run cap stopped the run; 0: it ran to the end
   std::string reason;  // the engine's own, when it reported the explosion itself
 };
 
@@ -40,7 +41,7 @@ void stretch(Clock::time_point start, double share) {
 }
 
 Pass run_once(Engine& engine, const Scene& scene, const std::vector<int>& bodies, int every_steps,
-              double explosion_distance, double slowdown, Trajectory* keep) {
+              double explosion_distance, double slowdown, Trajectory* keep, double cap = 0.0) {
   Pass pass;
   const long steps = scene.step_count();
   Sample first = sample_of(engine, bodies, 0.0);
@@ -51,38 +52,55 @@ Pass run_once(Engine& engine, const Scene& scene, const std::vector<int>& bodies
   std::stable_sort(due.begin(), due.end(),
                    [](const auto& a, const auto& b) { return a.first < b.first; });
   std::size_t next = 0;
+  // with a run cap, a run whose first step forecasts over a quarter of the cap is watched step by
+  // step (one step of a heavy scene can take seconds); any other at each sample, so a clock read
+  // never weighs on a cheap step's timing
+  bool watch = cap > 0.0;
+  const auto seconds_since = [](Clock::time_point t) {
+    return std::chrono::duration<double>(Clock::now() - t).count();
+  };
   for (long done = 0; done < steps;) {
     const long chunk = std::min<long>(every_steps, steps - done);
     const auto start = Clock::now();
     long i = 0;  // steps of this chunk taken
+    bool over = false;
     try {
-      if (next == due.size()) {
+      if (next == due.size() && !watch) {
         for (; i < chunk; ++i) engine.step();
       } else {
-        for (; i < chunk; ++i) {
+        for (; i < chunk && !over; ++i) {
           for (; next < due.size() && due[next].first == done + i; ++next)
             engine.apply_impulse(due[next].second->body, due[next].second->impulse,
                                  due[next].second->point);
           engine.step();
+          if (watch) {
+            const double so_far = pass.stepping_seconds + seconds_since(start);
+            if (done == 0 && i == 0) watch = so_far * static_cast<double>(steps) > 0.25 * cap;
+            over = so_far >= cap;
+          }
         }
       }
     } catch (const EngineExploded& e) {
       // the engine overwrote its own state: nothing sampled after this is the scene's motion
-      pass.stepping_seconds += std::chrono::duration<double>(Clock::now() - start).count();
+      pass.stepping_seconds += seconds_since(start);
       pass.exploded = true;
       pass.explosion_time = static_cast<double>(done + i + 1) * scene.dt;
       pass.reason = e.what();
       return pass;
     }
     stretch(start, slowdown);
-    pass.stepping_seconds += std::chrono::duration<double>(Clock::now() - start).count();
-    done += chunk;
+    pass.stepping_seconds += seconds_since(start);
+    done += i;
     Sample s = sample_of(engine, bodies, static_cast<double>(done) * scene.dt);
     const bool sane = is_sane(s, explosion_distance);
     if (keep) keep->samples.push_back(std::move(s));
     if (!sane) {
       pass.exploded = true;
       pass.explosion_time = static_cast<double>(done) * scene.dt;
+      return pass;
+    }
+    if (cap > 0.0 && (over || pass.stepping_seconds >= cap) && done < steps) {
+      pass.capped_at = done;
       return pass;
     }
   }
@@ -195,9 +213,22 @@ RunResult simulate(const EngineInfo& info, const std::string& variant, const Sce
     auto engine = create();
     engine->load(scene);
     const Pass pass = run_once(*engine, scene, result.trajectory.bodies, every,
-                               options.explosion_distance, options.slowdown, &result.trajectory);
+                               options.explosion_distance, options.slowdown, &result.trajectory,
+                               options.run_cap_seconds);
     if (const std::optional<ContactCount> contacts = engine->contact_count())
       result.contacts = *contacts;
+    if (pass.capped_at > 0) {
+      // too slow to finish: its speed from the steps it took, no verdict on a part of the run
+      std::ostringstream why;
+      why << "too slow: stopped at the run cap after " << pass.capped_at << " of "
+          << result.steps << " steps (" << pass.stepping_seconds << " s of stepping, --run-cap "
+          << options.run_cap_seconds << " s); its speed is from those steps";
+      result.status = Status::Timeout;
+      result.message = why.str();
+      result.steps = pass.capped_at;
+      result.wall_seconds.push_back(pass.stepping_seconds);
+      return result;
+    }
     if (pass.exploded) {
       std::ostringstream why;
       if (!pass.reason.empty())

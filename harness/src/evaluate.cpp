@@ -32,7 +32,9 @@ void put_speed(ResultRow& row, const Scene& scene, const RunResult& r, int dynam
   for (double seconds : r.wall_seconds) repeats.push_back(steps / seconds);
   row.numbers("steps_per_s_repeats", repeats, 4);
   row.number("body_steps_per_s", steps * dynamic_bodies / wall);
-  row.number("realtime_factor", scene.duration / wall);
+  // simulated time over wall time (a run stopped at the run cap simulated only its steps)
+  row.number("realtime_factor",
+             (r.status == Status::Timeout ? steps * scene.dt : scene.duration) / wall);
   // where a step's time went, by the engine's own stages, averaged over the same repeats
   if (!r.stages.names.empty() && r.stages.steps > 0) {
     std::vector<double> ms_per_step;
@@ -191,6 +193,9 @@ EvaluatedJob evaluate_job(const PlannedScene& p, const Scene& scene, const Engin
       append(message, std::string("metrics failed: ") + e.what());
     }
   }
+  // a run stopped at the run cap (--run-cap): too slow, its speed from the steps it took, no
+  // metric from part of a run
+  if (r.status == Status::Timeout && !r.wall_seconds.empty()) put_speed(row, scene, r, dynamic_bodies);
   row.text("status", to_string(job.status));
   row.text("message", message);
   return job;

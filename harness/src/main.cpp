@@ -141,6 +141,11 @@ int main(int argc, char** argv) {
                   "rounds would multiply the suite's slowest jobs)")
       ->capture_default_str()
       ->check(CLI::PositiveNumber);
+  run->add_option("--run-cap", options.run_cap_seconds,
+                  "seconds of stepping after which a job's run stops: a timeout row, its speed "
+                  "from the steps it took (0: no cap; --timeout still kills a hung job)")
+      ->capture_default_str()
+      ->check(CLI::NonNegativeNumber);
   std::string sweep_iterations, sweep_substeps;
   run->add_option("--sweep-iterations", sweep_iterations,
                   "run every engine variant once more per value, with its solver's iterations "

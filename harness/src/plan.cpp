@@ -147,6 +147,7 @@ Plan plan_run(const RunOptions& options, const std::vector<EngineVariant>& catal
   // (a plan timed in the default five rounds fingerprints as one before rounds existed)
   if (options.rounds != 5) plan_text += "rounds " + std::to_string(options.rounds) + "\n";
   if (options.round_cap_seconds != 3.0) plan_text += "round cap " + exact(options.round_cap_seconds) + "\n";
+  if (options.run_cap_seconds != 30.0) plan_text += "run cap " + exact(options.run_cap_seconds) + "\n";
   // (a plan without a knob sweep fingerprints as it did before knobs were swept)
   if (!options.sweep_iterations.empty() || !options.sweep_substeps.empty()) {
     plan_text += "knobs";

@@ -137,7 +137,7 @@ std::vector<EngineVariant> engine_catalog(const fs::path& self) {
 RunResult run_worker_job(const EngineVariant& ev, const fs::path& scene_file,
                          const fs::path& result_file, const fs::path& log_file, int every_steps,
                          double timing_budget, double timeout, const SolverKnobs& knobs,
-                         bool timing_only) {
+                         bool timing_only, double run_cap_seconds) {
   const struct {
     fs::path scene, result, log;
   } paths{scene_file, result_file, log_file};
@@ -157,6 +157,9 @@ RunResult run_worker_job(const EngineVariant& ev, const fs::path& scene_file,
     for (const std::string& a : {std::string("--substeps"), std::to_string(knobs.substeps)})
       argv.push_back(a);
   if (timing_only) argv.push_back("--timing-only");
+  if (run_cap_seconds > 0.0)
+    for (const std::string& a : {std::string("--run-cap"), number(run_cap_seconds)})
+      argv.push_back(a);
   fs::remove(paths.result);
   const ChildOutcome outcome = run_child(argv, paths.log.string(), timeout);
   if (outcome.kind == ChildOutcome::Kind::Interrupted)
@@ -453,7 +456,8 @@ int run_suite(const RunOptions& options, const fs::path& self) {
                                         folder.work() / (stem + ".log"),
                                         scene.probe_every_steps(),
                                         options.timing_budget / std::max(1, options.rounds),
-                                        options.timeout_seconds, planned.knobs);
+                                        options.timeout_seconds, planned.knobs, false,
+                                        options.run_cap_seconds);
       if (result.status == Status::NotApplicable) {
         not_applicable = {planned.step, planned.engine};
         std::cerr << "not applicable here\n";

@@ -133,6 +133,7 @@ int run_worker(const WorkerJob& job) {
       options.slowdown = test_slowdown(job.engine, job.variant);
       options.knobs = job.knobs;
       options.timing_only = job.timing_only;
+      options.run_cap_seconds = job.run_cap_seconds;
       result = simulate(*engine, job.variant, scene, options);
     }
   } catch (const std::exception& e) {

@@ -34,6 +34,9 @@ struct SimulateOptions {
   // trajectory; timed repeats from the first, at least one, until the budget
   bool timing_only = false;
   int max_timed_repeats = 50;
+  // s of stepping after which the first run stops (0: none): the run is a timeout, timed over
+  // the steps it took (`physbench run --run-cap`, docs/metrics.md, "Status")
+  double run_cap_seconds = 0.0;
   double explosion_distance = 1e6;  // m from the origin: a body beyond it has exploded
   // for the harness's own tests only: each timed stretch of stepping is stretched by this share
   // of its time (busy waiting), so that `physbench compare` can be shown to flag a slower build
@@ -48,7 +51,7 @@ struct RunResult {
   std::string message;  // why, for anything but ok
   std::string engine_version;
   std::vector<Setting> settings;
-  long steps = 0;                    // steps per run
+  long steps = 0;                    // steps per run (a run stopped at the cap: the steps it took)
   std::vector<double> wall_seconds;  // stepping time of each timed repeat (s)
   // the engine's stages (Engine::stage_times) summed over the timed repeats; empty names when
   // the engine does not time them

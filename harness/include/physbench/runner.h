@@ -53,7 +53,8 @@ RunResult run_worker_job(const EngineVariant& ev, const std::filesystem::path& s
                          const std::filesystem::path& result_file,
                          const std::filesystem::path& log_file, int every_steps,
                          double timing_budget, double timeout_seconds,
-                         const SolverKnobs& knobs = {}, bool timing_only = false);
+                         const SolverKnobs& knobs = {}, bool timing_only = false,
+                         double run_cap_seconds = 0.0);
 
 // The converged reference of a scene without contacts (docs/metrics.md, "References"): SciPy's
 // DOP853 on the rigid-body equations of motion (validation/reference/scipy_reference.py), a worker
@@ -78,6 +79,9 @@ struct RunOptions {
   int rounds = 5;
   // --round-cap: a job whose one run takes longer (s) is timed in its first round only
   double round_cap_seconds = 3.0;
+  // --run-cap: a job's sampled run stops after this much stepping (s) and is a timeout, its speed
+  // from the steps it took (docs/metrics.md, "Status"); 0: none
+  double run_cap_seconds = 30.0;
   // --shard K/N: the K-th of N disjoint slices of the planned jobs (K from 1), a stride over the
   // plan's scene steps (steps K−1, K−1+N, …, each with all its engine variants), so a scene's
   // engines are timed on one machine; `physbench merge` joins the N folders (docs/regression.md)

@@ -20,6 +20,7 @@ struct WorkerJob {
   std::string out_path;
   SolverKnobs knobs;  // a sweep's iterations or substeps; none: the variant's own
   bool timing_only = false;  // a timing round: timed repeats only, no trajectory
+  double run_cap_seconds = 0.0;  // the sampled run stops after this much stepping (0: none)
 };
 
 // Runs the job with the engines linked into this executable and writes out_path.

@@ -18,6 +18,8 @@ inline CLI::App* add_worker_subcommand(CLI::App& app, WorkerJob& job) {
   // a sweep's solver knobs (docs/regression.md): given only when set
   worker->add_option("--iterations", job.knobs.iterations, "solver iterations (0: the variant's)");
   worker->add_option("--substeps", job.knobs.substeps, "substeps per step (0: the variant's)");
+  worker->add_option("--run-cap", job.run_cap_seconds,
+                     "seconds of stepping after which the sampled run stops, a timeout (0: none)");
   worker->add_flag("--timing-only", job.timing_only,
                    "a timing round: no sampled run, timed repeats only (at least one)");
   return worker;

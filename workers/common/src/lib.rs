@@ -403,15 +403,19 @@ struct Pass {
     error: Option<String>,
     contact_points: f64, // summed over the steps that counted them
     contact_steps: i64,
+    /// the steps taken when the run cap stopped the run; 0: it ran to the end
+    capped_at: i64,
 }
 
 /// one run of the whole scene; only the steps (forces, impulses and the engine's step) are timed,
 /// the sampling between chunks is not
-fn run_once(scene: &Scene, world: &mut dyn World, every: i64, keep: Option<&mut Vec<Value>>)
-    -> Pass {
+/// the steps taken when the run cap stopped the run; 0: it ran to the end. With a cap (s, 0: none)
+/// the run stops after that much stepping, at the step that reaches it
+fn run_once(scene: &Scene, world: &mut dyn World, every: i64, keep: Option<&mut Vec<Value>>,
+            cap: f64) -> Pass {
     let mut keep = keep;
     let mut pass = Pass { stepping_seconds: 0.0, exploded: None, error: None, contact_points: 0.0,
-                          contact_steps: 0 };
+                          contact_steps: 0, capped_at: 0 };
     let sample = |world: &dyn World, time: f64| -> (Value, bool) {
         let mut row = vec![json!(time)];
         let mut ok = true;
@@ -435,6 +439,8 @@ fn run_once(scene: &Scene, world: &mut dyn World, every: i64, keep: Option<&mut 
         let chunk = every.min(steps - done);
         let start = Instant::now();
         let mut counting = 0.0; // seconds spent counting contacts, taken off the chunk's time
+        let mut taken = chunk;
+        let mut over = false;
         for i in 0..chunk {
             while next_impulse < scene.impulses.len() && scene.impulses[next_impulse].step == done + i {
                 let p = &scene.impulses[next_impulse];
@@ -450,9 +456,15 @@ fn run_once(scene: &Scene, world: &mut dyn World, every: i64, keep: Option<&mut 
                 pass.contact_steps += 1;
             }
             counting += count_start.elapsed().as_secs_f64();
+            if cap > 0.0
+                && pass.stepping_seconds + start.elapsed().as_secs_f64() - counting >= cap {
+                taken = i + 1;
+                over = true;
+                break;
+            }
         }
         pass.stepping_seconds += (start.elapsed().as_secs_f64() - counting).max(0.0);
-        done += chunk;
+        done += taken;
         let time = done as f64 * scene.dt;
         let (row, ok) = sample(world, time);
         if let Some(k) = keep.as_deref_mut() {
@@ -470,6 +482,10 @@ fn run_once(scene: &Scene, world: &mut dyn World, every: i64, keep: Option<&mut 
             pass.exploded = Some(format!("non-finite or runaway state at t = {time} s"));
             return pass;
         }
+        if over && done < steps {
+            pass.capped_at = done;
+            return pass;
+        }
     }
     pass
 }
@@ -483,6 +499,8 @@ pub struct Job {
     pub knobs: Knobs,
     /// a timing round (--timing-only): no sampled run, timed repeats only, at least one
     pub timing_only: bool,
+    /// --run-cap S: the sampled run stops after S s of stepping, a timeout (0: none)
+    pub run_cap: f64,
 }
 
 fn positive(option: &str, value: &str) -> Result<usize, String> {
@@ -494,7 +512,8 @@ fn positive(option: &str, value: &str) -> Result<usize, String> {
 
 fn parse_args(engine: &dyn Engine) -> Result<Job, String> {
     let mut job = Job { scene: String::new(), variant: String::new(), every: 0, budget: 0.3,
-                        out: String::new(), knobs: Knobs::default(), timing_only: false };
+                        out: String::new(), knobs: Knobs::default(), timing_only: false,
+                        run_cap: 0.0 };
     let args: Vec<String> = std::env::args().skip(1).collect();
     let mut i = 0;
     while i < args.len() {
@@ -515,6 +534,7 @@ fn parse_args(engine: &dyn Engine) -> Result<Job, String> {
             "--every" => job.every = value.parse().map_err(|_| "--every: an integer")?,
             "--budget" => job.budget = value.parse().map_err(|_| "--budget: a number")?,
             "--out" => job.out = value,
+            "--run-cap" => job.run_cap = value.parse().map_err(|_| "--run-cap: a number")?,
             "--iterations" => job.knobs.iterations = positive("--iterations", &value)?,
             "--substeps" => job.knobs.substeps = positive("--substeps", &value)?,
             other => return Err(format!("unknown option {other}")),
@@ -524,7 +544,7 @@ fn parse_args(engine: &dyn Engine) -> Result<Job, String> {
     if job.scene.is_empty() || job.variant.is_empty() || job.out.is_empty() {
         return Err("usage: --scene FILE --variant NAME --out RESULT.json [--every N] \
                     [--budget S] [--engine NAME] [--iterations N] [--substeps N] \
-                    [--timing-only]".into());
+                    [--timing-only] [--run-cap S]".into());
     }
     Ok(job)
 }
@@ -581,7 +601,7 @@ fn simulate(engine: &dyn Engine, job: &Job) -> Value {
             Ok(w) => w,
             Err(e) => return fail(doc, "error", e),
         };
-        let pass = run_once(&scene, world.as_mut(), every, Some(&mut samples));
+        let pass = run_once(&scene, world.as_mut(), every, Some(&mut samples), job.run_cap);
         wall.push(pass.stepping_seconds);
         if pass.contact_steps > 0 {
             doc["contacts"] = json!({"points": pass.contact_points, "steps": pass.contact_steps});
@@ -594,6 +614,15 @@ fn simulate(engine: &dyn Engine, job: &Job) -> Value {
         if let Some(why) = pass.exploded {
             doc["wall_seconds"] = json!(wall);
             return fail(doc, "exploded", why);
+        }
+        if pass.capped_at > 0 {
+            // too slow to finish: its speed from the steps it took, no verdict on part of a run
+            let why = format!("too slow: stopped at the run cap after {} of {} steps ({:.3} s of \
+                               stepping, --run-cap {} s); its speed is from those steps",
+                              pass.capped_at, scene.step_count(), pass.stepping_seconds, job.run_cap);
+            doc["steps"] = json!(pass.capped_at);
+            doc["wall_seconds"] = json!(wall);
+            return fail(doc, "timeout", why);
         }
         if pass.stepping_seconds >= job.budget {
             doc["wall_seconds"] = json!(wall);
@@ -610,7 +639,7 @@ fn simulate(engine: &dyn Engine, job: &Job) -> Value {
             Ok(w) => w,
             Err(e) => return fail(doc, "error", e),
         };
-        let pass = run_once(&scene, world.as_mut(), every, None);
+        let pass = run_once(&scene, world.as_mut(), every, None, 0.0);
         if let Some(why) = pass.error {
             return fail(doc, "error", why);
         }
