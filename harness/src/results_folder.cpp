@@ -86,27 +86,52 @@ std::string csv_field(const std::string& text) {
 // first four as it did before (200 made a mode's file 5–9 MB a job, 158 MB for the three modes)
 constexpr std::size_t kCsvParticles = 4;
 
+// the bodies whose states a trajectory keeps, unless the run keeps them all
+// (--all-trajectories): at most kTrajectoryBodies, spread evenly over the probed ones, the first
+// and the last among them (a stack's bottom and top, a chain's ends). The per-sample columns (the
+// error series and the energy) come from every probed body, so no metric or chart loses anything;
+// a pyramid's every box made one run's folder 1 GB (docs/usage.md, "The results folder")
+constexpr std::size_t kTrajectoryBodies = 8;
+
+std::vector<bool> kept_bodies(std::size_t probed, bool all) {
+  std::vector<bool> kept(probed, all || probed <= kTrajectoryBodies);
+  if (probed > kTrajectoryBodies && !all)
+    for (std::size_t k = 0; k < kTrajectoryBodies; ++k)
+      kept[(k * (probed - 1) + (kTrajectoryBodies - 1) / 2) / (kTrajectoryBodies - 1)] = true;
+  return kept;
+}
+
 // reference may be null; with one, each row also carries its own body's position error. Probed
 // indices from first_particle on are particles, of which the first kCsvParticles are written
-void write_trajectory_csv(const fs::path& path, const Trajectory& run, const ErrorSeries& series,
-                          const Trajectory* reference, int first_particle) {
+void write_trajectory_csv(const fs::path& path, const Scene& scene, const Trajectory& run,
+                          const ErrorSeries& series, const Trajectory* reference,
+                          int first_particle, bool all_bodies) {
   std::ofstream out(path);
   out << "time,body,px,py,pz,qw,qx,qy,qz,vx,vy,vz,wx,wy,wz,position_err,orientation_err,energy_"
          "drift,"
          "linear_momentum_drift,angular_momentum_drift,body_position_err,stack_drift,"
-         "penetration\n";
+         "penetration,energy_change_j\n";
   auto at = [](const std::vector<double>& v, std::size_t k) {
     return k < v.size() ? number(v[k]) : std::string();
   };
   auto at_abs = [](const std::vector<double>& v, std::size_t k) {
     return k < v.size() ? number(std::abs(v[k])) : std::string();
   };
+  std::vector<int> rigid;  // the probed bodies, particles left out
+  for (int b : run.bodies)
+    if (b < first_particle) rigid.push_back(b);
+  const std::vector<bool> kept = kept_bodies(rigid.size(), all_bodies);
   std::vector<bool> written(run.bodies.size());
-  std::size_t particles = 0;
+  std::size_t particles = 0, bodies = 0;
   for (std::size_t b = 0; b < run.bodies.size(); ++b)
-    written[b] = run.bodies[b] < first_particle || particles++ < kCsvParticles;
+    written[b] = run.bodies[b] < first_particle ? bool(kept[bodies++]) : particles++ < kCsvParticles;
+  const double energy_at_start =
+      run.samples.empty() ? 0.0 : body_energy(scene, run.bodies, run.samples.front());
   for (std::size_t k = 0; k < run.samples.size(); ++k) {
     const Sample& s = run.samples[k];
+    // E(t) − E(0) of every probed body (J): the energy chart's series, whichever bodies are kept
+    const std::string energy_change =
+        rigid.empty() ? std::string() : number(body_energy(scene, run.bodies, s) - energy_at_start);
     for (std::size_t b = 0; b < s.bodies.size(); ++b) {
       if (!written[b]) continue;
       const SampledState& st = s.bodies[b];
@@ -122,7 +147,8 @@ void write_trajectory_csv(const fs::path& path, const Trajectory& run, const Err
           << at(series.angular_momentum_drift, k) << ',';
       if (reference && k < reference->samples.size())
         out << number((st.position - reference->samples[k].bodies[b].position).norm());
-      out << ',' << at(series.stack_drift, k) << ',' << at(series.penetration, k) << '\n';
+      out << ',' << at(series.stack_drift, k) << ',' << at(series.penetration, k) << ','
+          << energy_change << '\n';
     }
   }
 }
@@ -239,6 +265,7 @@ ResultsFolder::ResultsFolder(const fs::path& out, const Plan& plan, const RunOpt
   for (std::size_t i = 0; i < std::size(kResultColumns); ++i)
     csv_ << (i ? "," : "") << kResultColumns[i].name;
   csv_ << '\n';
+  all_trajectories_ = options.all_trajectories;
   rounds_.open(out_ / "timing_rounds.csv.partial");
   rounds_ << "scenario,dt,engine,variant,iterations,substeps,round,order,repeats,"
              "seconds_per_step\n";
@@ -285,6 +312,16 @@ ResultsFolder::ResultsFolder(const fs::path& out, const Plan& plan, const RunOpt
       {"bytes", 0},
       {"not_written", json::object()},
       {"contacts_not_written", json::object()}};
+
+  // what trajectories/ keeps (docs/usage.md, "The results folder")
+  metadata["trajectories"] = {
+      {"rows", options.all_trajectories ? "every row"
+                                        : "the rows at their scene's own step and own knobs"},
+      {"bodies", options.all_trajectories
+                     ? std::string("every probed body")
+                     : "at most " + std::to_string(kTrajectoryBodies) +
+                           " probed bodies' states, spread evenly, the first and last among them"},
+      {"per_sample_columns_from", "every probed body"}};
 
   metadata["plan"] = {{"fingerprint", plan.fingerprint},
                       {"jobs", plan.jobs.size()},
@@ -370,11 +407,14 @@ void ResultsFolder::add(EvaluatedJob& job, const std::string& stem, bool own_ste
     if (!job.stage_names.empty()) engine_meta["stages"] = job.stage_names;
   }
 
-  if (job.measured) {
+  // the trajectory of a row the report draws over time: at the scene's own step and the engine's
+  // own knobs; a sweep's other rows keep their metrics only, unless --all-trajectories
+  const bool drawn = own_step && !job.knobs.any();
+  if (job.measured && (drawn || all_trajectories_)) {
     try {
       const fs::path trajectory = out_ / "trajectories" / (stem + ".csv");
-      write_trajectory_csv(trajectory, job.trajectory, job.series, job.against(),
-                           int(job.scene->bodies.size()));
+      write_trajectory_csv(trajectory, *job.scene, job.trajectory, job.series, job.against(),
+                           int(job.scene->bodies.size()), all_trajectories_);
       job.row.text("trajectory", fs::relative(trajectory, out_).string());
       // the replay viewer shows each engine variant at its own settings
       if (own_step && !job.knobs.any()) write_poses(job, stem);

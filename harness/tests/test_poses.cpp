@@ -53,22 +53,23 @@ Trajectory still_run(int bodies, int samples, double interval) {
 }
 
 TEST(PoseFiles, SixtyHertzSamplesGiveThirtyFramesPerSecondAndTheLastSample) {
-  const PoseLayout layout = pose_layout(still_run(20, 601, 1.0 / 60.0));
+  const PoseLayout layout = pose_layout(still_run(20, 601, 1.0 / 60.0), nullptr, 4ull << 20);
   EXPECT_EQ(layout.stride, 2u);
   EXPECT_EQ(layout.frames, 301u);  // 0, 2, …, 600
   EXPECT_EQ(layout.bytes, 32u + 4 * 20 + 4 * 301 + 32ull * 301 * 20);
   // an odd sample count: the last sample is a frame of its own
-  EXPECT_EQ(pose_layout(still_run(1, 600, 1.0 / 60.0)).frames, 301u);
+  EXPECT_EQ(pose_layout(still_run(1, 600, 1.0 / 60.0), nullptr, 4ull << 20).frames, 301u);
 }
 
 TEST(PoseFiles, AManyBodySceneKeepsFewerFramesWithinTheJobCap) {
-  const Trajectory run = still_run(5050, 61, 1.0 / 60.0);
+  // pyramid-50's 1,275 boxes over 5 s
+  const Trajectory run = still_run(1275, 301, 1.0 / 60.0);
   const PoseLayout layout = pose_layout(run);
   EXPECT_LE(layout.bytes, kPoseBytesPerJob);
   EXPECT_GT(layout.frames, 2u);
   EXPECT_GT(layout.stride, 2u);
   // a cap below two frames: nothing to write
-  EXPECT_EQ(pose_layout(run, nullptr, 5050ull * 32).frames, 0u);
+  EXPECT_EQ(pose_layout(run, nullptr, 1275ull * 32).frames, 0u);
 }
 
 TEST(PoseFiles, TheFileHoldsItsHeaderTimesAndPoses) {
@@ -223,7 +224,9 @@ TEST(PoseFiles, ContactsFillWhatTheJobCapLeavesAfterThePoses) {
     run.samples.push_back(s);
   }
   const OverlapGauge gauge(scene, run.bodies);
-  const PoseLayout plain = pose_layout(run), with = pose_layout(run, &gauge);
+  // a cap with room for every frame's contacts
+  const PoseLayout plain = pose_layout(run, nullptr, 4ull << 20),
+                   with = pose_layout(run, &gauge, 4ull << 20);
   EXPECT_EQ(with.frames, plain.frames);
   EXPECT_EQ(with.contact_stride, 1u);
   EXPECT_EQ(with.contact_points, 301u * 20 * 4);

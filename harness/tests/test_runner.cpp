@@ -598,7 +598,7 @@ TEST(Runner, IterationSweepIsARowPerValueWithTheSolverSetAndSaysWhereAVariantHas
   const fs::path dir = fresh_dir("sweep_iterations");
   const Invocation inv = physbench(
       {"run", "-s", "tower-10", "-e", "rtp", "--variant", "sequential-impulse,soft-step",
-       "--sweep-iterations", "1,16", "--duration", "2", "--budget", "0", "--out",
+       "--sweep-iterations", "1,16", "--duration", "2", "--budget", "0", "--all-trajectories", "--out",
        (dir / "r").string()},
       dir);
   ASSERT_EQ(inv.outcome.exit_code, 0) << inv.output;

@@ -113,8 +113,12 @@ def spring_energy(traj: pd.DataFrame, spring: dict) -> pd.Series | None:
 
 def per_time(traj: pd.DataFrame, column: str, scene: dict | None) -> pd.Series | None:
     """A chart's series by sample time: the worst probed body's value of an error column, or, for
-    energy on a contact scene (scene given), |E − E₀| in J from the probed states."""
+    energy on a contact scene (scene given), E − E₀ in J of every probed body (the harness's
+    energy_change_j column; from the kept states in a folder written before it)."""
     if column == "energy_drift" and scene is not None:
+        # the harness's E(t) − E(0) of every probed body; a folder from before it, from the states
+        if "energy_change_j" in traj and traj["energy_change_j"].notna().any():
+            return traj.groupby("time", sort=True)["energy_change_j"].first()
         if not {"qw", "vx", "wx", "px"} <= set(traj.columns):
             return None
         energy = mechanical_energy(traj, scene).sort_index()

@@ -72,6 +72,22 @@ Invariants invariants_of(const Scene& scene, const std::vector<int>& bodies, con
   return inv;
 }
 
+}  // namespace
+
+double body_energy(const Scene& scene, const std::vector<int>& bodies, const Sample& sample) {
+  std::vector<int> rigid;
+  Sample only;
+  only.time = sample.time;
+  for (std::size_t i = 0; i < bodies.size() && i < sample.bodies.size(); ++i)
+    if (bodies[i] < static_cast<int>(scene.bodies.size())) {
+      rigid.push_back(bodies[i]);
+      only.bodies.push_back(sample.bodies[i]);
+    }
+  return invariants_of(scene, rigid, only).energy;
+}
+
+namespace {
+
 bool wants(const Scene& scene, Metric metric) {
   for (Metric m : scene.probe.metrics)
     if (m == metric) return true;

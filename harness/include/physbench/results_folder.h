@@ -69,6 +69,7 @@ class ResultsFolder {
   std::ofstream csv_, rounds_;
   nlohmann::json metadata_;
   std::uint64_t pose_bytes_ = 0;
+  bool all_trajectories_ = false;  // --all-trajectories: every row's, every probed body's
   std::size_t rows_written_ = 0;
 };
 

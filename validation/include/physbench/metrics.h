@@ -149,6 +149,11 @@ Container container_of(const Scene& scene);
 bool energy_can_only_fall(const Scene& scene, const ErrorSeries& series);
 double energy_scale(const Scene& scene);
 
+// the mechanical energy (J) of a sample's probed bodies (kinetic, linear and about the centre of
+// mass, plus gravitational −m g·x) and of the springs whose moving ends are probed; probed particles
+// are left out. What the report's energy chart draws, as E(t) − E(0)
+double body_energy(const Scene& scene, const std::vector<int>& bodies, const Sample& sample);
+
 // whether a verdict is a failure the row's message must name (collapsed, sinks, tunnelled, …)
 bool verdict_is_failure(const std::string& verdict);
 
