@@ -8,7 +8,10 @@
 #include <algorithm>
 #include <cstdlib>
 #include <fstream>
+#include <cmath>
+#include <cstdio>
 #include <iostream>
+#include <map>
 #include <optional>
 #include <random>
 #include <sstream>
@@ -21,6 +24,7 @@
 #include "physbench/process.h"
 #include "physbench/registry.h"
 #include "physbench/results_folder.h"
+#include "physbench/scene_json.h"
 #include "physbench/worker.h"
 #include "text.h"
 
@@ -230,6 +234,28 @@ ReferenceRun converged_reference(const Scene& scene, const std::string& tag, Res
   return reference;
 }
 
+// What a converged reference depends on: the scene but its step, and the times the step samples it
+// and applies its impulses at (the SciPy integrator never takes the engines' step). A swept scene's
+// steps that sample at the same times share one reference, computed once (it was most of a
+// free-motion sweep's time: two SciPy runs a step)
+std::string reference_key(const Scene& scene) {
+  json doc = to_json(scene);
+  doc.erase("dt");
+  std::string key = doc.dump();
+  char text[32];
+  const auto time = [&](double t) {
+    std::snprintf(text, sizeof text, " %.12g", t);
+    key += text;
+  };
+  const long steps = scene.step_count(), every = scene.probe_every_steps();
+  key += "\nsamples";
+  for (long k = 0; k < steps; k += every) time(static_cast<double>(k) * scene.dt);
+  time(static_cast<double>(steps) * scene.dt);
+  key += "\nimpulses";
+  for (const ImpulseSpec& p : scene.impulses) time(std::round(p.time / scene.dt) * scene.dt);
+  return key;
+}
+
 // a finished row in one line of progress
 // a job of the scene step being run: run once (its first timing round, with the trajectory),
 // waiting for the step's other timing rounds before it is evaluated and written
@@ -400,6 +426,7 @@ int run_suite(const RunOptions& options, const fs::path& self) {
   fs::path scene_file;
   ReferenceRun reference;
   std::optional<std::pair<std::size_t, std::size_t>> not_applicable;  // (step, engine)
+  std::map<std::string, std::pair<std::string, ReferenceRun>> references;  // by reference_key: tag, run
   // the step's jobs, run once; timed in rounds, evaluated and written when the step ends
   std::vector<RanJob> ran;
   const auto finish_step = [&] {
@@ -429,9 +456,18 @@ int run_suite(const RunOptions& options, const fs::path& self) {
         step = &plan.steps[planned.step];
         scene = plan.scene_at(*step);
         scene_file = folder.write_scene(step->tag, scene);
-        reference = scene.reference.kind == ReferenceKind::Converged
-                        ? converged_reference(scene, step->tag, folder, options.timeout_seconds)
-                        : ReferenceRun{};
+        reference = ReferenceRun{};
+        if (scene.reference.kind == ReferenceKind::Converged) {
+          const std::string key = reference_key(scene);
+          if (const auto same = references.find(key); same != references.end()) {
+            reference = same->second.second;
+            std::cerr << "  reference for " << step->tag << ": " << same->second.first
+                      << "'s (the same sample and impulse times)\n";
+          } else {
+            reference = converged_reference(scene, step->tag, folder, options.timeout_seconds);
+            references.emplace(key, std::pair(step->tag, reference));
+          }
+        }
         folder.record_step(p, step->dt, scene_file, reference);
       }
 

@@ -1015,5 +1015,39 @@ TEST(Runner, AJobOverTheRunCapIsATimeoutTimedOverTheStepsItTook) {
   }
 }
 
+// the steps of a swept free-motion scene that sample at the same times share one converged
+// reference, computed once: the 120 Hz row of a 60,120 Hz sweep is measured against the 60 Hz
+// step's SciPy run, and its errors are those of a run at 120 Hz alone, which computes its own
+TEST(Runner, SweptStepsSampledAtTheSameTimesShareOneReference) {
+  const fs::path dir = fresh_dir("shared_reference");
+  const Invocation swept = physbench({"run", "-s", "tumbling-box", "-e", "rtp", "--variant", "rk4",
+                                      "--sweep-hz", "60,120", "--duration", "2", "--budget", "0",
+                                      "--out", (dir / "swept").string()},
+                                     dir);
+  ASSERT_EQ(swept.outcome.exit_code, 0) << swept.output;
+  EXPECT_NE(swept.output.find("reference for tumbling-box.dt-120hz: tumbling-box.dt-60hz's"),
+            std::string::npos)
+      << swept.output;
+  EXPECT_EQ(swept.output.find("reference for tumbling-box.dt-120hz: SciPy"), std::string::npos);
+  const Invocation alone = physbench({"run", "-s", "tumbling-box", "-e", "rtp", "--variant", "rk4",
+                                      "--dt", "0.008333333333333333", "--duration", "2", "--budget",
+                                      "0", "--out", (dir / "alone").string()},
+                                     dir);
+  ASSERT_EQ(alone.outcome.exit_code, 0) << alone.output;
+  const auto at_120 = [](const std::vector<std::map<std::string, std::string>>& rows) {
+    for (const auto& r : rows)
+      if (std::abs(std::stod(r.at("dt")) - 1.0 / 120.0) < 1e-12) return r;
+    return std::map<std::string, std::string>{};
+  };
+  const auto shared = at_120(read_rows(dir / "swept" / "results.csv"));
+  const auto own = at_120(read_rows(dir / "alone" / "results.csv"));
+  ASSERT_FALSE(shared.empty() || own.empty()) << swept.output << alone.output;
+  EXPECT_EQ(shared.at("reference_status"), "ok");
+  for (const char* column : {"orientation_err_max", "reference_self_error"})
+    EXPECT_NEAR(std::stod(shared.at(column)), std::stod(own.at(column)),
+                1e-9 * std::abs(std::stod(own.at(column))))
+        << column;
+}
+
 }  // namespace
 
