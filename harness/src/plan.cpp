@@ -91,6 +91,22 @@ std::vector<PlannedScene> planned_scenes(const RunOptions& options) {
   return scenes;
 }
 
+// a build of another variant at another instruction set (rtp's baseline-ISA build, a peer's native
+// one: workers/catalog.tsv): its accuracy at a swept step repeats its sibling's, and its speed is
+// compared at the scene's own step, so it runs there only (its knobs are swept as its sibling's)
+bool isa_build(const std::string& variant) {
+#ifdef PHYSBENCH_RTP_ISA_SUFFIX
+  const char* rtp_baseline = PHYSBENCH_RTP_ISA_SUFFIX;
+#else
+  const char* rtp_baseline = "-x86-64";
+#endif
+  for (const std::string suffix : {"-native", "-avx2", rtp_baseline})
+    if (variant.size() > suffix.size() &&
+        variant.compare(variant.size() - suffix.size(), suffix.size(), suffix) == 0)
+      return true;
+  return false;
+}
+
 }  // namespace
 
 std::string step_tag(double dt) {
@@ -173,6 +189,7 @@ Plan plan_run(const RunOptions& options, const std::vector<EngineVariant>& catal
       plan_text += to_json(plan.scene_at(step)).dump() + "\n";
       for (std::size_t e = 0; e < plan.engines.size(); ++e) {
         const EngineVariant& ev = plan.engines[e];
+        if (!step.own_step && isa_build(ev.variant)) continue;
         plan_text += ev.engine + "/" + ev.variant + "\n";
         for (const SolverKnobs& knobs : p.knobs)
           plan.jobs.push_back({plan.jobs.size(), step.number, e, knobs});

@@ -190,4 +190,23 @@ TEST(Plan, BadNamesAreRefusedBeforeAnythingIsPlanned) {
   EXPECT_THROW(physbench::plan_run(none, catalog()), physbench::RunError);
 }
 
+// a build of another variant at another instruction set (rtp's baseline build, a peer's native
+// one) runs at each scene's own step only, where speeds are compared; its knobs are swept there
+TEST(Plan, AnInstructionSetBuildRunsAtTheScenesOwnStepOnly) {
+  std::vector<EngineVariant> with_builds = catalog();
+  with_builds.push_back({"rtp", "rk4-x86-64", "0", "/nonexistent/physbench-rtp-baseline"});
+  with_builds.push_back({"rapier", "default-native", "0", "/nonexistent/physbench-rapier-native"});
+  RunOptions o = options();
+  o.sweep_substeps = {1, 4};
+  const Plan plan = physbench::plan_run(o, with_builds);
+  std::map<std::string, std::set<std::pair<bool, int>>> ran;  // variant: (own step, substeps)
+  for (const PlannedJob& job : plan.jobs)
+    ran[plan.engines[job.engine].variant].insert({plan.steps[job.step].own_step, job.knobs.substeps});
+  const std::set<std::pair<bool, int>> own_only = {{true, 0}, {true, 1}, {true, 4}};
+  EXPECT_EQ(ran["rk4-x86-64"], own_only);
+  EXPECT_EQ(ran["default-native"], own_only);
+  EXPECT_TRUE(ran["rk4"].count({false, 0})) << "the generic build runs the whole sweep";
+  EXPECT_EQ(ran["rk4"].size(), 6u);
+}
+
 }  // namespace
