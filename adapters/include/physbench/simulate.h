@@ -33,7 +33,10 @@ struct SimulateOptions {
   // a timing round (the harness's interleaved rounds, docs/metrics.md): no sampled run, no
   // trajectory; timed repeats from the first, at least one, until the budget
   bool timing_only = false;
-  int max_timed_repeats = 50;
+  // at most this many timed repeats a round: each rebuilds the world, untimed, and a cheap scene's
+  // rebuilds were most of the default suite's time beside its stepping (380,000 of them at 50);
+  // five rounds of ten still give a median over 50 repeats
+  int max_timed_repeats = 10;
   // s of stepping after which the first run stops (0: none): the run is a timeout, timed over
   // the steps it took (`physbench run --run-cap`, docs/metrics.md, "Status")
   double run_cap_seconds = 0.0;

@@ -550,7 +550,9 @@ fn parse_args(engine: &dyn Engine) -> Result<Job, String> {
 }
 
 const MIN_TIMED_REPEATS: usize = 3;
-const MAX_TIMED_REPEATS: usize = 50;
+/// at most this many a round, each on a world built afresh (untimed): as the harness's own
+/// engines (adapters/include/physbench/simulate.h, max_timed_repeats)
+const MAX_TIMED_REPEATS: usize = 10;
 
 fn simulate(engine: &dyn Engine, job: &Job) -> Value {
     let mut doc = json!({
