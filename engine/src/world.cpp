@@ -578,6 +578,12 @@ void World::step_with_contacts(double dt) {
   switch (settings.solver) {
     case ContactSolver::SoftStep: {
       const double h = dt / settings.substeps;
+      // a step whose deepest overlap is more than the push-out can remove in it is recovering
+      // from an overlap (boxes spawned into each other): the biased solve adds push velocity every
+      // substep, so relax passes cannot settle it and each pass past the minimum is spent for
+      // nothing (docs/solver.md, "The ring, and the relax passes")
+      const bool recovering =
+          contacts.deepest_penetration() > settings.max_push_speed * dt;
       for (int substep = 0; substep < settings.substeps; ++substep) {
         // the kick and the warm start; after the first substep, without springs, in one pass
         // over the bodies (ContactPipeline::next_substep: gravity is the only force then)
@@ -598,7 +604,9 @@ void World::step_with_contacts(double dt) {
           // relax_iterations passes, then more while the last one still moved a point's normal
           // velocity by over the tolerance, up to max_relax_iterations
           const double tolerance = settings.relax_tolerance;
-          const int most = std::max(settings.relax_iterations, settings.max_relax_iterations);
+          const int most = recovering ? settings.relax_iterations
+                                      : std::max(settings.relax_iterations,
+                                                 settings.max_relax_iterations);
           for (int i = 0; i < most; ++i) {
             // (the passes before the last of the minimum track nothing: nothing reads it)
             const bool last_needed = i + 1 >= settings.relax_iterations;

@@ -87,17 +87,19 @@ std::string csv_field(const std::string& text) {
 constexpr std::size_t kCsvParticles = 4;
 
 // the bodies whose states a trajectory keeps, unless the run keeps them all
-// (--all-trajectories): at most kTrajectoryBodies, spread evenly over the probed ones, the first
-// and the last among them (a stack's bottom and top, a chain's ends). The per-sample columns (the
-// error series and the energy) come from every probed body, so no metric or chart loses anything;
-// a pyramid's every box made one run's folder 1 GB (docs/usage.md, "The results folder")
-constexpr std::size_t kTrajectoryBodies = 8;
+// (--all-trajectories): at most kTrajectoryBodies (kContactTrajectoryBodies on a contact scene),
+// spread evenly over the probed ones, the first and the last among them (a stack's bottom and top,
+// a chain's ends). The per-sample columns (the error series, the stack's drift and penetration,
+// the energy) come from every probed body, so no metric or chart loses anything; a free-motion
+// scene keeps more because its chart draws each body's error. A pyramid's every box made one
+// run's folder 1 GB (docs/usage.md, "The results folder")
+constexpr std::size_t kTrajectoryBodies = 8, kContactTrajectoryBodies = 4;
 
-std::vector<bool> kept_bodies(std::size_t probed, bool all) {
-  std::vector<bool> kept(probed, all || probed <= kTrajectoryBodies);
-  if (probed > kTrajectoryBodies && !all)
-    for (std::size_t k = 0; k < kTrajectoryBodies; ++k)
-      kept[(k * (probed - 1) + (kTrajectoryBodies - 1) / 2) / (kTrajectoryBodies - 1)] = true;
+std::vector<bool> kept_bodies(std::size_t probed, bool all, std::size_t most) {
+  std::vector<bool> kept(probed, all || probed <= most);
+  if (probed > most && !all)
+    for (std::size_t k = 0; k < most; ++k)
+      kept[(k * (probed - 1) + (most - 1) / 2) / (most - 1)] = true;
   return kept;
 }
 
@@ -120,7 +122,8 @@ void write_trajectory_csv(const fs::path& path, const Scene& scene, const Trajec
   std::vector<int> rigid;  // the probed bodies, particles left out
   for (int b : run.bodies)
     if (b < first_particle) rigid.push_back(b);
-  const std::vector<bool> kept = kept_bodies(rigid.size(), all_bodies);
+  const std::vector<bool> kept = kept_bodies(
+      rigid.size(), all_bodies, scene.has_contacts() ? kContactTrajectoryBodies : kTrajectoryBodies);
   std::vector<bool> written(run.bodies.size());
   std::size_t particles = 0, bodies = 0;
   for (std::size_t b = 0; b < run.bodies.size(); ++b)
@@ -319,8 +322,9 @@ ResultsFolder::ResultsFolder(const fs::path& out, const Plan& plan, const RunOpt
                                         : "the rows at their scene's own step and own knobs"},
       {"bodies", options.all_trajectories
                      ? std::string("every probed body")
-                     : "at most " + std::to_string(kTrajectoryBodies) +
-                           " probed bodies' states, spread evenly, the first and last among them"},
+                     : "at most " + std::to_string(kTrajectoryBodies) + " probed bodies' states (" +
+                           std::to_string(kContactTrajectoryBodies) +
+                           " on a contact scene), spread evenly, the first and last among them"},
       {"per_sample_columns_from", "every probed body"}};
 
   metadata["plan"] = {{"fingerprint", plan.fingerprint},

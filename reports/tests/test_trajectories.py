@@ -1,5 +1,6 @@
 """What a results folder keeps of each run's trajectory (docs/usage.md, "The results folder"): by
-default the rows the report draws over time, each with at most eight bodies' states, and per-sample
+default the rows the report draws over time, each with at most four bodies' states on a contact scene
+(eight on a free-motion one, whose chart draws each body's error), and per-sample
 columns that still come from every probed body; `--all-trajectories` keeps everything."""
 from __future__ import annotations
 
@@ -29,7 +30,7 @@ def rows(folder: Path) -> pd.DataFrame:
     return pd.read_csv(folder / "results.csv", dtype={"trajectory": str})
 
 
-def test_a_default_run_keeps_the_drawn_rows_trajectory_with_eight_bodies_states(runs):
+def test_a_default_run_keeps_the_drawn_rows_trajectory_with_four_bodies_states(runs):
     default, everything = runs
     table = rows(default)
     own = table[table["substeps"].isna()]
@@ -42,21 +43,21 @@ def test_a_default_run_keeps_the_drawn_rows_trajectory_with_eight_bodies_states(
     full = pd.read_csv(everything / rows(everything).query("substeps != substeps")["trajectory"].iloc[0])
     probed = sorted(full["body"].unique())
     assert len(probed) == 55  # every box of the 10-row pyramid
-    # eight of them, spread evenly from the first to the last (the bottom row's first, the top)
+    # four of them, spread evenly from the first to the last (the bottom row's first, the top)
     bodies = sorted(kept["body"].unique())
-    assert len(bodies) == 8 and bodies[0] == probed[0] and bodies[-1] == probed[-1]
+    assert len(bodies) == 4 and bodies[0] == probed[0] and bodies[-1] == probed[-1]
     gaps = np.diff([probed.index(b) for b in bodies])
     assert gaps.max() - gaps.min() <= 1
     # the kept bodies' states are the full run's, number for number
     states = ["px", "py", "pz", "qw", "qx", "qy", "qz", "vx", "vy", "vz", "wx", "wy", "wz"]
     same = full[full["body"].isin(bodies)].reset_index(drop=True)
     pd.testing.assert_frame_equal(kept[["time", "body"] + states], same[["time", "body"] + states])
-    # the per-sample columns come from every probed body, not from the kept eight
+    # the per-sample columns come from every probed body, not from the kept four
     for column in ("stack_drift", "penetration", "energy_change_j"):
         assert (kept.groupby("time")[column].first().to_numpy()
                 == pytest.approx(full.groupby("time")[column].first().to_numpy(), rel=0, abs=0)), column
     meta = json.loads((default / "metadata.json").read_text())
-    assert "at most 8" in meta["trajectories"]["bodies"]
+    assert "4 on a contact scene" in meta["trajectories"]["bodies"]
 
 
 def test_the_harness_energy_column_is_the_energy_of_every_probed_bodys_state(runs):

@@ -17,8 +17,8 @@ namespace physbench {
 inline constexpr double kPoseFrameRate = 30.0;
 // one job's file at most: a scene with many bodies keeps fewer frames per second to fit. The
 // report embeds at most 600 kB of compressed poses for all of a scene's engines (replay.py's
-// SCENE_BYTES), so a job's 128 KiB (a 20-box tower at 15 frames a second) holds what a replay shows
-inline constexpr std::uint64_t kPoseBytesPerJob = 128ull << 10;
+// SCENE_BYTES), so a job's 96 KiB (a 20-box tower at 15 frames a second) holds what a replay shows
+inline constexpr std::uint64_t kPoseBytesPerJob = 96ull << 10;
 // one run's pose files at most: past it the runner writes no more and metadata.json says which
 inline constexpr std::uint64_t kPoseBytesPerRun = 64ull << 20;
 // floats per body per frame: position (3), orientation quaternion x, y, z, w (4), speed |v| (1)
