@@ -978,7 +978,8 @@ TEST(Runner, AJobThatCrashesInALaterTimingRoundIsCrashed) {
 // a job too slow to finish within the run cap is stopped there and reported as such: a timeout
 // row with its speed from the steps it took, the steps named in its message, and no verdict or
 // trajectory from part of a run; a job that finishes inside the cap is untouched. rtp's seed
-// solver on the 210-box pyramid takes far longer than 50 ms of stepping; the one-box bounce far less
+// solver and Rapier on the 1,275-box pyramid take far longer than 0.2 s of stepping; the one-box
+// bounce far less, even under the sanitizers on a busy machine
 TEST(Runner, AJobOverTheRunCapIsATimeoutTimedOverTheStepsItTook) {
   const fs::path dir = fresh_dir("run_cap");
   std::vector<std::string> engines = {"rtp"};
@@ -987,9 +988,9 @@ TEST(Runner, AJobOverTheRunCapIsATimeoutTimedOverTheStepsItTook) {
 #endif
   std::string engine_list;
   for (const std::string& e : engines) engine_list += (engine_list.empty() ? "" : ",") + e;
-  const Invocation inv = physbench({"run", "-s", "pyramid-20,bounce-e1-box", "-e", engine_list,
+  const Invocation inv = physbench({"run", "-s", "pyramid-50,bounce-e1-box", "-e", engine_list,
                                     "--variant", "seed,default", "--no-sweep", "--budget", "0",
-                                    "--run-cap", "0.05", "--out", (dir / "r").string()},
+                                    "--run-cap", "0.2", "--out", (dir / "r").string()},
                                    dir);
   ASSERT_EQ(inv.outcome.exit_code, 0) << inv.output;
   const std::string failed = std::to_string(engines.size()) + " job(s) crashed, timed out or failed";
@@ -998,7 +999,7 @@ TEST(Runner, AJobOverTheRunCapIsATimeoutTimedOverTheStepsItTook) {
   for (const auto& row : read_rows(dir / "r" / "results.csv"))
     by[row.at("scenario") + " " + row.at("engine")] = row;
   for (const std::string& engine : engines) {
-    const auto& slow = by[std::string("pyramid-20 ") + engine];
+    const auto& slow = by[std::string("pyramid-50 ") + engine];
     ASSERT_EQ(slow.at("status"), "timeout") << engine << ": " << slow.at("message");
     EXPECT_NE(slow.at("message").find("too slow: stopped at the run cap after"), std::string::npos)
         << slow.at("message");
@@ -1007,7 +1008,7 @@ TEST(Runner, AJobOverTheRunCapIsATimeoutTimedOverTheStepsItTook) {
     // the speed is the steps taken over the stepping time, about the cap: under 600 steps' worth
     const double speed = std::stod(slow.at("steps_per_s"));
     EXPECT_GT(speed, 0.0);
-    EXPECT_LT(speed * 0.05, 600.0 * 1.05) << engine << " took every step, yet timed out";
+    EXPECT_LT(speed * 0.2, 600.0 * 1.05) << engine << " took every step, yet timed out";
     EXPECT_TRUE(slow.at("contact_verdict").empty()) << slow.at("contact_verdict");
     EXPECT_TRUE(slow.at("trajectory").empty()) << slow.at("trajectory");
     const auto& quick = by[std::string("bounce-e1-box ") + engine];
