@@ -1,5 +1,6 @@
-// The contact solver's lanes: the contacts of one colour packed kBlockLanes manifolds to a block, one a
-// lane, in single precision (contact_solver.cpp solves them; docs/solver.md has the layout).
+// The contact solver's lanes: the contacts of one colour packed kBlockLanes manifolds to a block,
+// one a lane, in single precision (contact_prepare.cpp packs them, contact_solver.cpp solves them;
+// docs/solver.md has the layout).
 #pragma once
 
 #include <array>

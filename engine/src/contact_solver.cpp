@@ -1,6 +1,9 @@
-// The contact pipeline's solver half: per-step constants, warm start, the velocity solves,
-// restitution (docs/solver.md has the method, its sources and what was measured). The colouring
-// is in constraint_graph.cpp, the seed's solver in seed_solver.cpp.
+// The contact pipeline's solver half: warm start, the velocity solves, the substeps' velocity
+// bookkeeping, restitution and the impulses kept for the next step (docs/solver.md has the method,
+// its sources and what was measured). The per-step constants the passes read (the bodies'
+// records, the blocks and their effective masses) are in contact_prepare.cpp, the lane helpers
+// both use in contact_solver_internal.h, the colouring in constraint_graph.cpp, the seed's solver
+// in seed_solver.cpp.
 //
 // Every solver here works on velocities at the contact points, v_rel = (v_b + ω_b × r_b) −
 // (v_a + ω_a × r_a), and applies impulses P at the anchors: v_a −= P / m_a, ω_a −= I_a⁻¹ (r_a × P),
@@ -16,9 +19,6 @@
 // contacts are independent, the lane count, the thread count and which block a contact lands in
 // change no result. The colour past the last (contacts that found no free colour) holds one
 // contact a block and is solved in order.
-//
-// Over 500 lines because the lane helpers (V3, NormalRow, LanePair, NormalMotion) are private to
-// the kernels that use them; moved to a header they would be the solver's internals in two places.
 #include <algorithm>
 #include <atomic>
 #include <array>
@@ -32,79 +32,18 @@
 #include <omp.h>
 #endif
 
+#include "contact_solver_internal.h"
 #include "contacts.h"
-#include "hash.h"
 #include "threads.h"
 
 namespace rtp {
 
 namespace {
 
-constexpr std::size_t W = kBlockLanes;
-
-Lane splat(float x) { return simd::splat<Lane>(x); }
-
-// a vector of three lanes: W vectors at once
-struct V3 {
-  Lane x, y, z;
-  friend V3 operator+(const V3& a, const V3& b) { return {a.x + b.x, a.y + b.y, a.z + b.z}; }
-  friend V3 operator-(const V3& a, const V3& b) { return {a.x - b.x, a.y - b.y, a.z - b.z}; }
-  friend V3 operator*(Lane s, const V3& a) { return {s * a.x, s * a.y, s * a.z}; }
-};
-Lane dot(const V3& a, const V3& b) { return a.x * b.x + a.y * b.y + a.z * b.z; }
-V3 cross(const V3& a, const V3& b) {
-  return {a.y * b.z - a.z * b.y, a.z * b.x - a.x * b.z, a.x * b.y - a.y * b.x};
-}
-V3 load3(const Lane (&v)[3]) { return {v[0], v[1], v[2]}; }
-
-// a symmetric 3×3 in six lanes (xx, yy, zz, xy, xz, yz) times a vector
-V3 times(const Lane (&m)[6], const V3& v) {
-  return {m[0] * v.x + m[3] * v.y + m[4] * v.z, m[3] * v.x + m[1] * v.y + m[5] * v.z,
-          m[4] * v.x + m[5] * v.y + m[2] * v.z};
-}
-
-// a block's two world inverse inertias as six lanes each (xx yy zz xy xz yz), gathered from the
-// block and its rest; on an isotropic block (ContactLanes::isotropic: every lane's c·1) only the
-// first, c, is read and used
-struct BlockInertia {
-  Lane a[6], b[6];
-};
-template <bool kIsotropic>
-BlockInertia inertia_of(const ContactBlock& c, const ContactBlockRest& r) {
-  BlockInertia m{};
-  m.a[0] = c.inverse_inertia_a, m.b[0] = c.inverse_inertia_b;
-  if constexpr (!kIsotropic)
-    for (int k = 0; k < 5; ++k) {
-      m.a[1 + k] = r.inverse_inertia_a[k];
-      m.b[1 + k] = r.inverse_inertia_b[k];
-    }
-  return m;
-}
-
 // v turned by the inverse of the unit quaternion (x, y, z, w): Rᵀ v
 V3 rotate_back(const V3& q, Lane w, const V3& v) {
   const V3 t = splat(2.0f) * cross(v, q);  // 2 (v × q) = 2 ((−q) × v)
   return v + w * t - cross(q, t);           // v + w t + (−q) × t
-}
-
-}  // namespace
-
-namespace {
-
-// where each of a body's numbers is among its 16 floats (Eigen stores a quaternion x, y, z, w)
-constexpr int kBodyFloats = sizeof(SolverBody) / sizeof(float);
-constexpr int kLinearVelocity = 0, kAngularVelocity = 3, kDeltaPosition = 6, kDeltaRotation = 12;
-static_assert(offsetof(SolverBody, angular_velocity) == kAngularVelocity * sizeof(float) &&
-              offsetof(SolverBody, delta_position) == kDeltaPosition * sizeof(float) &&
-              offsetof(SolverBody, delta_rotation) == kDeltaRotation * sizeof(float));
-
-using LaneIndex = LaneMask;  // 32-bit integer lanes
-
-// each lane's body as the offset of its first float in the body array
-LaneIndex body_offsets(const std::array<std::uint32_t, W>& bodies) {
-  LaneIndex index;
-  for (std::size_t i = 0; i < W; ++i) index[i] = std::int32_t(bodies[i] * kBodyFloats);
-  return index;
 }
 #if defined(__AVX512F__)
 V3 gather3(const float* base, LaneIndex index) {
@@ -112,76 +51,6 @@ V3 gather3(const float* base, LaneIndex index) {
           simd::gather<Lane>(base + 2, index)};
 }
 #endif
-
-// a point's normal row: the angular parts r × n on each body (their response I⁻¹ (r × n) is
-// computed where an impulse is applied). Computed where read rather than kept in the block: the
-// solve at a large pyramid is bound by the bytes it streams, and these lanes a point cost more to
-// load than to compute
-struct NormalRow {
-  V3 angular_a, angular_b;
-
-  NormalRow(const ContactBlock::Point& p, const V3& n)
-      : angular_a(cross(load3(p.anchor_a), n)), angular_b(cross(load3(p.anchor_b), n)) {}
-};
-
-// the two bodies of each lane, read from the body array, and written back
-struct LanePair {
-  V3 va, wa, vb, wb;
-  LaneIndex a, b;  // each lane's bodies as offsets into the body array's floats
-
-  // each body's velocities are its first six floats: read as records (its first eight) and
-  // transposed, rather than gathered a float at a time (simd::gather_records)
-  [[gnu::always_inline]] LanePair(const std::vector<SolverBody>& bodies, const ContactBlock& block)
-      : a(body_offsets(block.body_a)), b(body_offsets(block.body_b)) {
-    static_assert(kLinearVelocity == 0 && kAngularVelocity == 3);
-    const float* base = reinterpret_cast<const float*>(bodies.data());
-    Lane rows[8];
-    simd::gather_records(base, a, rows);
-    va = {rows[0], rows[1], rows[2]}, wa = {rows[3], rows[4], rows[5]};
-    simd::gather_records(base, b, rows);
-    vb = {rows[0], rows[1], rows[2]}, wb = {rows[3], rows[4], rows[5]};
-  }
-  // static bodies and the body at rest are never written: colours share them, and their
-  // threads may not write the same memory (a colour's dynamic bodies are each in one lane)
-  [[gnu::always_inline]] void store(std::vector<SolverBody>& bodies,
-                                    const ContactBlock& block) const {
-    float* base = reinterpret_cast<float*>(bodies.data());
-    const Lane zero = splat(0.0f);
-    const Lane rows_a[6] = {va.x, va.y, va.z, wa.x, wa.y, wa.z};
-    const Lane rows_b[6] = {vb.x, vb.y, vb.z, wb.x, wb.y, wb.z};
-    simd::scatter_records(base, a, rows_a, block.inverse_mass_a > zero);
-    simd::scatter_records(base, b, rows_b, block.inverse_mass_b > zero);
-  }
-  // the relative velocity along the normal, by the point's row
-  Lane normal_velocity(const V3& n, const NormalRow& row) const {
-    return dot(n, vb - va) + dot(wb, row.angular_b) - dot(wa, row.angular_a);
-  }
-  // an impulse λ n on b at its anchor, and its opposite on a, by the point's row
-  void apply_normal(const ContactBlock& c, const BlockInertia& m, const NormalRow& row,
-                    const V3& n, Lane impulse) {
-    va = va - (c.inverse_mass_a * impulse) * n;
-    wa = wa - impulse * times(m.a, row.angular_a);
-    vb = vb + (c.inverse_mass_b * impulse) * n;
-    wb = wb + impulse * times(m.b, row.angular_b);
-  }
-  // an impulse P on b at its anchor rb, and −P on a at ra
-  void apply(const ContactBlock& c, const BlockInertia& m, const V3& ra, const V3& rb,
-             const V3& impulse) {
-    va = va - c.inverse_mass_a * impulse;
-    wa = wa - times(m.a, cross(ra, impulse));
-    vb = vb + c.inverse_mass_b * impulse;
-    wb = wb + times(m.b, cross(rb, impulse));
-  }
-  // an angular impulse L n on b, and its opposite on a
-  void apply_twist(const BlockInertia& m, const V3& n, Lane impulse) {
-    wa = wa - impulse * times(m.a, n);
-    wb = wb + impulse * times(m.b, n);
-  }
-  // the relative velocity at the anchors ra, rb
-  V3 relative_velocity(const V3& ra, const V3& rb) const {
-    return (vb + cross(wb, rb)) - (va + cross(wa, ra));
-  }
-};
 
 // The normal rows of an isotropic block, in the manifold's frame (n, t0, t1 with t0 × t1 = n). A
 // point's row reads the velocities only as the centres' relative speed along n, u = n·(v_b − v_a),
@@ -380,29 +249,6 @@ class Prefetch {
 };
 }  // namespace
 
-// where prepare() finds a contact's numbers among its floats (ContactConstraint's layout)
-constexpr std::size_t kContactFloats = sizeof(ContactConstraint) / sizeof(float);
-constexpr std::size_t kNormalFloat = offsetof(ContactConstraint, normal) / sizeof(float);
-constexpr std::size_t kPointFloat = offsetof(ContactConstraint, points) / sizeof(float);
-constexpr std::size_t kPointFloats = sizeof(ContactPointConstraint) / sizeof(float);
-static_assert(sizeof(ContactConstraint) % sizeof(float) == 0 &&
-              sizeof(ContactPointConstraint) % sizeof(float) == 0);
-// the header's floats in the order prepare() reads them, two records from the normal on
-static_assert(offsetof(ContactConstraint, tangent) == offsetof(ContactConstraint, normal) + 12 &&
-              offsetof(ContactConstraint, friction) == offsetof(ContactConstraint, normal) + 36 &&
-              offsetof(ContactConstraint, restitution) ==
-                  offsetof(ContactConstraint, normal) + 40 &&
-              offsetof(ContactConstraint, friction_impulse) ==
-                  offsetof(ContactConstraint, normal) + 44 &&
-              offsetof(ContactConstraint, twist_impulse) ==
-                  offsetof(ContactConstraint, normal) + 52);
-// a point's first eight floats: its anchors, base separation and normal impulse
-static_assert(offsetof(ContactPointConstraint, anchor_b) == 12 &&
-              offsetof(ContactPointConstraint, base_separation) == 24 &&
-              offsetof(ContactPointConstraint, normal_impulse) == 28);
-// the records read past the header and each point stay inside the contact
-static_assert((kNormalFloat + 16) * sizeof(float) <= sizeof(ContactConstraint) &&
-              kPointFloat + 3 * kPointFloats + 8 <= kContactFloats);
 
 template <class Kernel>
 void ContactPipeline::for_each_block(Kernel&& kernel, bool backwards) {
@@ -476,47 +322,6 @@ void ContactPipeline::for_each_block(Kernel&& kernel, bool backwards) {
   }
 }
 
-void ContactPipeline::load_bodies(std::span<const BodyState> states,
-                                  std::span<const BodyMass> masses) {
-  // one body past the last, at rest and static: what an empty lane reads
-  bodies_.resize(states.size() + 1);
-  masses_.resize(states.size() + 1);
-  mass_records_.resize(states.size() + 1);
-  bodies_.back() = SolverBody{};
-  masses_.back() = SolverMass{};
-  mass_records_.back() = {};
-  // each body by itself, on the threads
-  const std::ptrdiff_t n = std::ptrdiff_t(states.size());
-#pragma omp parallel for num_threads(threads_) schedule(static) if (n >= 2048)
-  for (std::ptrdiff_t i = 0; i < n; ++i) {
-    SolverBody& body = bodies_[i];
-    SolverMass& mass = masses_[i];
-    mass.inverse_mass = masses[i].inverse_mass;
-    body.delta_position.setZero();
-    body.delta_rotation.setIdentity();
-    if (mass.inverse_mass == 0.0) {
-      mass.inverse_inertia.setZero();
-      body.linear_velocity.setZero();
-      body.angular_velocity.setZero();
-      mass_records_[i] = {};
-      continue;
-    }
-    // a body whose inertia is the same about every axis (a cube, a sphere) has it so in the
-    // world too, exactly: R (c 1) Rᵀ = c 1, where the product leaves round-off off the diagonal
-    // (and the solve's isotropic blocks need it exact)
-    const Vec3& body_inertia = masses[i].inverse_inertia_body;
-    mass.inverse_inertia =
-        body_inertia.x() == body_inertia.y() && body_inertia.y() == body_inertia.z()
-            ? Mat3(body_inertia.x() * Mat3::Identity())
-            : world_inverse_inertia(states[i].orientation, body_inertia);
-    body.linear_velocity = (states[i].linear_momentum * mass.inverse_mass).cast<float>();
-    body.angular_velocity = (mass.inverse_inertia * states[i].angular_momentum).cast<float>();
-    const Mat3& m = mass.inverse_inertia;
-    mass_records_[i] = {float(mass.inverse_mass), float(m(0, 0)), float(m(1, 1)), float(m(2, 2)),
-                        float(m(0, 1)),           float(m(0, 2)), float(m(1, 2)), 0.0f};
-  }
-}
-
 // the soft step's contact stiffness for a solve of step h, as lanes: between two dynamic bodies,
 // and against a static one
 struct SoftLanes {
@@ -536,245 +341,6 @@ SoftLanes soft_lanes(const ContactSettings& settings, double h) {
     lanes.impulse_scale[against_static] = splat(float(soft.impulse_scale));
   }
   return lanes;
-}
-
-void ContactPipeline::prepare(const Vec3& gravity, double h) {
-  colour_contacts();
-  separations_stale_ = true;
-  if (settings_.solver == ContactSolver::Seed) return;  // the seed reads the contacts themselves
-  const std::uint32_t at_rest = std::uint32_t(bodies_.size() - 1);
-  const std::vector<std::uint32_t>& block_start = lanes_->colour_start;
-  std::vector<ContactBlock>& blocks = lanes_->blocks;
-  const std::size_t block_count = blocks.size();
-  const Lane zero_lane = splat(0.0f);
-  std::atomic<bool> bounces{false};
-  // a block's contacts, [first, last) in colour_order_: which colour it is of, and where in it
-  // (W contacts a block, one in the overflow colour)
-  auto contacts_of = [&](std::size_t bi) {
-    const int colour = int(std::upper_bound(block_start.begin(), block_start.end(),
-                                            std::uint32_t(bi)) -
-                           block_start.begin()) -
-                       1;
-    const std::size_t per_block = colour + 1 < kColours ? W : 1;
-    const std::size_t first = colour_start_[colour] + (bi - block_start[colour]) * per_block;
-    return std::pair{first,
-                     std::min<std::size_t>(first + per_block, colour_start_[colour + 1])};
-  };
-  auto prepare_block = [&](std::size_t bi) {
-    ContactBlock& block = blocks[bi];
-    ContactBlockRest& rest = lanes_->rest[bi];
-    // every lane of the block and its rest is written below (not cleared first: 3 KB a block,
-    // a base-100 step's 5.7 MB written twice); these two are not, until the solve
-    for (int j = 0; j < 4; ++j) {
-      block.points[j].separation = zero_lane;
-      rest.points[j].max_normal_impulse = zero_lane;
-    }
-    const auto [first, last] = contacts_of(bi);
-    for (std::size_t i = 0; i < W; ++i) {
-      block.body_a[i] = block.body_b[i] = at_rest;
-      rest.contact[i] = kNoContact;
-    }
-    std::array<LaneMask, 4> exists{};  // the lanes where each point is
-    std::array<LaneMask, 4> cold{};    // and where it is cold (ContactConstraint::cold)
-    Lane acceleration{};
-    // the next block's contacts asked for now (a colour's contacts lie far apart in contacts_, a
-    // 5,050-box pyramid's 3.4 MB), so that their lines arrive while this one is packed
-    if (bi + 1 < block_count) {
-      const auto [next_first, next_last] = contacts_of(bi + 1);
-      for (std::size_t k = next_first; k < next_last; ++k)
-        simd::prefetch(&contacts_[colour_order_[k]], sizeof(ContactConstraint));
-    }
-    // the lanes' contacts and bodies; an empty lane reads contact 0 and the body at rest, and its
-    // contact's numbers are cleared below
-    LaneIndex contact_offsets, mass_a_offsets, mass_b_offsets;
-    LaneMask filled = zero_lane != zero_lane;
-    for (std::size_t i = 0; i < W; ++i) {
-      std::uint32_t index = 0;
-      if (first + i < last) {
-        index = colour_order_[first + i];
-        const ContactConstraint& c = contacts_[index];
-        rest.contact[i] = index;
-        block.body_a[i] = c.body_a;
-        block.body_b[i] = c.body_b;
-        filled[i] = -1;
-        for (std::uint8_t j = 0; j < c.count; ++j) {
-          exists[j][i] = -1;
-          cold[j][i] = (c.cold >> j & 1u) ? -1 : 0;
-        }
-      }
-      contact_offsets[i] = std::int32_t(index * kContactFloats);
-      mass_a_offsets[i] = std::int32_t(block.body_a[i] * 8);
-      mass_b_offsets[i] = std::int32_t(block.body_b[i] * 8);
-    }
-    // each contact's numbers by records transposed to lanes (ContactConstraint's floats: the
-    // normal, the tangents, friction, restitution and the friction impulses, then each point's
-    // anchors, base separation and normal impulse; a point past the contact's count is zero)
-    const float* contact_floats = reinterpret_cast<const float*>(contacts_.data());
-    Lane rows[8];
-    auto clear = [&](Lane x) { return simd::select(filled, x, zero_lane); };
-    simd::gather_records(contact_floats + kNormalFloat, contact_offsets, rows);
-    for (int k = 0; k < 3; ++k) {
-      block.normal[k] = clear(rows[k]);
-      block.tangent[0][k] = clear(rows[3 + k]);
-    }
-    block.tangent[1][0] = clear(rows[6]), block.tangent[1][1] = clear(rows[7]);
-    simd::gather_records(contact_floats + kNormalFloat + 8, contact_offsets, rows);
-    block.tangent[1][2] = clear(rows[0]);
-    block.friction = clear(rows[1]), rest.restitution = clear(rows[2]);
-    block.friction_impulse[0] = clear(rows[3]), block.friction_impulse[1] = clear(rows[4]);
-    block.twist_impulse = clear(rows[5]);
-    for (int j = 0; j < 4; ++j) {
-      ContactBlock::Point& p = block.points[j];
-      simd::gather_records(contact_floats + kPointFloat + j * kPointFloats, contact_offsets, rows);
-      for (int k = 0; k < 3; ++k) {
-        p.anchor_a[k] = clear(rows[k]);
-        p.anchor_b[k] = clear(rows[3 + k]);
-      }
-      rest.points[j].base_separation = clear(rows[6]);
-      p.normal_impulse = clear(rows[7]);
-    }
-    // each body's masses (mass_records_: the body at rest's are zero)
-    const float* mass_floats = mass_records_.front().data();
-    // (each inertia's xx in the block, the rest in its rest: c·1 where both are isotropic)
-    auto isotropic = [&](const Lane(&m)[8]) {
-      return (m[2] == m[1]) & (m[3] == m[1]) & (m[4] == zero_lane) & (m[5] == zero_lane) &
-             (m[6] == zero_lane);
-    };
-    simd::gather_records(mass_floats, mass_a_offsets, rows);
-    block.inverse_mass_a = rows[0];
-    block.inverse_inertia_a = rows[1];
-    for (int k = 0; k < 5; ++k) rest.inverse_inertia_a[k] = rows[2 + k];
-    LaneMask round = isotropic(rows);
-    simd::gather_records(mass_floats, mass_b_offsets, rows);
-    block.inverse_mass_b = rows[0];
-    block.inverse_inertia_b = rows[1];
-    for (int k = 0; k < 5; ++k) rest.inverse_inertia_b[k] = rows[2 + k];
-    round &= isotropic(rows);
-    lanes_->isotropic[bi] = simd::all_of(round);
-    for (std::size_t i = 0; first + i < last; ++i) {
-      // the gravity along n that free flight closes a gap with (relative, b's less a's)
-      const Vec3 normal(double(block.normal[0][i]), double(block.normal[1][i]),
-                        double(block.normal[2][i]));
-      const Vec3 gravity_a = block.inverse_mass_a[i] > 0.0f ? gravity : Vec3::Zero();
-      const Vec3 gravity_b = block.inverse_mass_b[i] > 0.0f ? gravity : Vec3::Zero();
-      acceleration[i] = float(normal.dot(gravity_b - gravity_a));
-    }
-    if (prepare_lanes(block, rest, exists, cold, acceleration, h))
-      bounces.store(true, std::memory_order_relaxed);
-  };
-  // each thread the blocks it solves: of each colour its share (for_each_block; a colour too
-  // small to share is split here too, and solved on one thread there), so that the contacts it
-  // reads are mostly those it built (collide_pairs: a share of the pair order, as a colour's
-  // share is) and the blocks it writes are in its own cache when it solves them. Spread over the
-  // blocks in order, each thread read half its contacts from the other core's cache, and two
-  // threads took longer over this stage than one
-  const int colours = int(block_start.size()) - 1;
-#pragma omp parallel num_threads(threads_) if (block_count >= 64)
-  for (int k = 0; k < colours; ++k) {
-    const auto [begin, end] =
-        share_of(block_start[k + 1] - block_start[k], team_size(), team_index());
-    for (std::size_t bi = block_start[k] + begin; bi < block_start[k] + end; ++bi)
-      prepare_block(bi);
-  }
-  bounces_ = bounces.load(std::memory_order_relaxed);
-  gravity_ = gravity;
-  restitution_step_ = h;
-}
-
-bool ContactPipeline::prepare_lanes(ContactBlock& c, ContactBlockRest& r,
-                                    const std::array<LaneMask, 4>& exists,
-                                    const std::array<LaneMask, 4>& cold, Lane acceleration,
-                                    double h) const {
-  // the rows, effective masses and approach speeds of a block's points, lane by lane
-  const Lane zero = splat(0.0f);
-  const Lane threshold = splat(float(-settings_.restitution_threshold));
-  const LanePair pair(bodies_, c);
-  const V3 n = load3(c.normal);
-  const BlockInertia m = inertia_of<false>(c, r);
-  // 1 / (the velocity change along d at the anchors per unit impulse), 0 for an empty point
-  auto effective_mass = [&](const V3& ra, const V3& rb, const V3& d, LaneMask point) {
-    const V3 ja = cross(ra, d), jb = cross(rb, d);
-    const Lane k = c.inverse_mass_a + c.inverse_mass_b + dot(ja, times(m.a, ja)) +
-                   dot(jb, times(m.b, jb));
-    const LaneMask valid = point & (k > zero);
-    return simd::select(valid, splat(1.0f) / simd::select(valid, k, splat(1.0f)), zero);
-  };
-  LaneMask fresh = zero != zero, bounces = zero != zero;
-  // the centre of each manifold's points, and their mean distance from it: of the points that
-  // touch (within the linear slop), where some do, for friction acts where the bodies touch (a
-  // door toppling about its edge, its other edge a speculative point 4 cm up, took friction
-  // between the two and fell 2 % slow)
-  const Lane slop = splat(float(settings_.linear_slop));
-  std::array<LaneMask, 4> holds;
-  LaneMask any_touches = zero != zero;
-  for (int j = 0; j < 4; ++j) {
-    holds[j] = exists[j] & (r.points[j].base_separation <= slop);
-    any_touches |= holds[j];
-  }
-  for (int j = 0; j < 4; ++j) holds[j] = simd::select(any_touches, holds[j], exists[j]);
-  V3 sum_a{zero, zero, zero}, sum_b{zero, zero, zero};
-  Lane count = zero;
-  for (int j = 0; j < 4; ++j) {
-    const Lane one_if = simd::select(holds[j], splat(1.0f), zero);
-    sum_a = sum_a + one_if * load3(c.points[j].anchor_a);
-    sum_b = sum_b + one_if * load3(c.points[j].anchor_b);
-    count = count + one_if;
-  }
-  const LaneMask any = count > zero;
-  const Lane inverse_count =
-      simd::select(any, splat(1.0f) / simd::select(any, count, splat(1.0f)), zero);
-  const V3 centre_a = inverse_count * sum_a, centre_b = inverse_count * sum_b;
-  Lane arm = zero;
-  for (int j = 0; j < 4; ++j) {
-    const V3 d = load3(c.points[j].anchor_a) - centre_a;
-    arm = arm + simd::select(holds[j], simd::sqrt(dot(d, d)), zero);
-  }
-  {
-    const V3 t0 = load3(c.tangent[0]), t1 = load3(c.tangent[1]);
-    c.centre_a[0] = dot(centre_a, t0), c.centre_a[1] = dot(centre_a, t1);
-    c.centre_a[2] = dot(centre_a, n);
-    c.centre_b[0] = dot(centre_b, t0), c.centre_b[1] = dot(centre_b, t1);
-    c.centre_b[2] = dot(centre_b, n);
-  }
-  c.twist_arm = inverse_count * arm;
-  c.tangent_mass[0] = effective_mass(centre_a, centre_b, load3(c.tangent[0]), any);
-  c.tangent_mass[1] = effective_mass(centre_a, centre_b, load3(c.tangent[1]), any);
-  {
-    const Lane k = dot(n, times(m.a, n)) + dot(n, times(m.b, n));
-    const LaneMask valid = any & (k > zero);
-    c.twist_mass = simd::select(valid, splat(1.0f) / simd::select(valid, k, splat(1.0f)), zero);
-  }
-  for (int j = 0; j < 4; ++j) {
-    ContactBlock::Point& p = c.points[j];
-    ContactBlockRest::Point& q = r.points[j];
-    const V3 ra = load3(p.anchor_a), rb = load3(p.anchor_b);
-    const Lane separation = q.base_separation;
-    // the separation is tracked from here: s = base + n·(motion of b's anchor − a's)
-    q.base_separation = separation - dot(n, rb - ra);
-    p.normal_mass = effective_mass(ra, rb, n, exists[j]);
-    // The approach speed restitution reverses: what the forces alone give the point when it
-    // hits, never a speed another contact's impulse gave it this step (in a row of touching
-    // balls, one struck, the balls behind the first meet each other at a speed the first
-    // contact's push made: reversed as well, that speed created energy, 2.3 times the strike's
-    // in a row of five). It is the speed at the instant of the positions (restitution()): a
-    // solve's velocity is the one over its last step h, half a step behind them, so the speed
-    // at the positions is v + a h/2 with a the relative acceleration gravity gives along n. A
-    // point still apart hits, if it hits this step, at the speed free flight gives it over the
-    // gap, v² = v₀² − 2 a s₀; a touching one hits at its speed now
-    const Lane approach =
-        pair.normal_velocity(n, NormalRow(p, n)) + splat(float(0.5 * h)) * acceleration;
-    const LaneMask starts_apart = exists[j] & (separation > zero);
-    const Lane squared = approach * approach - splat(2.0f) * acceleration * separation;
-    q.approach_velocity = simd::select(starts_apart, zero - simd::sqrt(simd::max(squared, zero)),
-                                       approach);
-    // no warm start where it may push, or an approach fast enough to bounce: the manifold is
-    // solved locally
-    const LaneMask hits = exists[j] & (q.approach_velocity < threshold);
-    fresh |= cold[j] | hits;
-    bounces |= hits & (r.restitution > zero);
-  }
-  c.fresh = fresh;
-  return simd::any_of(bounces);
 }
 
 void ContactPipeline::warm_start(bool first_substep) {

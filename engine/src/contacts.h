@@ -52,7 +52,7 @@ struct SolverMass {
 
 // a point of a manifold as the narrow phase made it, with the impulse it starts the step with:
 // what prepare() packs and the next step's match needs (the solver's own per-step numbers live
-// in its lanes, contact_solver.cpp; the impulses it ends the step with, in the pipeline's
+// in its lanes, packed by contact_prepare.cpp; the impulses it ends the step with, in the pipeline's
 // StoredImpulses). In single precision, as the solver reads them: the narrow phase measures in
 // double and rounds once here, and a contact is 228 bytes (four cache lines), which the narrow
 // phase writes and prepare() reads every step

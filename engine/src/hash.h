@@ -1,7 +1,7 @@
 // splitmix64's finalizer (Steele, Lea and Flood, "Fast splittable pseudorandom number generators",
 // OOPSLA 2014): a 64-bit number mixed so that each input bit moves about half the output bits.
 // The engine's counter-based randomness (particles) and the colouring's scrambled start
-// (contact_solver.cpp) both draw from it
+// (constraint_graph.cpp) both draw from it
 #pragma once
 
 #include <cstdint>
