@@ -449,7 +449,8 @@ void ResultsFolder::add_round(const Round& r) {
   rounds_.flush();
 }
 
-void ResultsFolder::finish() {
+void ResultsFolder::finish(const nlohmann::json& wall_time) {
+  if (!wall_time.is_null()) metadata_["wall_time"] = wall_time;
   csv_.close();
   if (!csv_) throw RunError("cannot write " + (out_ / "results.csv").string());
   rounds_.close();

@@ -6,6 +6,7 @@
 #include <unistd.h>
 
 #include <algorithm>
+#include <chrono>
 #include <cstdlib>
 #include <fstream>
 #include <cmath>
@@ -266,6 +267,84 @@ struct RanJob {
   int rounds = 1;  // the timing rounds its time comes from
 };
 
+// Where a run's wall time goes (metadata.json's wall_time, docs/metrics.md, "Where a run's time
+// goes"): the jobs' processes in their first round and in the later timing rounds, with the timed
+// stepping inside them, the references, and the evaluation and files; by scenario too
+class WallTime {
+ public:
+  using Clock = std::chrono::steady_clock;
+  enum Phase { kFirstRuns, kTimingRounds, kReferences, kEvaluation, kPhases };
+
+  // f() timed, its seconds added to the phase, the scenario and the engine (a job's process)
+  template <typename F>
+  decltype(auto) time(Phase phase, const std::string& scenario, F&& f,
+                      const std::string& engine = "") {
+    struct Add {
+      WallTime& to;
+      Phase phase;
+      const std::string& scenario;
+      const std::string& engine;
+      Clock::time_point start = Clock::now();
+      ~Add() {
+        const double s = std::chrono::duration<double>(Clock::now() - start).count();
+        to.phase_[phase] += s;
+        to.scenario_[scenario] += s;
+        if (!engine.empty()) to.engine_[engine].first += s;
+      }
+    } add{*this, phase, scenario, engine};
+    return f();
+  }
+  // the timed stepping a job's process reported (its repeats, or its one run)
+  void stepped(const RunResult& r, const std::string& engine) {
+    for (double s : r.wall_seconds) stepping_ += s, engine_[engine].second += s;
+  }
+
+  json summary() const {
+    const double total = std::chrono::duration<double>(Clock::now() - start_).count();
+    double phases = 0.0;
+    for (double s : phase_) phases += s;
+    json by_scenario = json::object();
+    const auto ms = [](double s) { return std::round(s * 1000) / 1000; };
+    for (const auto& [name, s] : scenario_) by_scenario[name] = ms(s);
+    json by_engine = json::object();
+    for (const auto& [name, s] : engine_)
+      by_engine[name] = {{"processes_s", ms(s.first)}, {"timed_stepping_s", ms(s.second)}};
+    return {{"total_s", ms(total)},
+            {"first_runs_s", ms(phase_[kFirstRuns])},
+            {"timing_rounds_s", ms(phase_[kTimingRounds])},
+            {"timed_stepping_s", ms(stepping_)},
+            {"references_s", ms(phase_[kReferences])},
+            {"evaluation_and_files_s", ms(phase_[kEvaluation])},
+            {"other_s", ms(total - phases)},
+            {"by_scenario_s", by_scenario},
+            {"by_engine", by_engine},
+            {"note",
+             "first_runs_s and timing_rounds_s are the jobs' processes' wall time (start, world "
+             "builds, the sampled run, the timed repeats, the result's file); timed_stepping_s "
+             "is the stepping inside them that speeds are measured from; evaluation_and_files_s "
+             "the metrics, trajectories, poses and rows; other_s planning and scene files; "
+             "by_engine the jobs' processes and their timed stepping per engine"}};
+  }
+  // one line of the summary for the log
+  std::string line() const {
+    const json s = summary();
+    std::ostringstream out;
+    out << "wall time " << s["total_s"] << " s: the jobs' first runs " << s["first_runs_s"]
+        << " s, timing rounds " << s["timing_rounds_s"] << " s (timed stepping in both "
+        << s["timed_stepping_s"] << " s), references " << s["references_s"]
+        << " s, evaluation and files " << s["evaluation_and_files_s"] << " s, other "
+        << s["other_s"] << " s";
+    return out.str();
+  }
+
+ private:
+  Clock::time_point start_ = Clock::now();
+  double phase_[kPhases] = {};
+  double stepping_ = 0.0;
+  std::map<std::string, double> scenario_;
+  std::map<std::string, std::pair<double, double>> engine_;  // processes, timed stepping
+};
+
 
 // The scene step's timing rounds 2…R (docs/metrics.md, "Interleaved timing"): every job that ran
 // ok takes one more timed run a round, in its own process, in an order shuffled afresh each round
@@ -273,7 +352,7 @@ struct RanJob {
 // machine falls on every engine of the step alike. A round that fails is that job's failure.
 void run_timing_rounds(std::vector<RanJob>& ran, const Plan& plan, const SceneStep& step,
                        const PlannedScene& scene, const fs::path& scene_file,
-                       const RunOptions& options, ResultsFolder& folder) {
+                       const RunOptions& options, ResultsFolder& folder, WallTime& wall) {
   std::vector<std::size_t> timed;
   for (std::size_t i = 0; i < ran.size(); ++i) {
     const RunResult& r = ran[i].result;
@@ -307,9 +386,12 @@ void run_timing_rounds(std::vector<RanJob>& ran, const Plan& plan, const SceneSt
       if (job.result.status != Status::Ok) continue;  // an earlier round failed
       const EngineVariant& ev = plan.engines[job.planned.engine];
       const std::string stem = job.stem + ".round-" + std::to_string(round);
-      RunResult r = run_worker_job(ev, scene_file, folder.work() / (stem + ".json"),
-                                   folder.work() / (stem + ".log"), 0, budget,
-                                   options.timeout_seconds, job.planned.knobs, true);
+      RunResult r = wall.time(WallTime::kTimingRounds, scene.scene.name, [&] {
+        return run_worker_job(ev, scene_file, folder.work() / (stem + ".json"),
+                              folder.work() / (stem + ".log"), 0, budget, options.timeout_seconds,
+                              job.planned.knobs, true);
+      }, ev.engine);
+      wall.stepped(r, ev.engine);
       if (r.status != Status::Ok || r.wall_seconds.empty()) {
         job.result.status = r.status == Status::Ok ? Status::Error : r.status;
         append(job.result.message, "timing round " + std::to_string(round) + ": " +
@@ -420,6 +502,7 @@ int run_suite(const RunOptions& options, const fs::path& self) {
 
   int failures = 0;
   std::size_t done = 0;
+  WallTime wall;
   // the scene step being run: its scene, scene file and reference, made at its first job
   const SceneStep* step = nullptr;
   Scene scene;
@@ -432,15 +515,18 @@ int run_suite(const RunOptions& options, const fs::path& self) {
   const auto finish_step = [&] {
     if (!step) return;
     const PlannedScene& p = plan.scenes[step->scene];
-    run_timing_rounds(ran, plan, *step, p, scene_file, options, folder);
+    run_timing_rounds(ran, plan, *step, p, scene_file, options, folder, wall);
     for (RanJob& r : ran) {
       const EngineVariant& ev = plan.engines[r.planned.engine];
-      EvaluatedJob job = evaluate_job(p, scene, ev, r.planned.knobs, std::move(r.result), reference);
+      EvaluatedJob job = wall.time(WallTime::kEvaluation, p.scene.name, [&] {
+        return evaluate_job(p, scene, ev, r.planned.knobs, std::move(r.result), reference);
+      });
       if (job.status == Status::Crashed || job.status == Status::Timeout ||
           job.status == Status::Error)
         ++failures;
       if (!job.row["steps_per_s"].empty()) job.row.integer("timing_rounds", r.rounds);
-      folder.add(job, r.stem, step->own_step, r.planned.number);
+      wall.time(WallTime::kEvaluation, p.scene.name,
+                [&] { folder.add(job, r.stem, step->own_step, r.planned.number); });
       std::cerr << "  " << ev.engine << "/" << ev.variant
                 << (r.planned.knobs.any() ? " " + knob_tag(r.planned.knobs) : "") << ": ";
       print_outcome(job.row, job.status);
@@ -464,7 +550,9 @@ int run_suite(const RunOptions& options, const fs::path& self) {
             std::cerr << "  reference for " << step->tag << ": " << same->second.first
                       << "'s (the same sample and impulse times)\n";
           } else {
-            reference = converged_reference(scene, step->tag, folder, options.timeout_seconds);
+            reference = wall.time(WallTime::kReferences, p.scene.name, [&] {
+              return converged_reference(scene, step->tag, folder, options.timeout_seconds);
+            });
             references.emplace(key, std::pair(step->tag, reference));
           }
         }
@@ -488,12 +576,14 @@ int run_suite(const RunOptions& options, const fs::path& self) {
         continue;
       }
       // the first timing round: the sampled run and its share of the timing budget
-      RunResult result = run_worker_job(ev, scene_file, folder.work() / (stem + ".json"),
-                                        folder.work() / (stem + ".log"),
-                                        scene.probe_every_steps(),
-                                        options.timing_budget / std::max(1, options.rounds),
-                                        options.timeout_seconds, planned.knobs, false,
-                                        options.run_cap_seconds);
+      RunResult result = wall.time(WallTime::kFirstRuns, p.scene.name, [&] {
+        return run_worker_job(ev, scene_file, folder.work() / (stem + ".json"),
+                              folder.work() / (stem + ".log"), scene.probe_every_steps(),
+                              options.timing_budget / std::max(1, options.rounds),
+                              options.timeout_seconds, planned.knobs, false,
+                              options.run_cap_seconds);
+      }, ev.engine);
+      wall.stepped(result, ev.engine);
       if (result.status == Status::NotApplicable) {
         not_applicable = {planned.step, planned.engine};
         std::cerr << "not applicable here\n";
@@ -511,7 +601,8 @@ int run_suite(const RunOptions& options, const fs::path& self) {
     folder.mark_stopped(e.what(), done, jobs.size());
     throw;
   }
-  folder.finish();
+  folder.finish(wall.summary());
+  std::cerr << wall.line() << '\n';
   return failures;
 }
 

@@ -951,6 +951,26 @@ TEST(Runner, EveryJobIsTimedOnceARoundInAFreshOrder) {
     shuffled += order[round] != plan_order;
   }
   EXPECT_GT(shuffled, 0) << "no later round changed the order";
+
+  // where the run's time went: the phases within the total, the timed stepping within the jobs'
+  // processes, and the one scenario's share the sum of the phases it ran in
+  std::ifstream meta_file(dir / "r" / "metadata.json");
+  const nlohmann::json wall = nlohmann::json::parse(meta_file).at("wall_time");
+  const double first = wall.at("first_runs_s"), later = wall.at("timing_rounds_s"),
+               stepping = wall.at("timed_stepping_s"), references = wall.at("references_s"),
+               evaluation = wall.at("evaluation_and_files_s"), total = wall.at("total_s");
+  EXPECT_GT(first, 0.0);
+  EXPECT_GT(later, 0.0) << "rounds 2-4 ran in processes of their own";
+  EXPECT_GT(stepping, 0.0);
+  EXPECT_LE(stepping, first + later + 0.002);
+  EXPECT_EQ(references, 0.0) << "the scene has no converged reference";
+  EXPECT_GE(wall.at("other_s").get<double>(), -0.002);
+  EXPECT_NEAR(first + later + references + evaluation + wall.at("other_s").get<double>(), total,
+              0.005);
+  EXPECT_NEAR(wall.at("by_scenario_s").at("spring").get<double>(),
+              first + later + references + evaluation, 0.005);
+  EXPECT_NEAR(wall.at("by_engine").at("rtp").at("processes_s").get<double>(), first + later, 0.005);
+  EXPECT_NEAR(wall.at("by_engine").at("rtp").at("timed_stepping_s").get<double>(), stepping, 0.005);
 }
 
 // a job that crashes in a later timing round is a crash, not a row timed in fewer rounds

@@ -55,8 +55,9 @@ class ResultsFolder {
   };
   void add_round(const Round& round);
 
-  // results.csv and metadata.json renamed into place: the run is complete
-  void finish();
+  // results.csv and metadata.json (with wall_time, where the run's time went) renamed into
+  // place: the run is complete
+  void finish(const nlohmann::json& wall_time = nullptr);
   // the run stops at job `done` of `total`: results.csv.partial keeps the rows so far, an
   // INCOMPLETE file says why, and no results.csv appears
   void mark_interrupted(int signal, std::size_t done, std::size_t total);
