@@ -11,9 +11,11 @@
 
 namespace rtp {
 
-// lanes per block: the widest float register, at least 8 (a narrower core splits a block in
-// halves, which gives it two independent chains to interleave)
-inline constexpr std::size_t kBlockLanes = std::max<std::size_t>(simd::kNativeFloats, 8);
+// lanes per block: the widest float register (16 with AVX-512, 8 with AVX, 4 on the x86-64
+// baseline's SSE2). Eight lanes on SSE2, a block in two 4-lane halves, took its 16 registers'
+// worth twice over and spilled: the baseline build's base-100 step 23.3 -> 14.1 ms at four
+// (docs/solver.md, "Cost"); the lane count changes no result
+inline constexpr std::size_t kBlockLanes = simd::kNativeFloats;
 using Lane = simd::Pack<float, kBlockLanes>;
 using LaneMask = simd::MaskOf<Lane>;
 
