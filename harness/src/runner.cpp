@@ -269,7 +269,8 @@ struct RanJob {
 
 // Where a run's wall time goes (metadata.json's wall_time, docs/metrics.md, "Where a run's time
 // goes"): the jobs' processes in their first round and in the later timing rounds, with the timed
-// stepping inside them, the references, and the evaluation and files; by scenario too
+// stepping inside them, the references, and the evaluation and files; by scenario, and the
+// processes by engine
 class WallTime {
  public:
   using Clock = std::chrono::steady_clock;
