@@ -148,8 +148,9 @@ int main(int argc, char** argv) {
       ->check(CLI::NonNegativeNumber);
   run->add_flag("--all-trajectories", options.all_trajectories,
                 "keep a trajectory for every row (a sweep's too), with every probed body's states "
-                "(default: the rows at each scene's own step and knobs, at most 8 bodies' states, 4 on a contact scene; "
-                "the error and energy columns always come from every probed body)");
+                "(default: the rows at each scene's own step and knobs, at most 8 bodies' states, "
+                "4 on a contact scene; the error and energy columns always come from every probed "
+                "body)");
   std::string sweep_iterations, sweep_substeps;
   run->add_option("--sweep-iterations", sweep_iterations,
                   "run every engine variant once more per value, with its solver's iterations "

@@ -122,8 +122,8 @@ void write_trajectory_csv(const fs::path& path, const Scene& scene, const Trajec
   std::vector<int> rigid;  // the probed bodies, particles left out
   for (int b : run.bodies)
     if (b < first_particle) rigid.push_back(b);
-  const std::vector<bool> kept = kept_bodies(
-      rigid.size(), all_bodies, scene.has_contacts() ? kContactTrajectoryBodies : kTrajectoryBodies);
+  const std::size_t most = scene.has_contacts() ? kContactTrajectoryBodies : kTrajectoryBodies;
+  const std::vector<bool> kept = kept_bodies(rigid.size(), all_bodies, most);
   std::vector<bool> written(run.bodies.size());
   std::size_t particles = 0, bodies = 0;
   for (std::size_t b = 0; b < run.bodies.size(); ++b)

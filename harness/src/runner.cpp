@@ -326,9 +326,8 @@ class WallTime {
              "the metrics, trajectories, poses and rows; other_s planning and scene files; "
              "by_engine the jobs' processes and their timed stepping per engine"}};
   }
-  // one line of the summary for the log
-  std::string line() const {
-    const json s = summary();
+  // a summary in one line, for the log
+  static std::string line(const json& s) {
     std::ostringstream out;
     out << "wall time " << s["total_s"] << " s: the jobs' first runs " << s["first_runs_s"]
         << " s, timing rounds " << s["timing_rounds_s"] << " s (timed stepping in both "
@@ -602,8 +601,9 @@ int run_suite(const RunOptions& options, const fs::path& self) {
     folder.mark_stopped(e.what(), done, jobs.size());
     throw;
   }
-  folder.finish(wall.summary());
-  std::cerr << wall.line() << '\n';
+  const json wall_time = wall.summary();
+  folder.finish(wall_time);
+  std::cerr << WallTime::line(wall_time) << '\n';
   return failures;
 }
 

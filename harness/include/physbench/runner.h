@@ -83,7 +83,8 @@ struct RunOptions {
   // from the steps it took (docs/metrics.md, "Status"); 0: none
   double run_cap_seconds = 30.0;
   // --all-trajectories: every row keeps a trajectory with every probed body's states; by default
-  // only the rows the report draws over time (own step, own knobs), with at most 8 bodies' states (4 on a contact scene)
+  // only the rows the report draws over time (own step, own knobs), with at most 8 bodies' states
+  // (4 on a contact scene)
   bool all_trajectories = false;
   // --shard K/N: the K-th of N disjoint slices of the planned jobs (K from 1), a stride over the
   // plan's scene steps (steps K−1, K−1+N, …, each with all its engine variants), so a scene's
