@@ -3,10 +3,10 @@
 // every `every` seconds), the drift and the top box's sideways and height change (stderr), and one
 // summary line (stdout): drift as the harness defines it (the largest horizontal displacement of
 // any box, over the run so far), the top's height change, the deepest penetration the narrow
-// phase saw, the energy change, ms per step, and a fingerprint of the final state (FNV-1a over
-// every body's position, orientation and momenta, bit for bit: two builds that print the same
-// fingerprint computed the same run). Not a benchmark: time it only against itself, in
-// turn, on one machine (docs/metrics.md).
+// phase saw, the energy change (and the largest it reached: the harness's energy added), ms per
+// step, and a fingerprint of the final state (FNV-1a over every body's position, orientation and
+// momenta, bit for bit: two builds that print the same fingerprint computed the same run). Not a
+// benchmark: time it only against itself, in turn, on one machine (docs/metrics.md).
 //
 //   build/bench/bench/stack_probe pyramid-100 10
 //   build/bench/bench/stack_probe pyramid-50 3 substeps 16 hertz 240
@@ -90,7 +90,7 @@ int main(int argc, char** argv) {
   const double energy = world.mechanical_energy();
   const int steps = int(std::lround(seconds / scene.dt));
   const int per_line = std::max(1, int(std::lround(every / scene.dt)));
-  double drift = 0.0, seconds_stepping = 0.0, deepest = 0.0;
+  double drift = 0.0, seconds_stepping = 0.0, deepest = 0.0, energy_added_max = 0.0;
   std::size_t relax_passes = 0, touching = 0, moved = 0;
   for (int k = 0; k < steps; ++k) {
     world.step(scene.dt);
@@ -99,6 +99,7 @@ int main(int argc, char** argv) {
     touching += world.profile().contact_pairs;
     moved += world.profile().reused_manifolds;
     deepest = std::max(deepest, world.deepest_penetration());
+    energy_added_max = std::max(energy_added_max, world.mechanical_energy() - energy);
     for (int i = 0; i < n; ++i) {
       if (world.mass(i) == 0.0) continue;
       const rtp::Vec3 d = world.state(i).position - start[i];
@@ -121,9 +122,10 @@ int main(int argc, char** argv) {
     for (int k = 0; k < 3; ++k) hash(s.angular_momentum[k]);
     hash(s.orientation.w()), hash(s.orientation.x()), hash(s.orientation.y()), hash(s.orientation.z());
   }
-  std::printf("%s %.3g s: drift %.4f m, top %+.4f m, deepest penetration %.4f m, energy %+.3f J, %.2f ms a step, %.2f relax passes a step, state %016llx\n",
+  std::printf("%s %.3g s: drift %.4f m, top %+.4f m, deepest penetration %.4f m, energy %+.3f J "
+              "(at most %+.3f), %.4f ms a step, %.2f relax passes a step, state %016llx\n",
               argv[1], seconds, drift, world.state(top).position.y() - start[top].y(), deepest,
-              world.mechanical_energy() - energy, 1e3 * seconds_stepping / steps,
+              world.mechanical_energy() - energy, energy_added_max, 1e3 * seconds_stepping / steps,
               double(relax_passes) / steps, static_cast<unsigned long long>(fingerprint));
   if (moved > 0)
     std::printf("  manifolds moved, not computed: %.1f %% of the touching pairs\n",

@@ -109,8 +109,7 @@ void ContactPipeline::colour_contacts() {
   const std::size_t count = contacts_.size();
   colour_order_.resize(count);
   const int threads = std::max(1, threads_);
-#pragma omp parallel num_threads(threads) if (threads > 1 && count >= 2048)
-  {
+  parallel_region(threads, count >= 2048, [&] {
     const int size = team_size(), index = team_index();
     if (same_pairs) {
       const auto [first, last] = share_of(count, size, index);
@@ -137,7 +136,7 @@ void ContactPipeline::colour_contacts() {
             if ((colour_of[by_colour[j]] & kClass) == pass) colour_order_[at++] = by_colour[j];
       }
     }
-  }
+  });
 
   // the blocks: each colour's contacts W at a time, the overflow one at a time
   if (!lanes_) lanes_ = std::make_unique<ContactLanes>();
@@ -147,6 +146,9 @@ void ContactPipeline::colour_contacts() {
     const std::size_t n = colour_start_[k + 1] - colour_start_[k];
     block_start[k + 1] = block_start[k] + std::uint32_t(k + 1 < kColours ? (n + W - 1) / W : n);
   }
+  lanes_->used_colours.clear();
+  for (int k = 0; k < kColours; ++k)
+    if (block_start[k + 1] > block_start[k]) lanes_->used_colours.push_back(std::uint8_t(k));
   lanes_->blocks.resize(block_start[kColours]);
   lanes_->rest.resize(block_start[kColours]);
   lanes_->isotropic.resize(block_start[kColours]);

@@ -58,8 +58,7 @@ void ContactPipeline::load_bodies(std::span<const BodyState> states,
   mass_records_.back() = {};
   // each body by itself, on the threads
   const std::ptrdiff_t n = std::ptrdiff_t(states.size());
-#pragma omp parallel for num_threads(threads_) schedule(static) if (n >= 2048)
-  for (std::ptrdiff_t i = 0; i < n; ++i) {
+  parallel_for(threads_, n, n >= 2048, [&](std::ptrdiff_t i) {
     SolverBody& body = bodies_[i];
     SolverMass& mass = masses_[i];
     mass.inverse_mass = masses[i].inverse_mass;
@@ -70,7 +69,7 @@ void ContactPipeline::load_bodies(std::span<const BodyState> states,
       body.linear_velocity.setZero();
       body.angular_velocity.setZero();
       mass_records_[i] = {};
-      continue;
+      return;
     }
     // a body whose inertia is the same about every axis (a cube, a sphere) has it so in the
     // world too, exactly: R (c 1) Rᵀ = c 1, where the product leaves round-off off the diagonal
@@ -85,7 +84,7 @@ void ContactPipeline::load_bodies(std::span<const BodyState> states,
     const Mat3& m = mass.inverse_inertia;
     mass_records_[i] = {float(mass.inverse_mass), float(m(0, 0)), float(m(1, 1)), float(m(2, 2)),
                         float(m(0, 1)),           float(m(0, 2)), float(m(1, 2)), 0.0f};
-  }
+  });
 }
 
 void ContactPipeline::prepare(const Vec3& gravity, double h) {
@@ -219,13 +218,14 @@ void ContactPipeline::prepare(const Vec3& gravity, double h) {
   // blocks in order, each thread read half its contacts from the other core's cache, and two
   // threads took longer over this stage than one
   const int colours = int(block_start.size()) - 1;
-#pragma omp parallel num_threads(threads_) if (block_count >= 64)
-  for (int k = 0; k < colours; ++k) {
-    const auto [begin, end] =
-        share_of(block_start[k + 1] - block_start[k], team_size(), team_index());
-    for (std::size_t bi = block_start[k] + begin; bi < block_start[k] + end; ++bi)
-      prepare_block(bi);
-  }
+  parallel_region(threads_, block_count >= 64, [&] {
+    for (int k = 0; k < colours; ++k) {
+      const auto [begin, end] =
+          share_of(block_start[k + 1] - block_start[k], team_size(), team_index());
+      for (std::size_t bi = block_start[k] + begin; bi < block_start[k] + end; ++bi)
+        prepare_block(bi);
+    }
+  });
   bounces_ = bounces.load(std::memory_order_relaxed);
   gravity_ = gravity;
   restitution_step_ = h;

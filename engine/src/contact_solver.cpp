@@ -255,9 +255,12 @@ void ContactPipeline::for_each_block(Kernel&& kernel, bool backwards) {
   std::vector<ContactBlock>& blocks = lanes_->blocks;
   const std::vector<std::uint32_t>& start = lanes_->colour_start;
   constexpr std::size_t parallel_blocks = kParallelColour / W;
-  // the k-th colour visited: the colours in reverse on a backward pass (a colour's own blocks
-  // are independent, so they go forwards either way, each prefetching the next)
-  auto colour = [&](int k) { return backwards ? kColours - 1 - k : k; };
+  // the k-th colour visited, of those that hold a block: in reverse on a backward pass (a
+  // colour's own blocks are independent, so they go forwards either way, each prefetching the
+  // next)
+  const std::vector<std::uint8_t>& used = lanes_->used_colours;
+  const int colours = int(used.size());
+  auto colour = [&](int k) { return int(used[std::size_t(backwards ? colours - 1 - k : k)]); };
   auto wide = [&](int k) {
     const int c = colour(k);
     return c + 1 < kColours && start[c + 1] - start[c] >= parallel_blocks;
@@ -275,31 +278,28 @@ void ContactPipeline::for_each_block(Kernel&& kernel, bool backwards) {
   // threads only when some colour is wide enough to share: each colour ends in a barrier, and
   // a barrier among threads that have nothing to share costs more than the colour
   bool any_wide = false;
-  for (int k = 0; k + 1 < kColours && !any_wide; ++k) any_wide = wide(k);
+  for (int k = 0; k < colours && !any_wide; ++k) any_wide = wide(k);
   if (threads_ <= 1 || !any_wide) {
-    for (int k = 0; k < kColours; ++k) run_colour(k);
+    for (int k = 0; k < colours; ++k) run_colour(k);
     return;
   }
-  // the visit: each wide colour, and each run of narrow ones (with the overflow) that holds a
-  // block, on one thread; a barrier between two of them, none after the last (the region's end
-  // is one), and none for a run of empty colours
+  // the visit: each wide colour, and each run of narrow ones (with the overflow), on one
+  // thread; a barrier between two of them, none after the last (the region's end is one)
   struct Visit {
     int first, last;  // the k-th colours visited, [first, last)
     bool wide;
   };
   std::array<Visit, kColours> visits;
   int visit_count = 0;
-  for (int k = 0; k < kColours;) {
+  for (int k = 0; k < colours;) {
     if (wide(k)) {
       visits[std::size_t(visit_count++)] = {k, k + 1, true};
       ++k;
       continue;
     }
     int end = k;
-    bool any = false;
-    for (; end < kColours && !wide(end); ++end)
-      any = any || start[colour(end) + 1] > start[colour(end)];
-    if (any) visits[std::size_t(visit_count++)] = {k, end, false};
+    while (end < colours && !wide(end)) ++end;
+    visits[std::size_t(visit_count++)] = {k, end, false};
     k = end;
   }
   SpinBarrier barrier;
@@ -348,20 +348,19 @@ void ContactPipeline::warm_start(bool first_substep) {
   substep_start_.resize(bodies_.size());
   substep_change_.resize(bodies_.size());
   if (!first_substep) {
-#pragma omp parallel for num_threads(threads_) schedule(static) if (n >= 2048)
-    for (std::ptrdiff_t i = 0; i < n; ++i) {
+    parallel_for(threads_, n, n >= 2048, [&](std::ptrdiff_t i) {
       SolverBody& body = bodies_[i];
       substep_start_[i].linear = body.linear_velocity;
       substep_start_[i].angular = body.angular_velocity;
       body.linear_velocity += substep_change_[i].linear;
       body.angular_velocity += substep_change_[i].angular;
-    }
+    });
     return;
   }
-#pragma omp parallel for num_threads(threads_) schedule(static) if (n >= 2048)
-  for (std::ptrdiff_t i = 0; i < n; ++i)
+  parallel_for(threads_, n, n >= 2048, [&](std::ptrdiff_t i) {
     substep_start_[i] = {bodies_[i].linear_velocity, bodies_[i].angular_velocity,
                          masses_[i].inverse_mass > 0.0 ? 1.0f : 0.0f};
+  });
   for_each_block([&](const ContactBlock& c, const ContactBlockRest& r, Prefetch& ahead) {
     // the warm start reads 52 of a block's 66 lines (the bodies, the directions, the masses, the
     // friction's centre and impulses, each point's anchors and normal impulse): only those of
@@ -393,17 +392,15 @@ void ContactPipeline::warm_start(bool first_substep) {
 
 void ContactPipeline::end_substep() {
   const std::ptrdiff_t n = std::ptrdiff_t(bodies_.size());
-#pragma omp parallel for num_threads(threads_) schedule(static) if (n >= 2048)
-  for (std::ptrdiff_t i = 0; i < n; ++i) {
+  parallel_for(threads_, n, n >= 2048, [&](std::ptrdiff_t i) {
     substep_change_[i].linear = bodies_[i].linear_velocity - substep_start_[i].linear;
     substep_change_[i].angular = bodies_[i].angular_velocity - substep_start_[i].angular;
-  }
+  });
 }
 
 void ContactPipeline::next_substep(const Eigen::Vector3f& kick) {
   const std::ptrdiff_t n = std::ptrdiff_t(bodies_.size());
-#pragma omp parallel for num_threads(threads_) schedule(static) if (n >= 2048)
-  for (std::ptrdiff_t i = 0; i < n; ++i) {
+  parallel_for(threads_, n, n >= 2048, [&](std::ptrdiff_t i) {
     SolverBody& body = bodies_[i];
     Velocities& start = substep_start_[i];
     const Eigen::Vector3f linear_change = body.linear_velocity - start.linear;
@@ -413,7 +410,7 @@ void ContactPipeline::next_substep(const Eigen::Vector3f& kick) {
     start.angular = body.angular_velocity;
     body.linear_velocity += linear_change;
     body.angular_velocity += angular_change;
-  }
+  });
 }
 
 bool ContactPipeline::solve(double h, bool bias, bool backwards, double tolerance) {
@@ -725,8 +722,7 @@ void ContactPipeline::store_impulses() {
   const std::vector<ContactBlock>& blocks = lanes_->blocks;
   const std::vector<ContactBlockRest>& rest = lanes_->rest;
   const std::size_t block_count = blocks.size();
-#pragma omp parallel for num_threads(threads_) schedule(static) if (block_count >= 64)
-  for (std::size_t b = 0; b < block_count; ++b) {
+  parallel_for(threads_, block_count, block_count >= 64, [&](std::size_t b) {
     const ContactBlock& block = blocks[b];
     const auto& contact = rest[b].contact;
     for (std::size_t i = 0; i < W; ++i) {
@@ -736,7 +732,7 @@ void ContactPipeline::store_impulses() {
       stored.friction = {block.friction_impulse[0][i], block.friction_impulse[1][i]};
       stored.twist = block.twist_impulse[i];
     }
-  }
+  });
 }
 
 }  // namespace rtp

@@ -157,8 +157,7 @@ void ContactPipeline::update_bounds(std::span<const BodyState> states, double dt
   // broad phase), then the fast ones gathered in body order
   const std::ptrdiff_t n = std::ptrdiff_t(shapes_.size());
   fast_flags_.assign(shapes_.size(), 0);
-#pragma omp parallel for num_threads(threads_) schedule(static) if (n >= 2048)
-  for (std::ptrdiff_t i = 0; i < n; ++i) {
+  parallel_for(threads_, n, n >= 2048, [&](std::ptrdiff_t i) {
     BodyShapeData& data = shapes_[i];
     const BodyState& s = states[i];
     const SolverBody& body = bodies_[i];
@@ -175,11 +174,11 @@ void ContactPipeline::update_bounds(std::span<const BodyState> states, double dt
     Aabb box;
     switch (data.kind) {
       case BodyShape::None:
-        continue;
+        return;
       case BodyShape::Plane:
         data.plane_normal = s.orientation * data.shape.plane_normal;
         data.plane_offset = data.shape.plane_offset + data.plane_normal.dot(s.position);
-        continue;
+        return;
       case BodyShape::Sphere:
         box = bounds_of_sphere(s.position, data.shape.radius + extra);
         break;
@@ -192,7 +191,7 @@ void ContactPipeline::update_bounds(std::span<const BodyState> states, double dt
     }
     bounds_[i] = box;
     broad_phase_->move(data.proxy, box);
-  }
+  });
   fast_.clear();
   for (std::size_t i = 0; i < shapes_.size(); ++i)
     if (fast_flags_[i]) fast_.push_back({BodyId(i), states[i].position, states[i].orientation});
@@ -217,8 +216,7 @@ void ContactPipeline::find_pairs() {
     part_counts_.resize(std::size_t(parts));
   }
   bucket_start_.resize(bodies + 1);
-#pragma omp parallel num_threads(parts) if (parts > 1)
-  {
+  parallel_region(parts, parts > 1, [&] {
     const int size = team_size(), part = team_index();
     // the thread's keys, written through a pointer: the vectors' headers sit side by side in
     // part_keys_, and two threads pushing back there wrote one cache line (twice as slow)
@@ -288,7 +286,7 @@ void ContactPipeline::find_pairs() {
         std::sort(from, to);
       }
     }
-  }
+  });
   std::swap(candidates_, sorted_candidates_);
 }
 
@@ -305,13 +303,12 @@ void ContactPipeline::collide_pairs(std::span<const BodyState> states, double dt
   // (and the rotation in single precision, as a record the pair cache's test reads in lanes)
   poses_.resize(states.size());
   rotations_.resize(states.size());
-#pragma omp parallel for num_threads(threads_) schedule(static) if (states.size() >= 2048)
-  for (std::size_t i = 0; i < states.size(); ++i) {
-    if (shapes_[i].kind == BodyShape::None) continue;
+  parallel_for(threads_, states.size(), states.size() >= 2048, [&](std::size_t i) {
+    if (shapes_[i].kind == BodyShape::None) return;
     poses_[i] = pose_of(states[i]);
     for (int r = 0; r < 3; ++r)
       for (int c = 0; c < 3; ++c) rotations_[i][3 * r + c] = float(poses_[i].rotation(r, c));
-  }
+  });
   // each candidate's slot in the pair cache: last step's entry for the pair, or a free one for
   // an entry made this step (both lists sorted by key); last step's pairs that are candidates no
   // more free theirs
@@ -349,9 +346,8 @@ void ContactPipeline::collide_pairs(std::span<const BodyState> states, double dt
   // threads wrote each other's cache lines (a pair's outcome is a byte) and read half the
   // manifolds from the other core: at base 100 this loop took 0.85 ms on two threads against
   // 1.15 on one, 0.55 in halves
-#pragma omp parallel for num_threads(threads_) schedule(static) \
-    if (n >= 1024) reduction(+ : reused, moved)
-  for (std::size_t group = 0; group < groups; ++group) {
+  // (the counts are the calling thread's: the loop's reduction, or the function's own)
+  auto collide_group = [&](std::size_t group, std::size_t& reused, std::size_t& moved) {
     const std::size_t group_first = group * kMotionLanes;
     const std::size_t group_last = std::min(n, group_first + kMotionLanes);
     std::array<std::array<float, 2>, kMotionLanes> motion_of;
@@ -410,6 +406,12 @@ void ContactPipeline::collide_pairs(std::span<const BodyState> states, double dt
         outcome_[k] = kTouchingCached;
       }
     }
+  };
+  if (threads_ > 1 && n >= 1024) {
+#pragma omp parallel for num_threads(threads_) schedule(static) reduction(+ : reused, moved)
+    for (std::size_t group = 0; group < groups; ++group) collide_group(group, reused, moved);
+  } else {
+    for (std::size_t group = 0; group < groups; ++group) collide_group(group, reused, moved);
   }
   reused_ = reused;
   moved_ = moved;
@@ -447,9 +449,9 @@ void ContactPipeline::collide_pairs(std::span<const BodyState> states, double dt
   // fourteen probes each
   constexpr std::size_t kChunk = 256;
   const std::size_t chunks = (m + kChunk - 1) / kChunk;
-#pragma omp parallel for num_threads(threads_) schedule(static) if (m >= 1024) \
-    reduction(max : deepest) reduction(+ : matched, points)
-  for (std::size_t chunk = 0; chunk < chunks; ++chunk) {
+  // (the totals are the calling thread's: the loop's reduction, or the function's own)
+  auto build_chunk = [&](std::size_t chunk, double& deepest, std::size_t& matched,
+                         std::size_t& points) {
     const std::size_t first = chunk * kChunk, last = std::min(m, first + kChunk);
     std::size_t old = std::size_t(std::lower_bound(previous_keys_.begin(), previous_keys_.end(),
                                                    candidates_[touching_[first]]) -
@@ -525,6 +527,15 @@ void ContactPipeline::collide_pairs(std::span<const BodyState> states, double dt
         quiet = c.points[j].normal_impulse == 0.0f;
       contact_class_[i] = c.cold != 0 ? kColdContact : quiet ? kQuietContact : 0;
     }
+  };
+  if (threads_ > 1 && m >= 1024) {
+#pragma omp parallel for num_threads(threads_) schedule(static) reduction(max : deepest) \
+    reduction(+ : matched, points)
+    for (std::size_t chunk = 0; chunk < chunks; ++chunk)
+      build_chunk(chunk, deepest, matched, points);
+  } else {
+    for (std::size_t chunk = 0; chunk < chunks; ++chunk)
+      build_chunk(chunk, deepest, matched, points);
   }
   deepest_ = deepest;
   matched_ = matched;
