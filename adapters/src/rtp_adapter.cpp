@@ -58,6 +58,7 @@ std::optional<rtp::ContactSettings> contact_settings_for(const std::string& vari
     settings.damping_ratio = 10.0;
     settings.relax_iterations = 1;
     settings.max_relax_iterations = 1;  // Box2D's one pass, never more
+    settings.recovery_relax_iterations = 1;
     settings.max_push_speed = 3.0;
   } else if (base == "sequential-impulse") {
     settings.solver = rtp::ContactSolver::SequentialImpulse;
@@ -273,6 +274,11 @@ EngineInfo rtp_engine_info() {
                            "velocity by over " + number(c.relax_tolerance * 1e3) + " mm/s"});
         else
           table.push_back({"relax iterations", std::to_string(c.relax_iterations), "per substep"});
+        if (c.recovery_relax_iterations != c.relax_iterations)
+          table.push_back({"relax iterations recovering",
+                           std::to_string(c.recovery_relax_iterations),
+                           "per substep of a step whose deepest overlap is more than the push-out "
+                           "removes in it (boxes spawned into each other)"});
         table.push_back({"push-out speed", number(c.max_push_speed) + " m/s",
                          "the fastest a contact pushes penetrating bodies apart"});
         table.push_back({"contact stiffness",

@@ -56,7 +56,8 @@ World::World(Vec3 gravity, Integrator integrator, ContactSettings contacts)
       governor_(contacts.threads, contacts.adaptive_threads),
       active_threads_(std::max(1, contacts.threads)) {
   if (contacts.substeps < 1 || contacts.velocity_iterations < 0 || contacts.relax_iterations < 0 ||
-      contacts.max_relax_iterations < 0 || contacts.restitution_iterations < 0 ||
+      contacts.max_relax_iterations < 0 || contacts.recovery_relax_iterations < 0 ||
+      contacts.restitution_iterations < 0 ||
       contacts.local_iterations < 1 || contacts.threads < 1)
     throw std::invalid_argument("rtp: contact substeps must be >= 1 and iterations >= 0");
   if (!(contacts.speculative_distance >= 0.0) || !(contacts.linear_slop >= 0.0) ||
@@ -591,8 +592,8 @@ void World::step_with_contacts(double dt) {
       const double h = dt / settings.substeps;
       // a step whose deepest overlap is more than the push-out can remove in it is recovering
       // from an overlap (boxes spawned into each other): the biased solve adds push velocity every
-      // substep, so relax passes cannot settle it and each pass past the minimum is spent for
-      // nothing (docs/solver.md, "The ring, and the relax passes")
+      // substep, so relax passes cannot settle it: it runs a fixed number of them, enough to take
+      // most of the push-out's speed back (docs/solver.md, "The ring": "Not while recovering")
       const bool recovering =
           contacts.deepest_penetration() > settings.max_push_speed * dt;
       for (int substep = 0; substep < settings.substeps; ++substep) {
@@ -613,16 +614,18 @@ void World::step_with_contacts(double dt) {
         timed(profile_.integrate_positions, [&] { integrate_positions(h); });
         timed(profile_.relax, [&] {
           // relax_iterations passes, then more while the last one still moved a point's normal
-          // velocity by over the tolerance, up to max_relax_iterations
+          // velocity by over the tolerance, up to max_relax_iterations; recovering, a fixed
+          // recovery_relax_iterations
           const double tolerance = settings.relax_tolerance;
-          const int most = recovering ? settings.relax_iterations
-                                      : std::max(settings.relax_iterations,
-                                                 settings.max_relax_iterations);
+          const int least = recovering ? settings.recovery_relax_iterations
+                                       : settings.relax_iterations;
+          const int most =
+              recovering ? least : std::max(least, settings.max_relax_iterations);
           for (int i = 0; i < most; ++i) {
             // (the passes before the last of the minimum track nothing: nothing reads it)
-            const bool last_needed = i + 1 >= settings.relax_iterations;
+            const bool last_needed = i + 1 >= least;
             const bool settled =
-                contacts.solve(h, false, backwards, last_needed ? tolerance : 0.0);
+                contacts.solve(h, false, backwards, last_needed && most > least ? tolerance : 0.0);
             ++profile_.relax_passes;
             if (last_needed && (settled || tolerance <= 0.0)) break;
           }

@@ -121,6 +121,10 @@ struct ContactSettings {
                                    // by more than relax_tolerance (a 5,050-box pyramid rings
                                    // otherwise, and drifts 4.5 cm where it drifts 0.9)
   double relax_tolerance = 0.01;   // m/s (0: always relax_iterations)
+  int recovery_relax_iterations = 4;  // soft step: relax solves per substep, no more, in a step
+                                      // recovering from an overlap deeper than the push-out
+                                      // removes in it (boxes spawned into each other): two left
+                                      // a 5 cm overlap's push-out in the boxes, thrown 0.3 m up
   int restitution_iterations = 32;  // passes of the restitution solve at most, while the last
                                     // one still changed a point's normal velocity by more than
                                     // restitution_tolerance (a step without a bounce runs none)
