@@ -115,6 +115,20 @@ TEST(ThreadGovernor, ABusyMachineRunsOneThreadAndProbesTheTeamRarely) {
   EXPECT_LT(total / 3200, 1.1 * 10e-3);
 }
 
+TEST(ThreadGovernor, AnIdleMachineProbesOneThreadEverMoreRarelyAndABusyOneIsLeftAtOnce) {
+  rtp::ThreadGovernor g(2, true);
+  // idle for 10,000 steps: each probe finds the team faster, and the next comes twice as late,
+  // up to one in kMostProbeEvery
+  const int on_one = steps_on_one_thread(g, 10000, 4.8e-3, 9.3e-3);
+  EXPECT_GE(on_one, 10000 / rtp::ThreadGovernor::kMostProbeEvery);
+  EXPECT_LE(on_one, 10000 / rtp::ThreadGovernor::kMostProbeEvery + 8);
+  // then busy: the team's own estimate turns it to one thread within two steps, no probe needed
+  EXPECT_GE(steps_on_one_thread(g, 20, 30e-3, 10e-3), 18);
+  // and idle again: back on the team within a few probes at the first rate
+  steps_on_one_thread(g, 4 * rtp::ThreadGovernor::kProbeEvery, 4.8e-3, 9.3e-3);
+  EXPECT_LE(steps_on_one_thread(g, 320, 4.8e-3, 9.3e-3), 320 / rtp::ThreadGovernor::kProbeEvery + 1);
+}
+
 TEST(ThreadGovernor, TurnsBackWhenTheMachineChanges) {
   rtp::ThreadGovernor g(2, true);
   steps_on_one_thread(g, 200, 30e-3, 10e-3);  // busy: one thread
