@@ -5,12 +5,14 @@
 // any box, over the run so far), the top's height change, the deepest penetration the narrow
 // phase saw, the energy change (and the largest it reached: the harness's energy added), ms per
 // step, and a fingerprint of the final state (FNV-1a over every body's position, orientation and
-// momenta, bit for bit: two builds that print the same fingerprint computed the same run). Not a
-// benchmark: time it only against itself, in turn, on one machine (docs/metrics.md).
+// momenta, bit for bit: two builds that print the same fingerprint computed the same run), then
+// each stage's ms a step (StepProfile). Not a benchmark: time it only against itself, in turn, on
+// one machine (docs/metrics.md).
 //
 //   build/bench/bench/stack_probe pyramid-100 10
 //   build/bench/bench/stack_probe pyramid-50 3 substeps 16 hertz 240
 //   build/bench/bench/stack_probe pyramid-100 2 every 0.1     (a line every 0.1 s, not every second)
+#include <array>
 #include <cmath>
 #include <cstdint>
 #include <cstdio>
@@ -94,10 +96,13 @@ int main(int argc, char** argv) {
   const int per_line = std::max(1, int(std::lround(every / scene.dt)));
   double drift = 0.0, seconds_stepping = 0.0, deepest = 0.0, energy_added_max = 0.0;
   std::size_t relax_passes = 0, touching = 0, moved = 0;
+  std::array<double, rtp::StepProfile::kStageNames.size()> stage_seconds{};
   for (int k = 0; k < steps; ++k) {
     world.step(scene.dt);
     seconds_stepping += world.profile().total;
     relax_passes += world.profile().relax_passes;
+    const auto stages = world.profile().stage_seconds();
+    for (std::size_t i = 0; i < stages.size(); ++i) stage_seconds[i] += stages[i];
     touching += world.profile().contact_pairs;
     moved += world.profile().reused_manifolds;
     deepest = std::max(deepest, world.deepest_penetration());
@@ -129,6 +134,11 @@ int main(int argc, char** argv) {
               argv[1], seconds, drift, world.state(top).position.y() - start[top].y(), deepest,
               world.mechanical_energy() - energy, energy_added_max, 1e3 * seconds_stepping / steps,
               double(relax_passes) / steps, static_cast<unsigned long long>(fingerprint));
+  std::printf("  ms a step by stage:");
+  for (std::size_t i = 0; i < stage_seconds.size(); ++i)
+    if (stage_seconds[i] > 0.0)
+      std::printf(" %s %.4f", rtp::StepProfile::kStageNames[i], 1e3 * stage_seconds[i] / steps);
+  std::printf("\n");
   if (moved > 0)
     std::printf("  manifolds moved, not computed: %.1f %% of the touching pairs\n",
                 100.0 * double(moved) / double(touching));
