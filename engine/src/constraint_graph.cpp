@@ -17,6 +17,7 @@
 #include "threads.h"
 
 namespace rtp {
+inline namespace RTP_CONTACT_ISA_NAMESPACE {
 
 namespace {
 
@@ -154,4 +155,5 @@ void ContactPipeline::colour_contacts() {
   lanes_->isotropic.resize(block_start[kColours]);
 }
 
+}  // namespace RTP_CONTACT_ISA_NAMESPACE
 }  // namespace rtp

@@ -9,7 +9,15 @@
 
 #include "simd.h"
 
+// The copies of the contact pipeline a build carries, one per instruction set (contact_stages.h),
+// each in a namespace of its own, named by CMake: a build for one set has the one, isa_native
+#ifndef RTP_CONTACT_ISA_NAMESPACE
+#define RTP_CONTACT_ISA_NAMESPACE isa_native
+#define RTP_CONTACT_ISA_NAME "native"
+#endif
+
 namespace rtp {
+inline namespace RTP_CONTACT_ISA_NAMESPACE {
 
 // lanes per block: the widest float register (16 with AVX-512, 8 with AVX, 4 on the x86-64
 // baseline's SSE2). Eight lanes on SSE2, a block in two 4-lane halves, took its 16 registers'
@@ -76,4 +84,5 @@ struct ContactLanes {
   std::vector<std::uint8_t> isotropic;
 };
 
+}  // namespace RTP_CONTACT_ISA_NAMESPACE
 }  // namespace rtp

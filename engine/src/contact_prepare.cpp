@@ -22,6 +22,7 @@
 #include "threads.h"
 
 namespace rtp {
+inline namespace RTP_CONTACT_ISA_NAMESPACE {
 
 // where prepare() finds a contact's numbers among its floats (ContactConstraint's layout)
 constexpr std::size_t kContactFloats = sizeof(ContactConstraint) / sizeof(float);
@@ -327,4 +328,5 @@ bool ContactPipeline::prepare_lanes(ContactBlock& c, ContactBlockRest& r,
   return simd::any_of(bounces);
 }
 
+}  // namespace RTP_CONTACT_ISA_NAMESPACE
 }  // namespace rtp

@@ -37,6 +37,7 @@
 #include "threads.h"
 
 namespace rtp {
+inline namespace RTP_CONTACT_ISA_NAMESPACE {
 
 namespace {
 
@@ -213,8 +214,22 @@ Softness make_soft(double hertz, double damping_ratio, double h) {
 
 }  // namespace
 
-std::size_t contact_block_lanes() { return W; }
-const char* instruction_set() { return simd::kInstructionSet; }
+namespace {
+ContactStages* make_pipeline(const ContactSettings& settings) {
+  return new ContactPipeline(settings);
+}
+}  // namespace
+
+// this copy of the pipeline, for contact_isa() (contact_dispatch.cpp): in a build that carries
+// several, the one name CMake leaves global in each copy's object
+#ifndef RTP_CONTACT_ISA_ENTRY
+#define RTP_CONTACT_ISA_ENTRY rtp_contact_isa_native
+#endif
+extern "C" const ContactIsa* RTP_CONTACT_ISA_ENTRY() {
+  static const ContactIsa isa{RTP_CONTACT_ISA_NAME, simd::kInstructionSet, W, &make_pipeline,
+                              kContactInterfaceLayout};
+  return &isa;
+}
 
 namespace {
 // The next block's cache lines, asked for a few at a time while this one is solved: a pass
@@ -735,4 +750,5 @@ void ContactPipeline::store_impulses() {
   });
 }
 
+}  // namespace RTP_CONTACT_ISA_NAMESPACE
 }  // namespace rtp

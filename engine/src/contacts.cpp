@@ -13,6 +13,7 @@
 #include "threads.h"
 
 namespace rtp {
+inline namespace RTP_CONTACT_ISA_NAMESPACE {
 
 struct ContactPipeline::BodyShapeData {
   BodyShape kind = BodyShape::None;
@@ -844,4 +845,5 @@ std::size_t ContactPipeline::point_count() const { return point_count_; }
 
 double ContactPipeline::deepest_penetration() const { return deepest_; }
 
+}  // namespace RTP_CONTACT_ISA_NAMESPACE
 }  // namespace rtp

@@ -26,29 +26,15 @@
 #include <vector>
 
 #include "contact_lanes.h"
+#include "contact_stages.h"
 #include "rtp/broadphase.h"
 #include "rtp/collision.h"
 #include "rtp/world.h"
 
 namespace rtp {
-
-// the velocity state the solver reads and writes, per body, in single precision (64 bytes: one
-// cache line). The solve works on velocities and on the motion since the step's start, both
-// small numbers, so floats hold them as well as Box2D's and Jolt's solvers do; positions and
-// momenta stay in double in the world.
-struct alignas(64) SolverBody {
-  Eigen::Vector3f linear_velocity = Eigen::Vector3f::Zero();   // world (m/s)
-  Eigen::Vector3f angular_velocity = Eigen::Vector3f::Zero();  // world (rad/s)
-  Eigen::Vector3f delta_position = Eigen::Vector3f::Zero();    // moved since the step's start (m)
-  Eigen::Quaternionf delta_rotation = Eigen::Quaternionf::Identity();  // turned since then
-};
-static_assert(sizeof(SolverBody) == 64);
-
-// a body's mass as the solver sees it this step: zero for a static body
-struct SolverMass {
-  double inverse_mass = 0.0;                 // 1/kg
-  Mat3 inverse_inertia = Mat3::Zero();       // world, at the step's start (1/(kg m²))
-};
+// this copy's own names: one copy of the pipeline per instruction set the build carries, each in
+// its namespace (contact_lanes.h)
+inline namespace RTP_CONTACT_ISA_NAMESPACE {
 
 // a point of a manifold as the narrow phase made it, with the impulse it starts the step with:
 // what prepare() packs and the next step's match needs (the solver's own per-step numbers live
@@ -106,72 +92,73 @@ inline constexpr std::size_t kParallelColour = 256;
 inline constexpr int kColours = 64;
 
 
-class ContactPipeline {
+class ContactPipeline final : public ContactStages {
  public:
   explicit ContactPipeline(const ContactSettings& settings);
-  ~ContactPipeline();
+  ~ContactPipeline() override;
 
   // called for every body in order, shaped or not
   void add_body(BodyId id, const ShapeDef& shape, double friction, double restitution,
-                bool is_static);
+                bool is_static) override;
 
   // the team this step's parallel loops use, from 1 to settings.threads (World's ThreadGovernor);
   // the results are the same on any team
-  void set_threads(int threads) { threads_ = threads; }
+  void set_threads(int threads) override { threads_ = threads; }
 
   // ---- the stages, in order ----
-  void update_bounds(std::span<const BodyState> states, double dt);
-  void find_pairs();
+  void update_bounds(std::span<const BodyState> states, double dt) override;
+  void find_pairs() override;
   // dt and gravity tell which points without a warm start may push this step
   // (ContactConstraint::cold)
-  void collide_pairs(std::span<const BodyState> states, double dt, const Vec3& gravity);
+  void collide_pairs(std::span<const BodyState> states, double dt, const Vec3& gravity) override;
   // masses and velocities at the step's start
-  void load_bodies(std::span<const BodyState> states, std::span<const BodyMass> masses);
+  void load_bodies(std::span<const BodyState> states, std::span<const BodyMass> masses) override;
   // the solver's blocks, each contact in its colour's lanes (gravity gives a point's approach: a
   // point still apart the speed it closes at; h: the first solve's step, over which gravity acts
   // before the first push)
-  void prepare(const Vec3& gravity, double h);
+  void prepare(const Vec3& gravity, double h) override;
   // the warm start: each contact's accumulated impulses applied to its bodies. On the first
   // substep of a step (and for a solver without substeps) by a pass over the contacts; on a later
   // one each body takes the velocity change its contacts gave it over the substep before, which
   // is the same impulses (a substep's impulses on a contact sum to its accumulated impulse, and
   // the velocity change is linear in them) for a pass over the bodies alone
-  void warm_start(bool first_substep = true);
+  void warm_start(bool first_substep = true) override;
   // the end of a substep: each body's velocity change by its contacts since the warm start, for
   // the next substep's warm start
-  void end_substep();
+  void end_substep() override;
   // end_substep(), a kick of every dynamic body's velocity by `kick` (gravity over a substep: what
   // the world's velocity integration does without springs) and warm_start(false), in one pass
   // over the bodies
-  void next_substep(const Eigen::Vector3f& kick);
+  void next_substep(const Eigen::Vector3f& kick) override;
   // one pass of the velocity solve; bias: push out penetration (soft step, sequential impulse);
   // backwards: the colours in reverse order
   // returns whether every point's normal velocity changed by under `tolerance` (m/s) in the pass
   // (a relax pass's, bias false; true for a biased pass or without a tolerance: nothing is
   // tracked then)
-  bool solve(double h, bool bias, bool backwards = false, double tolerance = 0.0);
-  void solve_seed(double dt);
+  bool solve(double h, bool bias, bool backwards = false, double tolerance = 0.0) override;
+  void solve_seed(double dt) override;
   // the bodies' positions changed (the world integrated them): the next solve computes each
   // point's separation from their motion again, rather than read the one it stored
-  void positions_moved() { separations_stale_ = true; }
-  void restitution();
+  void positions_moved() override { separations_stale_ = true; }
+  void restitution() override;
   // continuous collision: each body that moved further this step than its speculative contacts
   // reach is swept from its start pose to its end against the static shapes, and stopped where it
   // first comes within the speculative distance of one (its velocity kept: the next step's
   // contact meets it). Returns the bodies stopped.
-  std::size_t sweep_fast_bodies(std::span<BodyState> states);
+  std::size_t sweep_fast_bodies(std::span<BodyState> states) override;
   // the accumulated impulses, by contact, for the next step's warm start (the seed's solve
   // accumulates them in the contacts themselves: copied from there)
-  void store_impulses();
+  void store_impulses() override;
 
-  std::vector<SolverBody>& bodies() { return bodies_; }
-  const std::vector<SolverMass>& masses() const { return masses_; }
+  std::vector<SolverBody>& bodies() override { return bodies_; }
+  const std::vector<SolverMass>& masses() const override { return masses_; }
   const std::vector<ContactConstraint>& contacts() const { return contacts_; }
-  std::size_t point_count() const;
-  double deepest_penetration() const;
-  std::size_t matched_points() const { return matched_; }
-  std::size_t reused_pairs() const { return reused_; }
-  std::size_t reused_manifolds() const { return moved_; }
+  std::size_t contact_count() const override { return contacts_.size(); }
+  std::size_t point_count() const override;
+  double deepest_penetration() const override;
+  std::size_t matched_points() const override { return matched_; }
+  std::size_t reused_pairs() const override { return reused_; }
+  std::size_t reused_manifolds() const override { return moved_; }
 
  private:
   struct BodyShapeData;
@@ -333,4 +320,5 @@ class ContactPipeline {
   double restitution_step_ = 0.0;  // restitution() reads (prepare())
 };
 
+}  // namespace RTP_CONTACT_ISA_NAMESPACE
 }  // namespace rtp

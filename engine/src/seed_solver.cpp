@@ -8,6 +8,7 @@
 #include "contacts.h"
 
 namespace rtp {
+inline namespace RTP_CONTACT_ISA_NAMESPACE {
 
 void ContactPipeline::solve_seed(double dt) {
   // The seed's lab 5 as it is written: each iteration applies at every penetrating point the
@@ -86,4 +87,5 @@ void ContactPipeline::solve_seed(double dt) {
   }
 }
 
+}  // namespace RTP_CONTACT_ISA_NAMESPACE
 }  // namespace rtp

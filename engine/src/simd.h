@@ -749,6 +749,18 @@ inline Float16 select_or_zero(Mask16 m, Float16 a) { return select(m, a, zero16(
 inline bool core_has_avx512() { return false; }
 #endif
 
+// whether the running core runs code built for x86-64-v4 (AVX-512F, BW, CD, DQ and VL beside
+// v3) or x86-64-v3 (AVX2, FMA, BMI1 and 2, F16C, LZCNT, MOVBE): which copy of the contact passes
+// the baseline build runs (contact_dispatch.cpp); the core and its system both (GCC's check reads
+// whether the system saves the registers too)
+#if defined(__x86_64__) && defined(__GNUC__)
+inline bool core_runs_x86_64_v4() { return __builtin_cpu_supports("x86-64-v4"); }
+inline bool core_runs_x86_64_v3() { return __builtin_cpu_supports("x86-64-v3"); }
+#else
+inline bool core_runs_x86_64_v4() { return false; }
+inline bool core_runs_x86_64_v3() { return false; }
+#endif
+
 // the lanes of a 16-lane group starting at j that are below n: all but in a last, partial group
 inline Mask16 lanes_below(std::size_t n, std::size_t j) {
   return static_cast<Mask16>(n - j >= 16 ? 0xFFFFu : (1u << (n - j)) - 1u);

@@ -6,7 +6,8 @@
 #include <cstring>
 #include <stdexcept>
 
-#include "contacts.h"
+#include "contact_stages.h"
+#include "simd.h"
 #include "threads.h"
 
 namespace rtp {
@@ -66,7 +67,10 @@ World::World(Vec3 gravity, Integrator integrator, ContactSettings contacts)
       !std::isfinite(contacts.relax_tolerance) || !(contacts.restitution_tolerance >= 0.0) ||
       !std::isfinite(contacts.restitution_tolerance))
     throw std::invalid_argument("rtp: contact distances, stiffness and speeds must be >= 0");
+  contact_isa_ = &contact_isa(contacts.instruction_set);
 }
+
+const char* World::contact_instruction_set() const { return contact_isa_->name; }
 
 World::~World() = default;
 World::World(World&&) noexcept = default;
@@ -96,7 +100,7 @@ BodyId World::add_body(const BodyDef& def) {
     throw std::invalid_argument("rtp: a plane must be static (mass 0)");
   // the first body with a shape makes the contact pipeline, and every body before it joins
   if (def.shape.kind != BodyShape::None && !pipeline_) {
-    pipeline_ = std::make_unique<ContactPipeline>(contact_settings_);
+    pipeline_.reset(contact_isa_->make(contact_settings_));
     for (std::size_t i = 0; i < states_.size(); ++i)
       pipeline_->add_body(BodyId(i), ShapeDef{}, 0.0, 0.0, masses_[i].inverse_mass == 0.0);
   }
@@ -574,7 +578,7 @@ void World::step_with_contacts(double dt) {
   // restitution pass at the end. Sequential impulse and seed: one kick, the iterations, one drift.
   const auto start = Clock::now();
   profile_ = StepProfile{};
-  ContactPipeline& contacts = *pipeline_;
+  ContactStages& contacts = *pipeline_;
   const ContactSettings& settings = contact_settings_;
   active_threads_ = governor_.next();
   contacts.set_threads(active_threads_);
@@ -666,7 +670,7 @@ void World::step_with_contacts(double dt) {
     timed(profile_.continuous,
           [&] { profile_.swept_stops = contacts.sweep_fast_bodies(states_); });
   store_momenta();
-  profile_.contact_pairs = contacts.contacts().size();
+  profile_.contact_pairs = contacts.contact_count();
   profile_.contact_points = contacts.point_count();
   profile_.matched_points = contacts.matched_points();
   profile_.reused_pairs = contacts.reused_pairs();

@@ -16,6 +16,8 @@
 #include <cstdlib>
 #include <new>
 #include <numbers>
+#include <stdexcept>
+#include <string>
 #include <vector>
 
 #include "rtp/world.h"
@@ -515,6 +517,65 @@ TEST(Contacts, SettledStackKeepsItsContactsAndAllocatesNothing) {
   }
   EXPECT_EQ(g_allocations.load() - before, 0);
   EXPECT_EQ(world.profile().contact_points, 16u);
+}
+
+// The baseline build carries the contact passes for x86-64, x86-64-v3 (AVX2, FMA) and x86-64-v4
+// (AVX-512) and runs the widest the core has; a build for one instruction set carries "native"
+// alone (engine/src/contact_stages.h). Every copy the core runs must give the stack the others
+// give: their lanes differ, and which products fuse into a multiply-add, so they agree closely,
+// not to the bit; each copy gives the same bits every run. A copy named that the build or core
+// lacks is refused, by the setting or by the environment variable, naming what there is.
+TEST(Contacts, EachCopyOfTheContactPassesTheCoreRunsGivesTheSameStack) {
+  ::unsetenv("RTP_CONTACT_ISA");  // (a choice from outside the test would stand in for the widest)
+  const std::string widest = World().contact_instruction_set();
+  std::vector<std::string> copies = {widest};
+#if defined(__x86_64__) && defined(__GNUC__)
+  if (widest != "native") {
+    copies = {"x86-64"};
+    if (__builtin_cpu_supports("x86-64-v3")) copies.push_back("x86-64-v3");
+    if (__builtin_cpu_supports("x86-64-v4")) copies.push_back("x86-64-v4");
+    EXPECT_EQ(widest, copies.back()) << "a world takes the widest copy the core runs";
+  }
+#endif
+  // a column of five boxes, and a sixth tilted, landing on it from 0.5 m
+  auto run = [](const std::string& copy) {
+    ContactSettings settings;
+    settings.instruction_set = copy;
+    World world(kGravity, Integrator::SemiImplicitEuler, settings);
+    EXPECT_EQ(std::string(world.contact_instruction_set()), copy);
+    add_ground(world, 0.6);
+    for (int k = 0; k < 5; ++k) add_box(world, {0.0, 0.5 + k, 0.0}, 1.0, 0.6);
+    add_box(world, {0.2, 6.0, 0.1}, 1.0, 0.6, 0.0,
+            Quat(Eigen::AngleAxisd(0.3, Vec3(1.0, 0.0, 1.0).normalized())));
+    for (int i = 0; i < 120; ++i) world.step(kDt);
+    std::vector<Vec3> positions;
+    for (BodyId b = 1; b < BodyId(world.body_count()); ++b)
+      positions.push_back(world.state(b).position);
+    return positions;
+  };
+  const std::vector<Vec3> reference = run(copies.front());
+  for (const std::string& copy : copies) {
+    const std::vector<Vec3> first = run(copy), second = run(copy);
+    for (std::size_t b = 0; b < reference.size(); ++b) {
+      EXPECT_EQ(first[b], second[b]) << copy << ", box " << b << ": a copy must repeat its bits";
+      EXPECT_LT((first[b] - reference[b]).norm(), 1e-3)
+          << copy << " against " << copies.front() << ", box " << b;
+    }
+  }
+  ContactSettings unknown;
+  unknown.instruction_set = "x86-64-v9";
+  try {
+    World world(kGravity, Integrator::SemiImplicitEuler, unknown);
+    ADD_FAILURE() << "a copy the build does not carry must be refused";
+  } catch (const std::invalid_argument& e) {
+    EXPECT_NE(std::string(e.what()).find("x86-64-v9"), std::string::npos) << e.what();
+    EXPECT_NE(std::string(e.what()).find(widest), std::string::npos) << e.what();
+  }
+  ::setenv("RTP_CONTACT_ISA", copies.front().c_str(), 1);
+  EXPECT_EQ(std::string(World().contact_instruction_set()), copies.front());
+  ::setenv("RTP_CONTACT_ISA", "x86-64-v9", 1);
+  EXPECT_THROW(World(), std::invalid_argument);
+  ::unsetenv("RTP_CONTACT_ISA");
 }
 
 // Four unit boxes started 5 cm into each other and into the ground, at rest (the overlap-recovery

@@ -12,6 +12,7 @@
 
 #include <cstdint>
 #include <memory>
+#include <string>
 #include <vector>
 
 #include "rtp/collision.h"
@@ -165,14 +166,21 @@ struct ContactSettings {
   // with threads > 1, each step runs on the team or on one thread, whichever the recent steps
   // found faster (ThreadGovernor: a busy machine's descheduled thread stalls every colour)
   bool adaptive_threads = true;
+  // the contact passes' instruction set, where the build carries several (the x86-64 baseline
+  // build: "x86-64", "x86-64-v3" with AVX2 and FMA, "x86-64-v4" with AVX-512; a build for one has
+  // "native" alone): empty takes the RTP_CONTACT_ISA environment variable's, or else the widest
+  // the core runs. A set the build or the core lacks is refused when the world is made.
+  std::string instruction_set;
 };
 
-// how many manifolds the contact solver's lanes hold: the build's widest float register, at
-// least 8 (it changes no result: a block's manifolds share no dynamic body)
+// how many manifolds the contact solver's lanes hold in a world with the default settings: the
+// widest float register of the contact passes it runs (it changes no result: a block's manifolds
+// share no dynamic body)
 std::size_t contact_block_lanes();
 
-// the instruction set this build of rtp was compiled for, in words ("AVX-512F, AVX2 and FMA
-// (-march=native)", "x86-64 baseline: SSE2", …): what a settings table states
+// the instruction set this build of rtp was compiled for, in words ("AVX-512F, AVX2, FMA",
+// "x86-64 baseline (SSE2)", …), and in the baseline build the contact passes a world with the
+// default settings runs: what a settings table states
 const char* instruction_set();
 
 // wall time of each stage of the last step (s)
@@ -208,7 +216,8 @@ struct StepProfile {
   }
 };
 
-class ContactPipeline;
+class ContactStages;
+struct ContactIsa;
 
 class World {
  public:
@@ -241,6 +250,9 @@ class World {
   const ContactSettings& contact_settings() const { return contact_settings_; }
   // true when some body has a shape: the world steps by its contact solver
   bool has_contacts() const { return pipeline_ != nullptr; }
+  // the instruction set of the contact passes this world runs ("x86-64", "x86-64-v3",
+  // "x86-64-v4", or "native" in a build for one; ContactSettings::instruction_set)
+  const char* contact_instruction_set() const;
   // the deepest penetration among this step's contacts (m, 0 when none): from the narrow phase
   // at the start of the last step
   double deepest_penetration() const;
@@ -281,7 +293,8 @@ class World {
   std::vector<BodyState> stage_state_;
   std::vector<BodyRate> k1_, k2_, k3_, k4_;
   ContactSettings contact_settings_;
-  std::unique_ptr<ContactPipeline> pipeline_;  // made by the first body with a shape
+  const ContactIsa* contact_isa_ = nullptr;  // the copy of the contact passes it runs
+  std::unique_ptr<ContactStages> pipeline_;  // made by the first body with a shape
   ThreadGovernor governor_{1, false};  // this world's choice of team, step by step
   int active_threads_ = 1;             // the team of the step being run
   // a step with contacts integrates positions in lanes: eight bodies a group, each group 56
