@@ -38,12 +38,13 @@ std::vector<const ContactIsa*> runnable() {
   out.push_back(rtp_contact_isa_native());
 #endif
   for (const ContactIsa* isa : out)
-    if (isa->interface_layout != kContactInterfaceLayout)
+    if (!(isa->interface_layout == kContactInterfaceLayout))
       throw std::logic_error(std::string("rtp: the contact passes for ") + isa->name +
-                             " were compiled with another layout of the world's types (" +
-                             std::to_string(isa->interface_layout) + " against " +
-                             std::to_string(kContactInterfaceLayout) +
-                             "): a build error, see engine/CMakeLists.txt");
+                             " were compiled with another layout of the world's types (a " +
+                             "BodyState of " + std::to_string(isa->interface_layout.body_state) +
+                             " bytes against " +
+                             std::to_string(kContactInterfaceLayout.body_state) +
+                             ", …): a build error, see engine/CMakeLists.txt");
   return out;
 }
 

@@ -75,10 +75,14 @@ class ContactStages {
 // the sizes and alignments of the types the world and a copy of the pipeline pass each other, as
 // the code compiling this sees them: every copy must see them as the world does (Eigen aligns its
 // fixed-size types to the widest register the compiler targets: engine/CMakeLists.txt pins it)
-inline constexpr std::size_t kContactInterfaceLayout =
-    sizeof(BodyState) * 1'000'000'000 + alignof(BodyState) * 10'000'000 +
-    sizeof(BodyMass) * 100'000 + alignof(BodyMass) * 1'000 + sizeof(ContactSettings) * 1 +
-    sizeof(SolverMass) * 7 + alignof(Quat) * 13 + sizeof(ShapeDef) * 17;
+struct ContactInterfaceLayout {
+  std::size_t body_state, body_state_align, body_mass, body_mass_align, quat_align, shape_def,
+      contact_settings, solver_mass;
+  bool operator==(const ContactInterfaceLayout&) const = default;
+};
+inline constexpr ContactInterfaceLayout kContactInterfaceLayout{
+    sizeof(BodyState), alignof(BodyState), sizeof(BodyMass),        alignof(BodyMass),
+    alignof(Quat),     sizeof(ShapeDef),   sizeof(ContactSettings), sizeof(SolverMass)};
 
 // one instruction set's copy of the pipeline
 struct ContactIsa {
@@ -86,7 +90,7 @@ struct ContactIsa {
   const char* instructions;  // what its code was compiled for, in words (simd::kInstructionSet)
   std::size_t block_lanes;   // manifolds a block of its solver holds
   ContactStages* (*make)(const ContactSettings& settings);  // a new pipeline, owned by the caller
-  std::size_t interface_layout;  // kContactInterfaceLayout as the copy was compiled
+  ContactInterfaceLayout interface_layout;  // kContactInterfaceLayout as the copy was compiled
 };
 
 // The copy a world with these settings runs: `wanted` (ContactSettings::instruction_set) names

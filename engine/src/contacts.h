@@ -152,7 +152,6 @@ class ContactPipeline final : public ContactStages {
 
   std::vector<SolverBody>& bodies() override { return bodies_; }
   const std::vector<SolverMass>& masses() const override { return masses_; }
-  const std::vector<ContactConstraint>& contacts() const { return contacts_; }
   std::size_t contact_count() const override { return contacts_.size(); }
   std::size_t point_count() const override;
   double deepest_penetration() const override;
