@@ -34,6 +34,10 @@ struct SolverMass {
   Mat3 inverse_inertia = Mat3::Zero();       // world, at the step's start (1/(kg m²))
 };
 
+// the world's poses in lanes during a step with contacts: a group of kPoseGroup bodies is
+// kPoseDoubles doubles, position x, y, z, then orientation w, x, y, z, each a lane a body
+inline constexpr std::ptrdiff_t kPoseGroup = 8, kPoseDoubles = 7 * kPoseGroup;
+
 // The stages of a step with contacts, in World::step_with_contacts' order; contacts.h says what
 // each does (ContactPipeline, the one implementation)
 class ContactStages {
@@ -56,6 +60,7 @@ class ContactStages {
   virtual void end_substep() = 0;
   virtual void next_substep(const Eigen::Vector3f& kick) = 0;
   virtual bool solve(double h, bool bias, bool backwards = false, double tolerance = 0.0) = 0;
+  virtual void integrate_positions(std::span<double> pose_lanes, std::size_t count, double h) = 0;
   virtual void solve_seed(double dt) = 0;
   virtual void positions_moved() = 0;
   virtual void restitution() = 0;
