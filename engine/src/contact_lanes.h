@@ -77,7 +77,7 @@ struct ContactLanes {
   std::vector<ContactBlockRest> rest;  // one a block
   std::vector<std::uint32_t> colour_start;  // colour k: blocks[start[k], start[k + 1])
   // the colours that hold a block, in order: a pass visits these (a small scene's two or three
-  // of the 64, whose walk took a fifth of its solve)
+  // of the 64, whose walk took 16 % of a four-box scene's step by `perf`)
   std::vector<std::uint8_t> used_colours;
   // per block, 1 where every lane's two bodies have an inverse inertia c·1 (cubes, spheres,
   // static bodies): the solve then applies it as a number, not a matrix

@@ -40,7 +40,8 @@ inline int team_index() {
 // body(i) for each i in [0, n): on a team of `threads`, each thread a contiguous share (OpenMP's
 // static schedule), where threads > 1 and the loop is `worth` a team; otherwise on the calling
 // thread without entering OpenMP, whose runtime makes and frees a team even for a region of one
-// thread (about 0.3 µs, with a heap allocation: a small scene's step paid it some 25 times)
+// thread (a heap allocation, and futex calls: `perf` put them at a tenth of a four-box scene's
+// step, some 25 regions a step)
 template <class Index, class Body>
 inline void parallel_for(int threads, Index n, bool worth, Body&& body) {
 #if defined(_OPENMP)
