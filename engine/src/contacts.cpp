@@ -5,6 +5,7 @@
 #include "contacts.h"
 
 #include <algorithm>
+#include <bit>
 #include <cmath>
 #include <cstddef>
 #include <limits>
@@ -39,10 +40,16 @@ Pose pose_of(const BodyState& s) { return Pose(s.position, s.orientation); }
 
 // two unit tangents that make a right-handed frame with n, a function of n alone (Catto,
 // "Computing a basis", 2014): the same normal gets the same basis every step
+// (written in scalars, one square root and one division: Eigen's normalized() on the
+// three-vector went through the stack, two stores read back as one, and divided twice)
 void tangent_basis(const Vec3& n, Vec3 tangent[2]) {
-  tangent[0] = std::abs(n.x()) >= 0.57735026919
-                   ? Vec3(n.y(), -n.x(), 0.0).normalized()
-                   : Vec3(0.0, n.z(), -n.y()).normalized();
+  if (std::abs(n.x()) >= 0.57735026919) {
+    const double inverse = 1.0 / std::sqrt(n.x() * n.x() + n.y() * n.y());
+    tangent[0] = Vec3(n.y() * inverse, -n.x() * inverse, 0.0);
+  } else {
+    const double inverse = 1.0 / std::sqrt(n.y() * n.y() + n.z() * n.z());
+    tangent[0] = Vec3(0.0, n.z() * inverse, -n.y() * inverse);
+  }
   tangent[1] = n.cross(tangent[0]);
 }
 
@@ -461,10 +468,16 @@ void ContactPipeline::collide_pairs(std::span<const BodyState> states, double dt
       const std::size_t k = touching_[i];
       const Manifold& manifold = manifolds_[k];
       const BodyId a = BodyId(candidates_[k] >> 32), b = BodyId(candidates_[k] & 0xffffffffu);
+      // every field written once (assigning ContactConstraint{} first built a zeroed one on
+      // the stack and copied it in: a fifth of this loop's time by perf)
       ContactConstraint& c = contacts_[i];
-      c = ContactConstraint{};
       c.body_a = a;
       c.body_b = b;
+      c.friction_impulse = {0.0f, 0.0f};
+      c.twist_impulse = 0.0f;
+      c.cold = 0;
+      // the points past the count are read in lanes (masked by multiplying): zeros, not NaN
+      for (std::uint8_t j = manifold.count; j < 4; ++j) c.points[j] = ContactPointConstraint{};
       contact_keys_[i] = c.key();
       c.normal = manifold.normal.cast<float>();
       Vec3 tangent[2];
@@ -513,6 +526,7 @@ void ContactPipeline::collide_pairs(std::span<const BodyState> states, double dt
         p.anchor_a = (point - states[a].position).cast<float>();
         p.anchor_b = (point - states[b].position).cast<float>();
         p.base_separation = float(separation);
+        p.normal_impulse = 0.0f;
         p.feature = manifold.points[j].feature;
         deepest = std::max(deepest, -separation);
       }
@@ -585,17 +599,30 @@ std::size_t ContactPipeline::carry_impulses(const ContactConstraint& old,
   // (incident vertex, crossing, reference corner) keeps a point flips with the smallest tilt:
   // the place survives where the id does not (as Bullet's and Jolt's contact caches match by
   // position)
+  // (a feature compared as the eight bytes it is; a manifold moved from the pair cache holds
+  // last step's features in last step's order, and the first search finds each at once)
+  auto same = [](const ContactFeature& x, const ContactFeature& y) {
+    return std::bit_cast<std::uint64_t>(x) == std::bit_cast<std::uint64_t>(y);
+  };
   std::array<bool, 4> claimed{};
   std::array<int, 4> source{-1, -1, -1, -1};
-  for (std::uint8_t i = 0; i < c.count; ++i)
+  int unmatched = 0;
+  bool in_order = old.count == c.count;
+  for (std::uint8_t i = 0; i < c.count && in_order; ++i)
+    in_order = same(old.points[i].feature, c.points[i].feature);
+  if (in_order)
+    for (std::uint8_t i = 0; i < c.count; ++i) source[i] = i;
+  for (std::uint8_t i = 0; i < c.count && !in_order; ++i) {
     for (std::uint8_t j = 0; j < old.count; ++j)
-      if (!claimed[j] && old.points[j].feature == c.points[i].feature) {
+      if (!claimed[j] && same(old.points[j].feature, c.points[i].feature)) {
         source[i] = j;
         claimed[j] = true;
         break;
       }
+    unmatched += source[i] < 0;
+  }
   const double match_squared = settings_.match_distance * settings_.match_distance;
-  for (std::uint8_t i = 0; i < c.count; ++i) {
+  for (std::uint8_t i = 0; i < c.count && unmatched > 0; ++i) {
     if (source[i] >= 0) continue;
     double nearest = match_squared;
     for (std::uint8_t j = 0; j < old.count; ++j) {
