@@ -323,5 +323,23 @@ class ContactPipeline final : public ContactStages {
   double restitution_step_ = 0.0;  // restitution() reads (prepare())
 };
 
+// a shaped body as the pipeline keeps it (contacts.cpp, and the pair cache, the match with last
+// step's contacts and the sweep of fast bodies in files of their own)
+struct ContactPipeline::BodyShapeData {
+  BodyShape kind = BodyShape::None;
+  Shape shape;  // grown by half the speculative distance
+  double reach = 0.0;   // the farthest its surface is from its centre of mass (m)
+  double thinnest = 0.0;  // its smallest half extent, or radius (m)
+  double growth = 0.0;  // this step: half the speculative distance and the motion bound (m)
+  bool is_static = false;
+  double friction = 0.0, restitution = 0.0;
+  ProxyId proxy = 0;
+  Vec3 plane_normal = Vec3::UnitY();  // a plane's, in the world, this step
+  double plane_offset = 0.0;          // (m), grown by half the speculative distance
+};
+
+// a body's pose from its state
+inline Pose pose_of(const BodyState& s) { return Pose(s.position, s.orientation); }
+
 }  // namespace RTP_CONTACT_ISA_NAMESPACE
 }  // namespace rtp
