@@ -6,6 +6,8 @@
 //   build/bench/bench/contacts_bench --benchmark_out=contacts.json --benchmark_out_format=json
 //   build/bench/bench/contacts_bench --benchmark_filter='Pyramid/base:100/'
 //   build/bench/bench/contacts_bench --benchmark_filter=ThreadScaling   (one thread against two)
+// The triad (triad.h) runs first and last, on one thread and two: the machine's memory bandwidth
+// beside the times, so that a slow spell shows in the run itself (Triad/threads:N/at:0 and at:1).
 #include <benchmark/benchmark.h>
 
 #include <algorithm>
@@ -17,6 +19,7 @@
 
 #include "physbench/rtp_world.h"
 #include "physbench/scenarios.h"
+#include "triad.h"
 
 namespace {
 
@@ -140,6 +143,16 @@ int main(int argc, char** argv) {
                     std::to_string(int(c.contact_hertz)) + " Hz; sleeping off; dt 1/60");
   benchmark::AddCustomContext("scene", "pyramid-N of the contact scenarios, settled " +
                                            std::to_string(kSettleSteps) + " steps before timing");
+  // the machine's bandwidth before the steps and after them (at:0, at:1)
+  auto triad = [](int at) {
+    for (int threads : {1, 2})
+      benchmark::RegisterBenchmark("Triad", Triad)
+          ->Args({threads, at})
+          ->ArgNames({"threads", "at"})
+          ->Unit(benchmark::kMillisecond)
+          ->UseRealTime();
+  };
+  triad(0);
   for (int base : {10, 20, 50, 100})
     for (int threads : {1, 2})
       benchmark::RegisterBenchmark("Pyramid", Pyramid)
@@ -169,6 +182,7 @@ int main(int argc, char** argv) {
         ->Unit(benchmark::kMillisecond)
         ->UseRealTime()
         ->Iterations(base >= 100 ? 300 : 600);
+  triad(1);
   benchmark::Initialize(&argc, argv);
   if (benchmark::ReportUnrecognizedArguments(argc, argv)) return 1;
   benchmark::RunSpecifiedBenchmarks();

@@ -13,6 +13,7 @@
 #include <vector>
 
 #include "paired.h"
+#include "triad.h"
 #include "physbench/particle_driver.h"
 #include "physbench/scenarios.h"
 
@@ -20,23 +21,6 @@ namespace {
 
 // bytes/s measured by the triad, per thread count, filled before the particle benchmarks run
 std::map<int, double> triad_bandwidth;
-
-// STREAM triad a = b + s c over 3 × 256 MiB / 3 of doubles, split across the given threads
-void Triad(benchmark::State& state) {
-  const int threads = static_cast<int>(state.range(0));
-  const std::size_t n = (256u << 20) / sizeof(double) / 3;
-  std::vector<double> a(n), b(n, 1.0), c(n, 2.0);
-  const double s = 3.0;
-  for (auto _ : state) {
-#pragma omp parallel for num_threads(threads) schedule(static)
-    for (std::size_t i = 0; i < n; ++i) a[i] = b[i] + s * c[i];
-    benchmark::DoNotOptimize(a.data());
-    benchmark::ClobberMemory();
-  }
-  const double bytes = 3.0 * sizeof(double) * static_cast<double>(n);
-  state.SetBytesProcessed(static_cast<int64_t>(bytes * static_cast<double>(state.iterations())));
-  state.counters["threads"] = threads;
-}
 
 // the particles-attractors scene (validation/src/scenarios.cpp), as rtp's definition
 rtp::ParticleSystemDef attractor_mode(std::size_t count, int threads) {

@@ -3,6 +3,7 @@ particles_bench, broadphase_bench, narrowphase_bench and contacts_bench, each as
 rows and charts, or None when the file is absent."""
 from __future__ import annotations
 
+import statistics
 from pathlib import Path
 
 import plotly.graph_objects as go
@@ -173,8 +174,21 @@ def contacts_benchmark(folder: Path) -> dict | None:
         return None
     cases: dict[tuple, dict] = {}
     paired: dict[int, dict] = {}
+    triad: dict[tuple, list] = {}  # (threads, at) -> bytes/s of each run
     for run in document.get("benchmarks", []):
         name = run.get("run_name", run.get("name", ""))
+        if name.startswith("Triad/"):
+            # the machine's bandwidth at the run's start (at:0) and end (at:1), GB/s
+            if run.get("run_type") == "aggregate" or run.get("error_occurred"):
+                continue
+            fields = dict(part.split(":", 1) for part in name.split("/")[1:] if ":" in part)
+            try:
+                key = (int(fields["threads"]), int(fields["at"]))
+                triad.setdefault(key, []).append(float(run["bytes_per_second"]) / 1e9)
+            except (KeyError, ValueError) as exc:
+                raise ReportError(f"{folder / 'benchmarks' / 'contacts.json'}: benchmark {name!r} lacks "
+                                  f"or garbles {exc}") from exc
+            continue
         if name.startswith("ThreadScaling/"):
             scaling = thread_scaling_row(folder, name, run)
             if scaling is not None:
@@ -211,8 +225,12 @@ def contacts_benchmark(folder: Path) -> dict | None:
     fig.update_layout(barmode="stack", title="rtp contact step: each stage's share of the step (contacts_bench)",
                       yaxis_title="share of the step")
     context = document.get("context", {})
+    bandwidth = [dict(threads=threads, start=statistics.median(triad[(threads, 0)]) if (threads, 0) in triad else None,
+                      end=statistics.median(triad[(threads, 1)]) if (threads, 1) in triad else None)
+                 for threads in sorted({threads for threads, _ in triad})]
     return dict(rows=rows, stages=stages, chart=figure_html(fig) if rows else "", solver=context.get("solver", ""),
-                scene=context.get("scene", ""), paired=[paired[base] for base in sorted(paired)])
+                scene=context.get("scene", ""), paired=[paired[base] for base in sorted(paired)],
+                bandwidth=bandwidth)
 
 
 def thread_scaling_row(folder: Path, name: str, run: dict) -> dict | None:

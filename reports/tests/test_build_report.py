@@ -486,6 +486,31 @@ def test_contacts_benchmark_rows_speedups_and_shares(tmp_path):
     assert bench["solver"] == "soft step, 8 substeps"
 
 
+def triad_run(threads, at, gb_per_s):
+    name = f"Triad/threads:{threads}/at:{at}/real_time"
+    return {"name": name, "run_name": name, "run_type": "iteration", "iterations": 27, "real_time": 25.0,
+            "time_unit": "ms", "bytes_per_second": gb_per_s * 1e9, "threads": threads}
+
+
+def test_the_triad_beside_the_contact_step_is_its_start_and_end_bandwidth(tmp_path):
+    # contacts_bench measures the machine's bandwidth first and last (at:0, at:1): the report shows
+    # both, per thread count, so a slow spell shows beside the times
+    (tmp_path / "benchmarks").mkdir()
+    (tmp_path / "benchmarks" / "contacts.json").write_text(contacts_json([
+        triad_run(1, 0, 13.6), triad_run(2, 0, 28.3), pyramid_run(10, 1, 2.0), triad_run(1, 1, 9.7),
+        triad_run(2, 1, 20.4)]))
+    bench = benchmarks.contacts_benchmark(tmp_path)
+    assert bench["bandwidth"] == [dict(threads=1, start=pytest.approx(13.6), end=pytest.approx(9.7)),
+                                  dict(threads=2, start=pytest.approx(28.3), end=pytest.approx(20.4))]
+    # a Triad run is not read as a pyramid's
+    assert [(r["base"], r["threads"]) for r in bench["rows"]] == [(10, 1)]
+    broken = triad_run(1, 0, 13.6)
+    del broken["bytes_per_second"]
+    (tmp_path / "benchmarks" / "contacts.json").write_text(contacts_json([broken, pyramid_run(10, 1, 2.0)]))
+    with pytest.raises(build_report.ReportError, match=r"contacts.json: benchmark 'Triad/threads:1/at:0.*bytes_per_second"):
+        benchmarks.contacts_benchmark(tmp_path)
+
+
 def test_thread_scaling_runs_are_the_paired_speedups(tmp_path):
     (tmp_path / "benchmarks").mkdir()
     scaling = {"name": "ThreadScaling/base:100/iterations:300/real_time",
@@ -525,7 +550,8 @@ def test_pyramid_series_draws_cost_against_bodies_with_the_benchmark(tmp_path):
         pytest.skip("no engine in this build runs contact scenes")
     (out / "benchmarks").mkdir()
     (out / "benchmarks" / "contacts.json").write_text(contacts_json([
-        pyramid_run(10, 1, 2.0), pyramid_run(10, 2, 1.6), pyramid_run(20, 1, 8.0), pyramid_run(20, 2, 5.0)]))
+        triad_run(1, 0, 13.6), pyramid_run(10, 1, 2.0), pyramid_run(10, 2, 1.6), pyramid_run(20, 1, 8.0),
+        pyramid_run(20, 2, 5.0), triad_run(1, 1, 9.7)]))
     page = readable(build_report.build_report(out).read_text())
     chart = page.split("Scaling: pyramid")[1].split("</section>")[0]
     assert "pyramid: ms per step against bodies" in chart
@@ -536,6 +562,7 @@ def test_pyramid_series_draws_cost_against_bodies_with_the_benchmark(tmp_path):
     assert "rtp soft-step, contacts_bench, 2 thread(s)" in chart
     assert "rtp contact step on the pyramids" in page and "<td>1.60</td>" not in page
     assert "<td>1.6</td><td>1.25×</td>" in page
+    assert "at its start and its end: 13.6 and 9.7 GB/s on 1 thread." in page
     # drift against cost: both views for both pyramids, each with its front
     costs = page.split("Stacks: drift against cost")[1].split("</section>")[0]
     for name in ("pyramid-10", "pyramid-20"):
