@@ -7,7 +7,8 @@
 //   build/bench/bench/contacts_bench --benchmark_filter='Pyramid/base:100/'
 //   build/bench/bench/contacts_bench --benchmark_filter=ThreadScaling   (one thread against two)
 // The triad (triad.h) runs first and last, on one thread and two: the machine's memory bandwidth
-// beside the times, so that a slow spell shows in the run itself (Triad/threads:N/at:0 and at:1).
+// beside the times, so that a slow spell shows in the run itself (Triad/threads:N/at:0 and at:1;
+// with --benchmark_enable_random_interleaving they run among the others instead).
 #include <benchmark/benchmark.h>
 
 #include <algorithm>
