@@ -59,7 +59,6 @@ std::size_t ContactPipeline::carry_impulses(const ContactConstraint& old,
   };
   std::array<bool, 4> claimed{};
   std::array<int, 4> source{-1, -1, -1, -1};
-  int unmatched = 0;
   bool in_order = old.count == c.count;
   for (std::uint8_t i = 0; i < c.count && in_order; ++i)
     in_order = same(old.points[i].feature, c.points[i].feature);
@@ -72,10 +71,9 @@ std::size_t ContactPipeline::carry_impulses(const ContactConstraint& old,
         claimed[j] = true;
         break;
       }
-    unmatched += source[i] < 0;
   }
   const double match_squared = settings_.match_distance * settings_.match_distance;
-  for (std::uint8_t i = 0; i < c.count && unmatched > 0; ++i) {
+  for (std::uint8_t i = 0; i < c.count; ++i) {
     if (source[i] >= 0) continue;
     double nearest = match_squared;
     for (std::uint8_t j = 0; j < old.count; ++j) {

@@ -62,7 +62,6 @@ class ContactStages {
   virtual bool solve(double h, bool bias, bool backwards = false, double tolerance = 0.0) = 0;
   virtual void integrate_positions(std::span<double> pose_lanes, std::size_t count, double h) = 0;
   virtual void solve_seed(double dt) = 0;
-  virtual void positions_moved() = 0;
   virtual void restitution() = 0;
   virtual std::size_t sweep_fast_bodies(std::span<BodyState> states) = 0;
   virtual void store_impulses() = 0;

@@ -139,11 +139,9 @@ class ContactPipeline final : public ContactStages {
   void solve_seed(double dt) override;
   // the positions of the first `count` bodies by their velocities over h, their orientations by
   // the exponential map, in pose_lanes (groups of kPoseGroup bodies: contact_stages.h), and each
-  // body's motion since the step's start with them (pose_lanes.cpp)
+  // body's motion since the step's start with them (pose_lanes.cpp); the next solve then
+  // computes each point's separation from that motion again, rather than read the one it stored
   void integrate_positions(std::span<double> pose_lanes, std::size_t count, double h) override;
-  // the bodies' positions changed (the world integrated them): the next solve computes each
-  // point's separation from their motion again, rather than read the one it stored
-  void positions_moved() override { separations_stale_ = true; }
   void restitution() override;
   // continuous collision: each body that moved further this step than its speculative contacts
   // reach is swept from its start pose to its end against the static shapes, and stopped where it

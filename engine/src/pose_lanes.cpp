@@ -15,7 +15,7 @@ inline namespace RTP_CONTACT_ISA_NAMESPACE {
 
 namespace {
 
-// A body's turn over a substep, for a lane type D (simd::Double8: eight bodies at once; or
+// A body's turn over a substep, for a lane type D (simd::Double4: four bodies at once; or
 // float lanes for the solver's single-precision motion).
 //
 // The turn by ω over h is exp(h ω / 2) as a unit quaternion: (cos x, sin x ω/|ω|) with
@@ -157,6 +157,7 @@ void ContactPipeline::integrate_positions(std::span<double> pose_lanes, std::siz
       std::memcpy(static_cast<void*>(bodies.data() + first), tail,
                   sizeof(SolverBody) * std::size_t(in_group));
   });
+  separations_stale_ = true;
 }
 
 }  // namespace RTP_CONTACT_ISA_NAMESPACE

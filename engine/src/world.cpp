@@ -405,7 +405,6 @@ void World::integrate_positions(double h) {
   pipeline_->integrate_positions(pose_lanes_, states_.size(), h);
   // the springs read this substep's poses from the states
   if (!springs_.empty()) store_pose_lanes();
-  pipeline_->positions_moved();
 }
 
 void World::store_momenta() {
