@@ -46,16 +46,21 @@ struct ContactBlock {
   Lane friction, tangent_mass[2], twist_mass, twist_arm;
   LaneMask fresh;  // a point without a warm start, or hitting: the manifold is solved locally
   struct Point {
-    Lane anchor_a[3], anchor_b[3];  // the rows are computed from these as read
+    // the point from a's centre of mass in the manifold's frame: its coordinates along
+    // tangent[0], tangent[1] and the normal (m). The point is the same for both bodies, so from
+    // b's centre it is this plus centre_b − centre_a (frame_offset()); the rows are computed from
+    // these as read
+    Lane anchor[3];
     Lane normal_impulse;
     Lane separation;   // as the bodies last moved: the base (ContactBlockRest), plus their motion
                        // along n since the step's start (m); computed again once they move
     Lane normal_mass;  // 1 / the velocity change per unit impulse (kg); 0 for an empty point
   } points[4];
 };
-// 66 floats a lane: 30 for the manifold, 9 for each of four points (264 bytes a manifold; the soft
-// step's stiffness is chosen in the solve, by whether a body is static)
-static_assert(sizeof(ContactBlock) == 66 * sizeof(float) * kBlockLanes);
+// 54 floats a lane: 30 for the manifold, 6 for each of four points (216 bytes a manifold; the soft
+// step's stiffness is chosen in the solve, by whether a body is static). A point's anchors as two
+// world vectors were 9 a point, 66 a lane (docs/solver.md, "Precision and layout")
+static_assert(sizeof(ContactBlock) == 54 * sizeof(float) * kBlockLanes);
 
 // the rest of a block: what the passes read only now and then (a substep's first separations,
 // a non-isotropic block's inertia, restitution), and what prepare() and store_impulses() read
@@ -64,7 +69,7 @@ struct ContactBlockRest {
   Lane inverse_inertia_a[5], inverse_inertia_b[5];  // yy zz xy xz yz
   Lane restitution;
   struct Point {
-    Lane base_separation;     // at the step's start, less n·(anchor_b − anchor_a) (m)
+    Lane base_separation;     // at the step's start, less n·(b's anchor − a's) (m)
     Lane max_normal_impulse;  // the largest this step (N s; kept where some lane bounces)
     Lane approach_velocity;   // relative normal velocity at impact (m/s), < 0 closing
   } points[4];

@@ -173,13 +173,13 @@ void ContactPipeline::prepare(const Vec3& gravity, double h) {
     block.friction = clear(rows[1]), rest.restitution = clear(rows[2]);
     block.friction_impulse[0] = clear(rows[3]), block.friction_impulse[1] = clear(rows[4]);
     block.twist_impulse = clear(rows[5]);
+    // (the anchors as the contacts hold them, world vectors from each centre: prepare_lanes()
+    // keeps them in the manifold's frame)
+    PointAnchors anchors;
     for (int j = 0; j < 4; ++j) {
       ContactBlock::Point& p = block.points[j];
       simd::gather_records(contact_floats + kPointFloat + j * kPointFloats, contact_offsets, rows);
-      for (int k = 0; k < 3; ++k) {
-        p.anchor_a[k] = clear(rows[k]);
-        p.anchor_b[k] = clear(rows[3 + k]);
-      }
+      for (int k = 0; k < 6; ++k) anchors[j][k] = clear(rows[k]);
       rest.points[j].base_separation = clear(rows[6]);
       p.normal_impulse = clear(rows[7]);
     }
@@ -209,7 +209,7 @@ void ContactPipeline::prepare(const Vec3& gravity, double h) {
       const Vec3 gravity_b = block.inverse_mass_b[i] > 0.0f ? gravity : Vec3::Zero();
       acceleration[i] = float(normal.dot(gravity_b - gravity_a));
     }
-    if (prepare_lanes(block, rest, exists, cold, acceleration, h))
+    if (prepare_lanes(block, rest, anchors, exists, cold, acceleration, h))
       bounces.store(true, std::memory_order_relaxed);
   };
   // each thread the blocks it solves: of each colour its share (for_each_block; a colour too
@@ -233,6 +233,7 @@ void ContactPipeline::prepare(const Vec3& gravity, double h) {
 }
 
 bool ContactPipeline::prepare_lanes(ContactBlock& c, ContactBlockRest& r,
+                                    const PointAnchors& anchors,
                                     const std::array<LaneMask, 4>& exists,
                                     const std::array<LaneMask, 4>& cold, Lane acceleration,
                                     double h) const {
@@ -240,15 +241,21 @@ bool ContactPipeline::prepare_lanes(ContactBlock& c, ContactBlockRest& r,
   const Lane zero = splat(0.0f);
   const Lane threshold = splat(float(-settings_.restitution_threshold));
   const LanePair pair(bodies_, c);
-  const V3 n = load3(c.normal);
+  const V3 n = load3(c.normal), t0 = load3(c.tangent[0]), t1 = load3(c.tangent[1]);
+  auto anchor_a = [&](int j) { return V3{anchors[j][0], anchors[j][1], anchors[j][2]}; };
+  auto anchor_b = [&](int j) { return V3{anchors[j][3], anchors[j][4], anchors[j][5]}; };
   const BlockInertia m = inertia_of<false>(c, r);
-  // 1 / (the velocity change along d at the anchors per unit impulse), 0 for an empty point
-  auto effective_mass = [&](const V3& ra, const V3& rb, const V3& d, LaneMask point) {
-    const V3 ja = cross(ra, d), jb = cross(rb, d);
+  // 1 / (the velocity change along a row per unit impulse), its angular parts ja, jb (r × d); 0
+  // for an empty point
+  auto row_mass = [&](const V3& ja, const V3& jb, LaneMask point) {
     const Lane k = c.inverse_mass_a + c.inverse_mass_b + dot(ja, times(m.a, ja)) +
                    dot(jb, times(m.b, jb));
     const LaneMask valid = point & (k > zero);
     return simd::select(valid, splat(1.0f) / simd::select(valid, k, splat(1.0f)), zero);
+  };
+  // along d at the anchors ra, rb
+  auto effective_mass = [&](const V3& ra, const V3& rb, const V3& d, LaneMask point) {
+    return row_mass(cross(ra, d), cross(rb, d), point);
   };
   LaneMask fresh = zero != zero, bounces = zero != zero;
   // the centre of each manifold's points, and their mean distance from it: of the points that
@@ -267,8 +274,8 @@ bool ContactPipeline::prepare_lanes(ContactBlock& c, ContactBlockRest& r,
   Lane count = zero;
   for (int j = 0; j < 4; ++j) {
     const Lane one_if = simd::select(holds[j], splat(1.0f), zero);
-    sum_a = sum_a + one_if * load3(c.points[j].anchor_a);
-    sum_b = sum_b + one_if * load3(c.points[j].anchor_b);
+    sum_a = sum_a + one_if * anchor_a(j);
+    sum_b = sum_b + one_if * anchor_b(j);
     count = count + one_if;
   }
   const LaneMask any = count > zero;
@@ -277,19 +284,19 @@ bool ContactPipeline::prepare_lanes(ContactBlock& c, ContactBlockRest& r,
   const V3 centre_a = inverse_count * sum_a, centre_b = inverse_count * sum_b;
   Lane arm = zero;
   for (int j = 0; j < 4; ++j) {
-    const V3 d = load3(c.points[j].anchor_a) - centre_a;
+    const V3 d = anchor_a(j) - centre_a;
     arm = arm + simd::select(holds[j], simd::sqrt(dot(d, d)), zero);
   }
-  {
-    const V3 t0 = load3(c.tangent[0]), t1 = load3(c.tangent[1]);
-    c.centre_a[0] = dot(centre_a, t0), c.centre_a[1] = dot(centre_a, t1);
-    c.centre_a[2] = dot(centre_a, n);
-    c.centre_b[0] = dot(centre_b, t0), c.centre_b[1] = dot(centre_b, t1);
-    c.centre_b[2] = dot(centre_b, n);
-  }
+  c.centre_a[0] = dot(centre_a, t0), c.centre_a[1] = dot(centre_a, t1);
+  c.centre_a[2] = dot(centre_a, n);
+  c.centre_b[0] = dot(centre_b, t0), c.centre_b[1] = dot(centre_b, t1);
+  c.centre_b[2] = dot(centre_b, n);
+  // the passes take b's anchors as a's plus this (FrameOffset), the points' separations from
+  // the bodies' motion likewise
+  const FrameOffset offset(c);
   c.twist_arm = inverse_count * arm;
-  c.tangent_mass[0] = effective_mass(centre_a, centre_b, load3(c.tangent[0]), any);
-  c.tangent_mass[1] = effective_mass(centre_a, centre_b, load3(c.tangent[1]), any);
+  c.tangent_mass[0] = effective_mass(centre_a, centre_b, t0, any);
+  c.tangent_mass[1] = effective_mass(centre_a, centre_b, t1, any);
   {
     const Lane k = dot(n, times(m.a, n)) + dot(n, times(m.b, n));
     const LaneMask valid = any & (k > zero);
@@ -298,11 +305,15 @@ bool ContactPipeline::prepare_lanes(ContactBlock& c, ContactBlockRest& r,
   for (int j = 0; j < 4; ++j) {
     ContactBlock::Point& p = c.points[j];
     ContactBlockRest::Point& q = r.points[j];
-    const V3 ra = load3(p.anchor_a), rb = load3(p.anchor_b);
+    const V3 ra = anchor_a(j);
+    p.anchor[0] = dot(ra, t0), p.anchor[1] = dot(ra, t1), p.anchor[2] = dot(ra, n);
     const Lane separation = q.base_separation;
-    // the separation is tracked from here: s = base + n·(motion of b's anchor − a's)
-    q.base_separation = separation - dot(n, rb - ra);
-    p.normal_mass = effective_mass(ra, rb, n, exists[j]);
+    // the separation is tracked from here: s = base + n·(motion of b's anchor − a's), with b's
+    // anchor a's plus the offset, as the passes take it (NormalMotion)
+    q.base_separation = separation - offset.d[2];
+    // the effective mass of the row the passes compute (NormalRow)
+    const NormalRow row(p, t0, t1, offset);
+    p.normal_mass = row_mass(row.angular_a, row.angular_b, exists[j]);
     // The approach speed restitution reverses: what the forces alone give the point when it
     // hits, never a speed another contact's impulse gave it this step (in a row of touching
     // balls, one struck, the balls behind the first meet each other at a speed the first
@@ -313,7 +324,7 @@ bool ContactPipeline::prepare_lanes(ContactBlock& c, ContactBlockRest& r,
     // point still apart hits, if it hits this step, at the speed free flight gives it over the
     // gap, v² = v₀² − 2 a s₀; a touching one hits at its speed now
     const Lane approach =
-        pair.normal_velocity(n, NormalRow(p, n)) + splat(float(0.5 * h)) * acceleration;
+        pair.normal_velocity(n, row) + splat(float(0.5 * h)) * acceleration;
     const LaneMask starts_apart = exists[j] & (separation > zero);
     const Lane squared = approach * approach - splat(2.0f) * acceleration * separation;
     q.approach_velocity = simd::select(starts_apart, zero - simd::sqrt(simd::max(squared, zero)),

@@ -66,10 +66,13 @@ V3 gather3(const float* base, LaneIndex index) {
 struct FrameRow {
   Lane alpha_a, beta_a, alpha_b, beta_b;
 
-  FrameRow(const ContactBlock::Point& p, const V3& t0, const V3& t1) {
-    const V3 ra = load3(p.anchor_a), rb = load3(p.anchor_b);
-    alpha_a = dot(ra, t0), beta_a = dot(ra, t1), alpha_b = dot(rb, t0), beta_b = dot(rb, t1);
-  }
+  // the anchors are kept in the frame (ContactBlock::Point::anchor): α and β are read, b's
+  // the offset added
+  FrameRow(const ContactBlock::Point& p, const FrameOffset& offset)
+      : alpha_a(p.anchor[0]),
+        beta_a(p.anchor[1]),
+        alpha_b(p.anchor[0] + offset.d[0]),
+        beta_b(p.anchor[1] + offset.d[1]) {}
 };
 struct BlockFrame {
   Lane u, pa, qa, pb, qb;        // n·(v_b − v_a); w_a·t0, w_a·t1; w_b·t0, w_b·t1
@@ -148,19 +151,22 @@ struct BlockFrame {
   }
 };
 
-// a manifold centre's world vector from its coordinates along t0, t1 and n
-V3 centre_in_world(const Lane (&centre)[3], const V3& n, const V3& t0, const V3& t1) {
-  return centre[0] * t0 + centre[1] * t1 + centre[2] * n;
+// a vector's world coordinates from its coordinates along t0, t1 and n (a manifold's frame)
+V3 in_world(const Lane (&v)[3], const V3& n, const V3& t0, const V3& t1) {
+  return v[0] * t0 + v[1] * t1 + v[2] * n;
 }
 
 // how far each lane's bodies have moved along its normal since the step's start, as what the
 // points need: s = s₀' + n·(Δx_b − Δx_a) + (ΔR_bᵀ n)·r_b − (ΔR_aᵀ n)·r_a, the two turned normals
-// once per manifold rather than two rotations per point
+// once per manifold rather than two rotations per point. The anchors are in the manifold's frame,
+// b's a's plus the offset d, so with the turned normals in the frame too (T_a, T_b) a point's is
+// s₀' + [n·(Δx_b − Δx_a) + T_b·d] + (T_b − T_a)·r_a: one number and one vector a manifold
 struct NormalMotion {
-  Lane translation;
-  V3 turned_a, turned_b;
+  Lane shift;  // n·(Δx_b − Δx_a) + T_b·d
+  Lane turn[3];  // T_b − T_a
 
-  NormalMotion(const std::vector<SolverBody>& bodies, const ContactBlock& block) {
+  NormalMotion(const std::vector<SolverBody>& bodies, const ContactBlock& block,
+               const FrameOffset& offset) {
     const float* base = reinterpret_cast<const float*>(bodies.data());
     const LaneIndex a = body_offsets(block.body_a), b = body_offsets(block.body_b);
 #if defined(__AVX512F__)
@@ -183,14 +189,16 @@ struct NormalMotion {
     const V3 dpb = {low[6], low[7], high[0]}, qb = {high[4], high[5], high[6]};
     const Lane wb = high[7];
 #endif
-    const V3 n = load3(block.normal);
-    translation = dot(n, dpb - dpa);
-    turned_a = rotate_back(qa, wa, n);
-    turned_b = rotate_back(qb, wb, n);
+    const V3 n = load3(block.normal), t0 = load3(block.tangent[0]), t1 = load3(block.tangent[1]);
+    const V3 turned_a = rotate_back(qa, wa, n), turned_b = rotate_back(qb, wb, n);
+    const V3 b_frame{dot(turned_b, t0), dot(turned_b, t1), dot(turned_b, n)};
+    const V3 turned = turned_b - turned_a;
+    shift = dot(n, dpb - dpa) + dot(b_frame, V3{offset.d[0], offset.d[1], offset.d[2]});
+    turn[0] = dot(turned, t0), turn[1] = dot(turned, t1), turn[2] = dot(turned, n);
   }
   Lane separation(const ContactBlock::Point& p, Lane base_separation) const {
-    return base_separation + translation + dot(turned_b, load3(p.anchor_b)) -
-           dot(turned_a, load3(p.anchor_a));
+    return base_separation + shift +
+           (turn[0] * p.anchor[0] + turn[1] * p.anchor[1] + turn[2] * p.anchor[2]);
   }
 };
 
@@ -234,7 +242,7 @@ extern "C" const ContactIsa* RTP_CONTACT_ISA_ENTRY() {
 namespace {
 // The next block's cache lines, asked for a few at a time while this one is solved: a pass
 // streams the blocks in order, and at a large pyramid they come from L3, whose latency the kernel
-// otherwise waits on (docs/solver.md, "Cost"). Asked for all at once, the 66 lines a block fill
+// otherwise waits on (docs/solver.md, "Cost"). Asked for all at once, the 54 lines a block fill
 // the core's line-fill buffers and the prefetches stall the kernel behind them.
 class Prefetch {
  public:
@@ -377,12 +385,12 @@ void ContactPipeline::warm_start(bool first_substep) {
                          masses_[i].inverse_mass > 0.0 ? 1.0f : 0.0f};
   });
   for_each_block([&](const ContactBlock& c, const ContactBlockRest& r, Prefetch& ahead) {
-    // the warm start reads 52 of a block's 66 lines (the bodies, the directions, the masses, the
-    // friction's centre and impulses, each point's anchors and normal impulse): only those of
+    // the warm start reads 40 of a block's 54 lanes (the bodies, the directions, the masses, the
+    // friction's centre and impulses, each point's anchor and normal impulse): only those of
     // the next block are asked for, since at a large pyramid this pass waits on memory more
     // than it computes
     ahead.same(c, &c, offsetof(ContactBlock, friction));
-    for (const ContactBlock::Point& p : c.points) ahead.same(c, &p.anchor_a, 7 * sizeof(Lane));
+    for (const ContactBlock::Point& p : c.points) ahead.same(c, &p.anchor, 4 * sizeof(Lane));
     ahead.done();
     // a block without an impulse to apply (its contacts all carried none: the colouring packs
     // such contacts together) leaves the velocities as they are
@@ -395,10 +403,13 @@ void ContactPipeline::warm_start(bool first_substep) {
     const V3 n = load3(c.normal), t0 = load3(c.tangent[0]), t1 = load3(c.tangent[1]);
     // (the whole matrix even on an isotropic block: the same numbers, and the same round-off)
     const BlockInertia m = inertia_of<false>(c, r);
-    for (const ContactBlock::Point& p : c.points)
-      pair.apply(c, m, load3(p.anchor_a), load3(p.anchor_b), p.normal_impulse * n);
-    pair.apply(c, m, centre_in_world(c.centre_a, n, t0, t1),
-               centre_in_world(c.centre_b, n, t0, t1),
+    const V3 to_b = in_world(FrameOffset(c).d, n, t0, t1);
+    for (const ContactBlock::Point& p : c.points) {
+      const V3 ra = in_world(p.anchor, n, t0, t1);
+      pair.apply(c, m, ra, ra + to_b, p.normal_impulse * n);
+    }
+    pair.apply(c, m, in_world(c.centre_a, n, t0, t1),
+               in_world(c.centre_b, n, t0, t1),
                c.friction_impulse[0] * t0 + c.friction_impulse[1] * t1);
     pair.apply_twist(m, n, c.twist_impulse);
     pair.store(bodies_, c);
@@ -471,9 +482,10 @@ bool ContactPipeline::solve(double h, bool bias, bool backwards, double toleranc
     bool wrote = false;  // whether any lane's velocities changed
     LanePair pair(bodies_, c);
     const V3 n = load3(c.normal), t0 = load3(c.tangent[0]), t1 = load3(c.tangent[1]);
+    const FrameOffset offset(c);
     ahead.ahead(16);
     if (refresh) {
-      const NormalMotion motion(bodies_, c);
+      const NormalMotion motion(bodies_, c, offset);
       for (int j = 0; j < 4; ++j)
         c.points[j].separation = motion.separation(c.points[j], r.points[j].base_separation);
     }
@@ -502,9 +514,9 @@ bool ContactPipeline::solve(double h, bool bias, bool backwards, double toleranc
         const Lane s = p.separation;
         const auto row = [&] {
           if constexpr (kIsotropic)
-            return FrameRow(p, t0, t1);
+            return FrameRow(p, offset);
           else
-            return NormalRow(p, n);
+            return NormalRow(p, t0, t1, offset);
         }();
         const Lane vn = [&] {
           if constexpr (kIsotropic)
@@ -579,8 +591,8 @@ bool ContactPipeline::solve(double h, bool bias, bool backwards, double toleranc
           f1 = old1 - c.tangent_mass[1] *
                           frame.tangent_velocity1(dot(t1, linear), c.centre_a, c.centre_b);
         } else {
-          const V3 dv = pair.relative_velocity(centre_in_world(c.centre_a, n, t0, t1),
-                                               centre_in_world(c.centre_b, n, t0, t1));
+          const V3 dv = pair.relative_velocity(in_world(c.centre_a, n, t0, t1),
+                                               in_world(c.centre_b, n, t0, t1));
           f0 = old0 - c.tangent_mass[0] * dot(t0, dv);
           f1 = old1 - c.tangent_mass[1] * dot(t1, dv);
         }
@@ -606,8 +618,8 @@ bool ContactPipeline::solve(double h, bool bias, bool backwards, double toleranc
           c.twist_impulse = twist;
           frame.apply_twist(m, twist - old_twist);
         } else {
-          pair.apply(c, m, centre_in_world(c.centre_a, n, t0, t1),
-                     centre_in_world(c.centre_b, n, t0, t1), (f0 - old0) * t0 + (f1 - old1) * t1);
+          pair.apply(c, m, in_world(c.centre_a, n, t0, t1),
+                     in_world(c.centre_b, n, t0, t1), (f0 - old0) * t0 + (f1 - old1) * t1);
           const Lane twist = simd::max(
               simd::min(old_twist - c.twist_mass * dot(n, pair.wb - pair.wa), twist_limit),
               zero - twist_limit);
@@ -671,7 +683,8 @@ void ContactPipeline::restitution() {
     for_each_block([&](ContactBlock& c, const ContactBlockRest& r, Prefetch&) {
       if (!simd::any_of(r.restitution > zero)) return;
       LanePair pair(bodies_, c);
-      const V3 n = load3(c.normal);
+      const V3 n = load3(c.normal), t0 = load3(c.tangent[0]), t1 = load3(c.tangent[1]);
+      const FrameOffset offset(c);
       const BlockInertia m = inertia_of<false>(c, r);
       // the relative acceleration gravity gives along n (b's less a's: a static body has none)
       const Lane gravity_along = dot(n, V3{splat(float(gravity_.x())), splat(float(gravity_.y())),
@@ -700,7 +713,7 @@ void ContactPipeline::restitution() {
           const Lane lag = half_step * acceleration;
           const Lane target = simd::select(q.approach_velocity < threshold,
                                            after_motion ? leaving - lag : leaving + lag, zero);
-          const NormalRow row(p, n);
+          const NormalRow row(p, t0, t1, offset);
           const Lane vn = pair.normal_velocity(n, row);
           const Lane impulse = zero - p.normal_mass * (vn - target);
           const Lane accumulated =

@@ -78,15 +78,27 @@ LaneIndex body_offsets(const std::array<std::uint32_t, W>& bodies) {
   return index;
 }
 
+// a block's offset from each point's anchor from a to its anchor from b, in the manifold's frame:
+// the point is the same for both bodies, so it is x_a − x_b, and the centres' difference (prepare()
+// takes both centres from the same points)
+struct FrameOffset {
+  Lane d[3];
+  explicit FrameOffset(const ContactBlock& c)
+      : d{c.centre_b[0] - c.centre_a[0], c.centre_b[1] - c.centre_a[1],
+          c.centre_b[2] - c.centre_a[2]} {}
+};
+
 // a point's normal row: the angular parts r × n on each body (their response I⁻¹ (r × n) is
-// computed where an impulse is applied). Computed where read rather than kept in the block: the
+// computed where an impulse is applied). For r = α t0 + β t1 + γ n in the manifold's frame
+// (t0 × t1 = n), r × n = β t0 − α t1. Computed where read rather than kept in the block: the
 // solve at a large pyramid is bound by the bytes it streams, and these lanes a point cost more to
 // load than to compute
 struct NormalRow {
   V3 angular_a, angular_b;
 
-  NormalRow(const ContactBlock::Point& p, const V3& n)
-      : angular_a(cross(load3(p.anchor_a), n)), angular_b(cross(load3(p.anchor_b), n)) {}
+  NormalRow(const ContactBlock::Point& p, const V3& t0, const V3& t1, const FrameOffset& offset)
+      : angular_a(p.anchor[1] * t0 - p.anchor[0] * t1),
+        angular_b((p.anchor[1] + offset.d[1]) * t0 - (p.anchor[0] + offset.d[0]) * t1) {}
 };
 
 // the two bodies of each lane, read from the body array, and written back

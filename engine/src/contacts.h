@@ -227,7 +227,9 @@ class ContactPipeline final : public ContactStages {
   void for_each_block(Kernel&& kernel, bool backwards = false);
   // a block's rows, effective masses, approach speeds and fresh lanes from its raw points
   // (whether some lane's point hits fast enough to bounce)
-  bool prepare_lanes(ContactBlock& block, ContactBlockRest& rest,
+  // (each point's anchors from a and from b as the contacts hold them: world vectors, in lanes)
+  using PointAnchors = std::array<std::array<Lane, 6>, 4>;
+  bool prepare_lanes(ContactBlock& block, ContactBlockRest& rest, const PointAnchors& anchors,
                      const std::array<LaneMask, 4>& exists,
                      const std::array<LaneMask, 4>& cold, Lane acceleration, double h) const;
   std::vector<std::uint32_t> colour_order_;  // contact indices, colour by colour
