@@ -32,7 +32,11 @@ using LaneMask = simd::MaskOf<Lane>;
 // gives the layout's bytes per point); what only some passes read is in its ContactBlockRest
 struct ContactBlock {
   std::array<std::uint32_t, kBlockLanes> body_a, body_b;  // an empty lane holds the body at rest
-  Lane normal[3], tangent[2][3];
+  Lane normal[3];
+  // the tangents t0, t1 as one lane (tangents_of, contact_solver_internal.h): the narrow phase's
+  // basis from the normal, t0 = s (n_y, −n_x, 0) where s > 0, else −s (0, n_z, −n_y), and
+  // t1 = n × t0; 0 in an empty lane
+  Lane tangent_scale;
   Lane inverse_mass_a, inverse_mass_b;
   // each body's world inverse inertia, xx (the rest is in ContactBlockRest; on an isotropic block,
   // ContactLanes::isotropic, this is the whole of it, c in c·1)
@@ -57,10 +61,11 @@ struct ContactBlock {
     Lane normal_mass;  // 1 / the velocity change per unit impulse (kg); 0 for an empty point
   } points[4];
 };
-// 54 floats a lane: 30 for the manifold, 6 for each of four points (216 bytes a manifold; the soft
+// 49 floats a lane: 25 for the manifold, 6 for each of four points (196 bytes a manifold; the soft
 // step's stiffness is chosen in the solve, by whether a body is static). A point's anchors as two
-// world vectors were 9 a point, 66 a lane (docs/solver.md, "Precision and layout")
-static_assert(sizeof(ContactBlock) == 54 * sizeof(float) * kBlockLanes);
+// world vectors were 9 a point, and the tangents 6 lanes: 66 a lane (docs/solver.md, "Precision
+// and layout")
+static_assert(sizeof(ContactBlock) == 49 * sizeof(float) * kBlockLanes);
 
 // the rest of a block: what the passes read only now and then (a substep's first separations,
 // a non-isotropic block's inertia, restitution), and what prepare() and store_impulses() read

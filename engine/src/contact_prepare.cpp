@@ -48,6 +48,20 @@ static_assert(offsetof(ContactPointConstraint, anchor_b) == 12 &&
 static_assert((kNormalFloat + 16) * sizeof(float) <= sizeof(ContactConstraint) &&
               kPointFloat + 3 * kPointFloats + 8 <= kContactFloats);
 
+// the one lane a block keeps for its tangents (ContactBlock::tangent_scale): the narrow phase's
+// form decided by the same test on the same single-precision normal (contacts.cpp,
+// tangent_basis), 1 / √(n_x² + n_y²) for the first form and its negative for the second; 0 in an
+// empty lane (n = 0), whose tangents are then 0
+Lane tangent_scale(const V3& n) {
+  const Lane zero = splat(0.0f);
+  const LaneMask along_x = simd::abs(n.x) >= splat(0.57735026919f);
+  const Lane squared = simd::select(along_x, n.x * n.x + n.y * n.y, n.y * n.y + n.z * n.z);
+  const LaneMask valid = squared > zero;
+  const Lane scale = simd::select(
+      valid, splat(1.0f) / simd::sqrt(simd::select(valid, squared, splat(1.0f))), zero);
+  return simd::select(along_x, scale, zero - scale);
+}
+
 void ContactPipeline::load_bodies(std::span<const BodyState> states,
                                   std::span<const BodyMass> masses) {
   // one body past the last, at rest and static: what an empty lane reads
@@ -163,13 +177,10 @@ void ContactPipeline::prepare(const Vec3& gravity, double h) {
     Lane rows[8];
     auto clear = [&](Lane x) { return simd::select(filled, x, zero_lane); };
     simd::gather_records(contact_floats + kNormalFloat, contact_offsets, rows);
-    for (int k = 0; k < 3; ++k) {
-      block.normal[k] = clear(rows[k]);
-      block.tangent[0][k] = clear(rows[3 + k]);
-    }
-    block.tangent[1][0] = clear(rows[6]), block.tangent[1][1] = clear(rows[7]);
+    // (the contact's tangents are not kept: the passes compute them from the normal)
+    for (int k = 0; k < 3; ++k) block.normal[k] = clear(rows[k]);
+    block.tangent_scale = tangent_scale(load3(block.normal));
     simd::gather_records(contact_floats + kNormalFloat + 8, contact_offsets, rows);
-    block.tangent[1][2] = clear(rows[0]);
     block.friction = clear(rows[1]), rest.restitution = clear(rows[2]);
     block.friction_impulse[0] = clear(rows[3]), block.friction_impulse[1] = clear(rows[4]);
     block.twist_impulse = clear(rows[5]);
@@ -241,7 +252,9 @@ bool ContactPipeline::prepare_lanes(ContactBlock& c, ContactBlockRest& r,
   const Lane zero = splat(0.0f);
   const Lane threshold = splat(float(-settings_.restitution_threshold));
   const LanePair pair(bodies_, c);
-  const V3 n = load3(c.normal), t0 = load3(c.tangent[0]), t1 = load3(c.tangent[1]);
+  const V3 n = load3(c.normal);
+  const Tangents tangents = tangents_of(c, n);
+  const V3 &t0 = tangents.t0, &t1 = tangents.t1;
   auto anchor_a = [&](int j) { return V3{anchors[j][0], anchors[j][1], anchors[j][2]}; };
   auto anchor_b = [&](int j) { return V3{anchors[j][3], anchors[j][4], anchors[j][5]}; };
   const BlockInertia m = inertia_of<false>(c, r);

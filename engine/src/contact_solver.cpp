@@ -189,7 +189,9 @@ struct NormalMotion {
     const V3 dpb = {low[6], low[7], high[0]}, qb = {high[4], high[5], high[6]};
     const Lane wb = high[7];
 #endif
-    const V3 n = load3(block.normal), t0 = load3(block.tangent[0]), t1 = load3(block.tangent[1]);
+    const V3 n = load3(block.normal);
+    const Tangents tangents = tangents_of(block, n);
+    const V3 &t0 = tangents.t0, &t1 = tangents.t1;
     const V3 turned_a = rotate_back(qa, wa, n), turned_b = rotate_back(qb, wb, n);
     const V3 b_frame{dot(turned_b, t0), dot(turned_b, t1), dot(turned_b, n)};
     const V3 turned = turned_b - turned_a;
@@ -400,7 +402,9 @@ void ContactPipeline::warm_start(bool first_substep) {
     for (const ContactBlock::Point& p : c.points) any |= p.normal_impulse != zero;
     if (!simd::any_of(any)) return;
     LanePair pair(bodies_, c);
-    const V3 n = load3(c.normal), t0 = load3(c.tangent[0]), t1 = load3(c.tangent[1]);
+    const V3 n = load3(c.normal);
+    const Tangents tangents = tangents_of(c, n);
+    const V3 &t0 = tangents.t0, &t1 = tangents.t1;
     // (the whole matrix even on an isotropic block: the same numbers, and the same round-off)
     const BlockInertia m = inertia_of<false>(c, r);
     const V3 to_b = in_world(FrameOffset(c).d, n, t0, t1);
@@ -481,7 +485,9 @@ bool ContactPipeline::solve(double h, bool bias, bool backwards, double toleranc
     LaneMask changed = zero != zero;
     bool wrote = false;  // whether any lane's velocities changed
     LanePair pair(bodies_, c);
-    const V3 n = load3(c.normal), t0 = load3(c.tangent[0]), t1 = load3(c.tangent[1]);
+    const V3 n = load3(c.normal);
+    const Tangents tangents = tangents_of(c, n);
+    const V3 &t0 = tangents.t0, &t1 = tangents.t1;
     const FrameOffset offset(c);
     ahead.ahead(16);
     if (refresh) {
@@ -683,7 +689,9 @@ void ContactPipeline::restitution() {
     for_each_block([&](ContactBlock& c, const ContactBlockRest& r, Prefetch&) {
       if (!simd::any_of(r.restitution > zero)) return;
       LanePair pair(bodies_, c);
-      const V3 n = load3(c.normal), t0 = load3(c.tangent[0]), t1 = load3(c.tangent[1]);
+      const V3 n = load3(c.normal);
+      const Tangents tangents = tangents_of(c, n);
+      const V3 &t0 = tangents.t0, &t1 = tangents.t1;
       const FrameOffset offset(c);
       const BlockInertia m = inertia_of<false>(c, r);
       // the relative acceleration gravity gives along n (b's less a's: a static body has none)

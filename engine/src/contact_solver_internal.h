@@ -78,6 +78,19 @@ LaneIndex body_offsets(const std::array<std::uint32_t, W>& bodies) {
   return index;
 }
 
+// a manifold's tangents (ContactBlock::tangent_scale): computed from the normal as read, the
+// narrow phase's basis (contacts.cpp, tangent_basis), t0 × t1 = n
+struct Tangents {
+  V3 t0, t1;
+};
+Tangents tangents_of(const ContactBlock& c, const V3& n) {
+  const Lane s = c.tangent_scale, zero = splat(0.0f);
+  const LaneMask along_x = s > zero;
+  const V3 t0{s * simd::select(along_x, n.y, zero), (zero - s) * simd::select(along_x, n.x, n.z),
+              s * simd::select(along_x, zero, n.y)};
+  return {t0, cross(n, t0)};
+}
+
 // a block's offset from each point's anchor from a to its anchor from b, in the manifold's frame:
 // the point is the same for both bodies, so it is x_a − x_b, and the centres' difference (prepare()
 // takes both centres from the same points)

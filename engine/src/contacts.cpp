@@ -27,7 +27,9 @@ std::uint64_t pair_key(BodyId a, BodyId b) {
 // (written in scalars, one square root and one division: Eigen's normalized() on the
 // three-vector went through the stack, two stores read back as one, and divided twice)
 void tangent_basis(const Vec3& n, Vec3 tangent[2]) {
-  if (std::abs(n.x()) >= 0.57735026919) {
+  // which of the two forms, decided on the normal in single precision, as the solver holds it:
+  // its lanes compute the same basis from that normal (contact_solver_internal.h, tangents_of)
+  if (std::abs(float(n.x())) >= 0.57735026919f) {
     const double inverse = 1.0 / std::sqrt(n.x() * n.x() + n.y() * n.y());
     tangent[0] = Vec3(n.y() * inverse, -n.x() * inverse, 0.0);
   } else {
