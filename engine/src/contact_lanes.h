@@ -37,10 +37,8 @@ struct ContactBlock {
   // basis from the normal, t0 = s (n_y, −n_x, 0) where s > 0, else −s (0, n_z, −n_y), and
   // t1 = n × t0; 0 in an empty lane
   Lane tangent_scale;
-  Lane inverse_mass_a, inverse_mass_b;
-  // each body's world inverse inertia, xx (the rest is in ContactBlockRest; on an isotropic block,
-  // ContactLanes::isotropic, this is the whole of it, c in c·1)
-  Lane inverse_inertia_a, inverse_inertia_b;
+  // (each lane's bodies' inverse masses and inertias' xx are read with their velocities, from
+  // their records: SolverBody)
   // friction at the centre of the manifold's points: its anchors from each body, as coordinates
   // along tangent[0], tangent[1] and the normal; the accumulated impulses, the effective masses
   // along the tangents and about the normal, and the mean distance of the points from it (the
@@ -52,7 +50,7 @@ struct ContactBlock {
   struct Point {
     // the point from a's centre of mass in the manifold's frame: its coordinates along
     // tangent[0], tangent[1] and the normal (m). The point is the same for both bodies, so from
-    // b's centre it is this plus centre_b − centre_a (frame_offset()); the rows are computed from
+    // b's centre it is this plus centre_b − centre_a (FrameOffset); the rows are computed from
     // these as read
     Lane anchor[3];
     Lane normal_impulse;
@@ -61,11 +59,11 @@ struct ContactBlock {
     Lane normal_mass;  // 1 / the velocity change per unit impulse (kg); 0 for an empty point
   } points[4];
 };
-// 49 floats a lane: 25 for the manifold, 6 for each of four points (196 bytes a manifold; the soft
+// 45 floats a lane: 21 for the manifold, 6 for each of four points (180 bytes a manifold; the soft
 // step's stiffness is chosen in the solve, by whether a body is static). A point's anchors as two
-// world vectors were 9 a point, and the tangents 6 lanes: 66 a lane (docs/solver.md, "Precision
-// and layout")
-static_assert(sizeof(ContactBlock) == 49 * sizeof(float) * kBlockLanes);
+// world vectors were 9 a point, the tangents 6 lanes and the bodies' masses 4: 66 a lane
+// (docs/solver.md, "Precision and layout")
+static_assert(sizeof(ContactBlock) == 45 * sizeof(float) * kBlockLanes);
 
 // the rest of a block: what the passes read only now and then (a substep's first separations,
 // a non-isotropic block's inertia, restitution), and what prepare() and store_impulses() read

@@ -77,6 +77,8 @@ void ContactPipeline::load_bodies(std::span<const BodyState> states,
     SolverBody& body = bodies_[i];
     SolverMass& mass = masses_[i];
     mass.inverse_mass = masses[i].inverse_mass;
+    body.inverse_mass = 0.0f;
+    body.inverse_inertia_xx = 0.0f;
     body.delta_position.setZero();
     body.delta_rotation.setIdentity();
     if (mass.inverse_mass == 0.0) {
@@ -99,6 +101,8 @@ void ContactPipeline::load_bodies(std::span<const BodyState> states,
     const Mat3& m = mass.inverse_inertia;
     mass_records_[i] = {float(mass.inverse_mass), float(m(0, 0)), float(m(1, 1)), float(m(2, 2)),
                         float(m(0, 1)),           float(m(0, 2)), float(m(1, 2)), 0.0f};
+    body.inverse_mass = mass_records_[i][0];
+    body.inverse_inertia_xx = mass_records_[i][1];
   });
 }
 
@@ -194,21 +198,20 @@ void ContactPipeline::prepare(const Vec3& gravity, double h) {
       rest.points[j].base_separation = clear(rows[6]);
       p.normal_impulse = clear(rows[7]);
     }
-    // each body's masses (mass_records_: the body at rest's are zero)
+    // each body's masses (mass_records_: the body at rest's are zero; the passes read the
+    // inverse mass and the inertia's xx from the body's record, the rest of the inertia from the
+    // block's rest: c·1 where both are isotropic)
     const float* mass_floats = mass_records_.front().data();
-    // (each inertia's xx in the block, the rest in its rest: c·1 where both are isotropic)
     auto isotropic = [&](const Lane(&m)[8]) {
       return (m[2] == m[1]) & (m[3] == m[1]) & (m[4] == zero_lane) & (m[5] == zero_lane) &
              (m[6] == zero_lane);
     };
     simd::gather_records(mass_floats, mass_a_offsets, rows);
-    block.inverse_mass_a = rows[0];
-    block.inverse_inertia_a = rows[1];
+    const Lane inverse_mass_a = rows[0];
     for (int k = 0; k < 5; ++k) rest.inverse_inertia_a[k] = rows[2 + k];
     LaneMask round = isotropic(rows);
     simd::gather_records(mass_floats, mass_b_offsets, rows);
-    block.inverse_mass_b = rows[0];
-    block.inverse_inertia_b = rows[1];
+    const Lane inverse_mass_b = rows[0];
     for (int k = 0; k < 5; ++k) rest.inverse_inertia_b[k] = rows[2 + k];
     round &= isotropic(rows);
     lanes_->isotropic[bi] = simd::all_of(round);
@@ -216,8 +219,8 @@ void ContactPipeline::prepare(const Vec3& gravity, double h) {
       // the gravity along n that free flight closes a gap with (relative, b's less a's)
       const Vec3 normal(double(block.normal[0][i]), double(block.normal[1][i]),
                         double(block.normal[2][i]));
-      const Vec3 gravity_a = block.inverse_mass_a[i] > 0.0f ? gravity : Vec3::Zero();
-      const Vec3 gravity_b = block.inverse_mass_b[i] > 0.0f ? gravity : Vec3::Zero();
+      const Vec3 gravity_a = inverse_mass_a[i] > 0.0f ? gravity : Vec3::Zero();
+      const Vec3 gravity_b = inverse_mass_b[i] > 0.0f ? gravity : Vec3::Zero();
       acceleration[i] = float(normal.dot(gravity_b - gravity_a));
     }
     if (prepare_lanes(block, rest, anchors, exists, cold, acceleration, h))
@@ -257,11 +260,11 @@ bool ContactPipeline::prepare_lanes(ContactBlock& c, ContactBlockRest& r,
   const V3 &t0 = tangents.t0, &t1 = tangents.t1;
   auto anchor_a = [&](int j) { return V3{anchors[j][0], anchors[j][1], anchors[j][2]}; };
   auto anchor_b = [&](int j) { return V3{anchors[j][3], anchors[j][4], anchors[j][5]}; };
-  const BlockInertia m = inertia_of<false>(c, r);
+  const BlockInertia m = inertia_of<false>(pair, r);
   // 1 / (the velocity change along a row per unit impulse), its angular parts ja, jb (r × d); 0
   // for an empty point
   auto row_mass = [&](const V3& ja, const V3& jb, LaneMask point) {
-    const Lane k = c.inverse_mass_a + c.inverse_mass_b + dot(ja, times(m.a, ja)) +
+    const Lane k = pair.inverse_mass_a + pair.inverse_mass_b + dot(ja, times(m.a, ja)) +
                    dot(jb, times(m.b, jb));
     const LaneMask valid = point & (k > zero);
     return simd::select(valid, splat(1.0f) / simd::select(valid, k, splat(1.0f)), zero);

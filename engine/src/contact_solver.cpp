@@ -82,8 +82,7 @@ struct BlockFrame {
   Lane friction0, friction1;     // the friction impulse applied along t0, t1
   Lane inverse_mass_sum;
 
-  BlockFrame(const LanePair& pair, const ContactBlock& c, const V3& n, const V3& t0,
-             const V3& t1)
+  BlockFrame(const LanePair& pair, const V3& n, const V3& t0, const V3& t1)
       : u(dot(n, pair.vb - pair.va)),
         pa(dot(pair.wa, t0)),
         qa(dot(pair.wa, t1)),
@@ -100,7 +99,7 @@ struct BlockFrame {
         total(splat(0.0f)),
         friction0(splat(0.0f)),
         friction1(splat(0.0f)),
-        inverse_mass_sum(c.inverse_mass_a + c.inverse_mass_b) {}
+        inverse_mass_sum(pair.inverse_mass_a + pair.inverse_mass_b) {}
   Lane normal_velocity(const FrameRow& row) const {
     return u + (row.beta_b * pb - row.alpha_b * qb) - (row.beta_a * pa - row.alpha_a * qa);
   }
@@ -141,11 +140,10 @@ struct BlockFrame {
     sb = sb + m.b[0] * impulse;
   }
   // the rows' impulses on the velocities themselves
-  void store(LanePair& pair, const ContactBlock& c, const V3& n, const V3& t0,
-             const V3& t1) const {
+  void store(LanePair& pair, const V3& n, const V3& t0, const V3& t1) const {
     const V3 impulse = total * n + friction0 * t0 + friction1 * t1;
-    pair.va = pair.va - c.inverse_mass_a * impulse;
-    pair.vb = pair.vb + c.inverse_mass_b * impulse;
+    pair.va = pair.va - pair.inverse_mass_a * impulse;
+    pair.vb = pair.vb + pair.inverse_mass_b * impulse;
     pair.wa = pair.wa + ((pa - pa0) * t0 + (qa - qa0) * t1 + (sa - sa0) * n);
     pair.wb = pair.wb + ((pb - pb0) * t0 + (qb - qb0) * t1 + (sb - sb0) * n);
   }
@@ -176,17 +174,16 @@ struct NormalMotion {
     const Lane wa = simd::gather<Lane>(base + kDeltaRotation + 3, a);
     const Lane wb = simd::gather<Lane>(base + kDeltaRotation + 3, b);
 #else
-    // each body's floats 0–7 and 8–15 as records transposed (AVX2 has no fast gather: the
-    // fourteen gathers were a tenth of the kernel on a Zen 3)
-    static_assert(kDeltaPosition == 6 && kDeltaRotation == 12);
-    Lane low[8], high[8];
-    simd::gather_records(base, a, low);
+    // each body's floats 8–15 as records transposed (AVX2 has no fast gather: the fourteen
+    // gathers were a tenth of the kernel on a Zen 3)
+    // (floats 8–15: Δx, padding, Δq as x, y, z, w)
+    static_assert(kDeltaPosition == 8 && kDeltaRotation == 12);
+    Lane high[8];
     simd::gather_records(base + 8, a, high);
-    const V3 dpa = {low[6], low[7], high[0]}, qa = {high[4], high[5], high[6]};
+    const V3 dpa = {high[0], high[1], high[2]}, qa = {high[4], high[5], high[6]};
     const Lane wa = high[7];
-    simd::gather_records(base, b, low);
     simd::gather_records(base + 8, b, high);
-    const V3 dpb = {low[6], low[7], high[0]}, qb = {high[4], high[5], high[6]};
+    const V3 dpb = {high[0], high[1], high[2]}, qb = {high[4], high[5], high[6]};
     const Lane wb = high[7];
 #endif
     const V3 n = load3(block.normal);
@@ -406,17 +403,16 @@ void ContactPipeline::warm_start(bool first_substep) {
     const Tangents tangents = tangents_of(c, n);
     const V3 &t0 = tangents.t0, &t1 = tangents.t1;
     // (the whole matrix even on an isotropic block: the same numbers, and the same round-off)
-    const BlockInertia m = inertia_of<false>(c, r);
+    const BlockInertia m = inertia_of<false>(pair, r);
     const V3 to_b = in_world(FrameOffset(c).d, n, t0, t1);
     for (const ContactBlock::Point& p : c.points) {
       const V3 ra = in_world(p.anchor, n, t0, t1);
-      pair.apply(c, m, ra, ra + to_b, p.normal_impulse * n);
+      pair.apply(m, ra, ra + to_b, p.normal_impulse * n);
     }
-    pair.apply(c, m, in_world(c.centre_a, n, t0, t1),
-               in_world(c.centre_b, n, t0, t1),
+    pair.apply(m, in_world(c.centre_a, n, t0, t1), in_world(c.centre_b, n, t0, t1),
                c.friction_impulse[0] * t0 + c.friction_impulse[1] * t1);
     pair.apply_twist(m, n, c.twist_impulse);
-    pair.store(bodies_, c);
+    pair.store(bodies_);
   });
 }
 
@@ -470,11 +466,13 @@ bool ContactPipeline::solve(double h, bool bias, bool backwards, double toleranc
   enum class Rows { kSoft, kBaumgarte, kRelax, kRelaxTracked };
   auto solve_block = [&]<bool kIsotropic, Rows kRows>(ContactBlock& c, ContactBlockRest& r,
                                                        Prefetch& ahead) {
-    const BlockInertia m = inertia_of<kIsotropic>(c, r);
+    LanePair pair(bodies_, c);
+    const BlockInertia m = inertia_of<kIsotropic>(pair, r);
     // the soft step's stiffness of each lane, by whether a body is static (soft_lanes)
     [[maybe_unused]] Lane soft_bias_rate, soft_mass_scale, soft_impulse_scale;
     if constexpr (kRows == Rows::kSoft) {
-      const LaneMask against_static = (c.inverse_mass_a == zero) | (c.inverse_mass_b == zero);
+      const LaneMask against_static =
+          (pair.inverse_mass_a == zero) | (pair.inverse_mass_b == zero);
       soft_bias_rate =
           simd::select(against_static, stiffness.bias_rate[1], stiffness.bias_rate[0]);
       soft_mass_scale =
@@ -484,7 +482,6 @@ bool ContactPipeline::solve(double h, bool bias, bool backwards, double toleranc
     }
     LaneMask changed = zero != zero;
     bool wrote = false;  // whether any lane's velocities changed
-    LanePair pair(bodies_, c);
     const V3 n = load3(c.normal);
     const Tangents tangents = tangents_of(c, n);
     const V3 &t0 = tangents.t0, &t1 = tangents.t1;
@@ -507,7 +504,7 @@ bool ContactPipeline::solve(double h, bool bias, bool backwards, double toleranc
     // an isotropic block's rows in the manifold's frame (BlockFrame), written back after them
     [[maybe_unused]] auto frame = [&] {
       if constexpr (kIsotropic)
-        return BlockFrame(pair, c, n, t0, t1);
+        return BlockFrame(pair, n, t0, t1);
       else
         return 0;
     }();
@@ -567,7 +564,7 @@ bool ContactPipeline::solve(double h, bool bias, bool backwards, double toleranc
           // response is not computed
           const LaneMask pushes = applied != zero;
           if (simd::any_of(pushes)) {
-            pair.apply_normal(c, m, row, n, applied);
+            pair.apply_normal(m, row, n, applied);
             wrote = true;
           }
         }
@@ -624,7 +621,7 @@ bool ContactPipeline::solve(double h, bool bias, bool backwards, double toleranc
           c.twist_impulse = twist;
           frame.apply_twist(m, twist - old_twist);
         } else {
-          pair.apply(c, m, in_world(c.centre_a, n, t0, t1),
+          pair.apply(m, in_world(c.centre_a, n, t0, t1),
                      in_world(c.centre_b, n, t0, t1), (f0 - old0) * t0 + (f1 - old1) * t1);
           const Lane twist = simd::max(
               simd::min(old_twist - c.twist_mass * dot(n, pair.wb - pair.wa), twist_limit),
@@ -636,8 +633,8 @@ bool ContactPipeline::solve(double h, bool bias, bool backwards, double toleranc
       }
     }
     if constexpr (kIsotropic)
-      if (wrote) frame.store(pair, c, n, t0, t1);
-    if (wrote) pair.store(bodies_, c);
+      if (wrote) frame.store(pair, n, t0, t1);
+    if (wrote) pair.store(bodies_);
     // written once a pass at most: the biased passes (no tolerance) and a settling pass would
     // otherwise have both threads write the flag's cache line after every block
     if (tolerance > 0.0 && simd::any_of(changed) && !moved.load(std::memory_order_relaxed))
@@ -693,12 +690,12 @@ void ContactPipeline::restitution() {
       const Tangents tangents = tangents_of(c, n);
       const V3 &t0 = tangents.t0, &t1 = tangents.t1;
       const FrameOffset offset(c);
-      const BlockInertia m = inertia_of<false>(c, r);
+      const BlockInertia m = inertia_of<false>(pair, r);
       // the relative acceleration gravity gives along n (b's less a's: a static body has none)
       const Lane gravity_along = dot(n, V3{splat(float(gravity_.x())), splat(float(gravity_.y())),
                                            splat(float(gravity_.z()))});
-      const Lane acceleration = simd::select(c.inverse_mass_b > zero, gravity_along, zero) -
-                                simd::select(c.inverse_mass_a > zero, gravity_along, zero);
+      const Lane acceleration = simd::select(pair.inverse_mass_b > zero, gravity_along, zero) -
+                                simd::select(pair.inverse_mass_a > zero, gravity_along, zero);
       LaneMask changed = zero != zero;
       bool wrote = false;
       // each manifold's points several times in a row, as for a fresh contact in solve()
@@ -729,11 +726,11 @@ void ContactPipeline::restitution() {
           const Lane applied = accumulated - p.normal_impulse;
           changed |= simd::max(applied, zero - applied) > tolerance * p.normal_mass;
           if (!simd::any_of(applied != zero)) continue;
-          pair.apply_normal(c, m, row, n, applied);
+          pair.apply_normal(m, row, n, applied);
           p.normal_impulse = accumulated;
           wrote = true;
         }
-      if (wrote) pair.store(bodies_, c);
+      if (wrote) pair.store(bodies_);
       if (simd::any_of(changed) && !moved.load(std::memory_order_relaxed))
         moved.store(true, std::memory_order_relaxed);
     });

@@ -44,28 +44,13 @@ V3 times(const Lane (&m)[6], const V3& v) {
           m[4] * v.x + m[5] * v.y + m[2] * v.z};
 }
 
-// a block's two world inverse inertias as six lanes each (xx yy zz xy xz yz), gathered from the
-// block and its rest; on an isotropic block (ContactLanes::isotropic: every lane's c·1) only the
-// first, c, is read and used
-struct BlockInertia {
-  Lane a[6], b[6];
-};
-template <bool kIsotropic>
-BlockInertia inertia_of(const ContactBlock& c, const ContactBlockRest& r) {
-  BlockInertia m{};
-  m.a[0] = c.inverse_inertia_a, m.b[0] = c.inverse_inertia_b;
-  if constexpr (!kIsotropic)
-    for (int k = 0; k < 5; ++k) {
-      m.a[1 + k] = r.inverse_inertia_a[k];
-      m.b[1 + k] = r.inverse_inertia_b[k];
-    }
-  return m;
-}
-
 // where each of a body's numbers is among its 16 floats (Eigen stores a quaternion x, y, z, w)
 constexpr int kBodyFloats = sizeof(SolverBody) / sizeof(float);
-constexpr int kLinearVelocity = 0, kAngularVelocity = 3, kDeltaPosition = 6, kDeltaRotation = 12;
+constexpr int kLinearVelocity = 0, kAngularVelocity = 3, kInverseMass = 6, kInverseInertia = 7,
+              kDeltaPosition = 8, kDeltaRotation = 12;
 static_assert(offsetof(SolverBody, angular_velocity) == kAngularVelocity * sizeof(float) &&
+              offsetof(SolverBody, inverse_mass) == kInverseMass * sizeof(float) &&
+              offsetof(SolverBody, inverse_inertia_xx) == kInverseInertia * sizeof(float) &&
               offsetof(SolverBody, delta_position) == kDeltaPosition * sizeof(float) &&
               offsetof(SolverBody, delta_rotation) == kDeltaRotation * sizeof(float));
 
@@ -114,52 +99,63 @@ struct NormalRow {
         angular_b((p.anchor[1] + offset.d[1]) * t0 - (p.anchor[0] + offset.d[0]) * t1) {}
 };
 
+// a block's two world inverse inertias as six lanes each (xx yy zz xy xz yz), xx from the bodies'
+// records (LanePair) and the rest from the block's rest; on an isotropic block
+// (ContactLanes::isotropic: every lane's c·1) only the first, c, is read and used
+struct BlockInertia {
+  Lane a[6], b[6];
+};
+
 // the two bodies of each lane, read from the body array, and written back
 struct LanePair {
   V3 va, wa, vb, wb;
+  Lane inverse_mass_a, inverse_mass_b;
+  // each body's world inverse inertia, xx (the rest is in ContactBlockRest; on an isotropic block,
+  // ContactLanes::isotropic, this is the whole of it, c in c·1)
+  Lane inertia_a, inertia_b;
   LaneIndex a, b;  // each lane's bodies as offsets into the body array's floats
 
-  // each body's velocities are its first six floats: read as records (its first eight) and
-  // transposed, rather than gathered a float at a time (simd::gather_records)
+  // each body's velocities, inverse mass and inertia's xx are its first eight floats: read as
+  // records and transposed, rather than gathered a float at a time (simd::gather_records)
   [[gnu::always_inline]] LanePair(const std::vector<SolverBody>& bodies, const ContactBlock& block)
       : a(body_offsets(block.body_a)), b(body_offsets(block.body_b)) {
-    static_assert(kLinearVelocity == 0 && kAngularVelocity == 3);
+    static_assert(kLinearVelocity == 0 && kAngularVelocity == 3 && kInverseMass == 6 &&
+                  kInverseInertia == 7);
     const float* base = reinterpret_cast<const float*>(bodies.data());
     Lane rows[8];
     simd::gather_records(base, a, rows);
     va = {rows[0], rows[1], rows[2]}, wa = {rows[3], rows[4], rows[5]};
+    inverse_mass_a = rows[6], inertia_a = rows[7];
     simd::gather_records(base, b, rows);
     vb = {rows[0], rows[1], rows[2]}, wb = {rows[3], rows[4], rows[5]};
+    inverse_mass_b = rows[6], inertia_b = rows[7];
   }
   // static bodies and the body at rest are never written: colours share them, and their
   // threads may not write the same memory (a colour's dynamic bodies are each in one lane)
-  [[gnu::always_inline]] void store(std::vector<SolverBody>& bodies,
-                                    const ContactBlock& block) const {
+  [[gnu::always_inline]] void store(std::vector<SolverBody>& bodies) const {
     float* base = reinterpret_cast<float*>(bodies.data());
     const Lane zero = splat(0.0f);
     const Lane rows_a[6] = {va.x, va.y, va.z, wa.x, wa.y, wa.z};
     const Lane rows_b[6] = {vb.x, vb.y, vb.z, wb.x, wb.y, wb.z};
-    simd::scatter_records(base, a, rows_a, block.inverse_mass_a > zero);
-    simd::scatter_records(base, b, rows_b, block.inverse_mass_b > zero);
+    simd::scatter_records(base, a, rows_a, inverse_mass_a > zero);
+    simd::scatter_records(base, b, rows_b, inverse_mass_b > zero);
   }
   // the relative velocity along the normal, by the point's row
   Lane normal_velocity(const V3& n, const NormalRow& row) const {
     return dot(n, vb - va) + dot(wb, row.angular_b) - dot(wa, row.angular_a);
   }
   // an impulse λ n on b at its anchor, and its opposite on a, by the point's row
-  void apply_normal(const ContactBlock& c, const BlockInertia& m, const NormalRow& row,
-                    const V3& n, Lane impulse) {
-    va = va - (c.inverse_mass_a * impulse) * n;
+  void apply_normal(const BlockInertia& m, const NormalRow& row, const V3& n, Lane impulse) {
+    va = va - (inverse_mass_a * impulse) * n;
     wa = wa - impulse * times(m.a, row.angular_a);
-    vb = vb + (c.inverse_mass_b * impulse) * n;
+    vb = vb + (inverse_mass_b * impulse) * n;
     wb = wb + impulse * times(m.b, row.angular_b);
   }
   // an impulse P on b at its anchor rb, and −P on a at ra
-  void apply(const ContactBlock& c, const BlockInertia& m, const V3& ra, const V3& rb,
-             const V3& impulse) {
-    va = va - c.inverse_mass_a * impulse;
+  void apply(const BlockInertia& m, const V3& ra, const V3& rb, const V3& impulse) {
+    va = va - inverse_mass_a * impulse;
     wa = wa - times(m.a, cross(ra, impulse));
-    vb = vb + c.inverse_mass_b * impulse;
+    vb = vb + inverse_mass_b * impulse;
     wb = wb + times(m.b, cross(rb, impulse));
   }
   // an angular impulse L n on b, and its opposite on a
@@ -172,6 +168,18 @@ struct LanePair {
     return (vb + cross(wb, rb)) - (va + cross(wa, ra));
   }
 };
+
+template <bool kIsotropic>
+BlockInertia inertia_of(const LanePair& pair, const ContactBlockRest& r) {
+  BlockInertia m{};
+  m.a[0] = pair.inertia_a, m.b[0] = pair.inertia_b;
+  if constexpr (!kIsotropic)
+    for (int k = 0; k < 5; ++k) {
+      m.a[1 + k] = r.inverse_inertia_a[k];
+      m.b[1 + k] = r.inverse_inertia_b[k];
+    }
+  return m;
+}
 
 }  // namespace
 

@@ -23,6 +23,10 @@ namespace rtp {
 struct alignas(64) SolverBody {
   Eigen::Vector3f linear_velocity = Eigen::Vector3f::Zero();   // world (m/s)
   Eigen::Vector3f angular_velocity = Eigen::Vector3f::Zero();  // world (rad/s)
+  // its inverse mass and the xx of its world inverse inertia (the whole of it, c in c·1, for a
+  // cube or a sphere), for the step: the contact passes read them with the velocities, in the
+  // same 32-byte record (zero for a static body)
+  float inverse_mass = 0.0f, inverse_inertia_xx = 0.0f;
   Eigen::Vector3f delta_position = Eigen::Vector3f::Zero();    // moved since the step's start (m)
   Eigen::Quaternionf delta_rotation = Eigen::Quaternionf::Identity();  // turned since then
 };

@@ -70,7 +70,7 @@ void ContactPipeline::integrate_positions(std::span<double> pose_lanes, std::siz
   constexpr int kRecordFloats = int(sizeof(SolverBody) / sizeof(float));
   static_assert(offsetof(SolverBody, linear_velocity) == 0 &&
                 offsetof(SolverBody, angular_velocity) == 3 * sizeof(float) &&
-                offsetof(SolverBody, delta_position) == 6 * sizeof(float) &&
+                offsetof(SolverBody, delta_position) == 8 * sizeof(float) &&
                 offsetof(SolverBody, delta_rotation) == 12 * sizeof(float) &&
                 kRecordFloats == 16);
   const std::ptrdiff_t n = std::ptrdiff_t(count);
@@ -89,12 +89,13 @@ void ContactPipeline::integrate_positions(std::span<double> pose_lanes, std::siz
       std::memcpy(tail, base, sizeof(SolverBody) * std::size_t(in_group));
       base = reinterpret_cast<float*>(tail);
     }
-    // floats 0–7 of each record (v, ω, Δx, Δy) and 8–15 (Δz, padding, Δq as x, y, z, w)
+    // floats 0–7 of each record (v, ω, the inverse mass and inertia's xx, kept as read) and 8–15
+    // (Δx, padding, Δq as x, y, z, w)
     F low[8], high[8];
     simd::gather_records(base, offsets, low);
     simd::gather_records(base + 8, offsets, high);
     double* lanes = pose_lanes.data() + g * kPoseDoubles;
-    F dx[3] = {low[6], low[7], high[0]}, dq[4] = {high[7], high[4], high[5], high[6]};
+    F dx[3] = {high[0], high[1], high[2]}, dq[4] = {high[7], high[4], high[5], high[6]};
     const F zero_f = simd::splat<F>(0.0f);
     const FM turns_f = (low[3] != zero_f) | (low[4] != zero_f) | (low[5] != zero_f);
     const FM moves_f = turns_f | (low[0] != zero_f) | (low[1] != zero_f) | (low[2] != zero_f);
@@ -148,11 +149,10 @@ void ContactPipeline::integrate_positions(std::span<double> pose_lanes, std::siz
     F turned_float[4] = {dq[0], dq[1], dq[2], dq[3]};
     turn_quaternion(turn_float, turned_float);
     for (int k = 0; k < 4; ++k) dq[k] = simd::select(turns_f, turned_float[k], dq[k]);
-    low[6] = dx[0], low[7] = dx[1], high[0] = dx[2];
+    high[0] = dx[0], high[1] = dx[1], high[2] = dx[2];
     high[4] = dq[1], high[5] = dq[2], high[6] = dq[3], high[7] = dq[0];
     const FM all = simd::splat<F>(0.0f) == simd::splat<F>(0.0f);
-    simd::scatter_records(base, offsets, low, all);
-    simd::scatter_records(base + 8, offsets, high, all);
+    simd::scatter_records(base + 8, offsets, high, all);  // (floats 0–7 are as read)
     if (in_group < G)
       std::memcpy(static_cast<void*>(bodies.data() + first), tail,
                   sizeof(SolverBody) * std::size_t(in_group));
