@@ -163,8 +163,8 @@ struct NormalMotion {
   Lane shift;  // n·(Δx_b − Δx_a) + T_b·d
   Lane turn[3];  // T_b − T_a
 
-  NormalMotion(const std::vector<SolverBody>& bodies, const ContactBlock& block,
-               const FrameOffset& offset) {
+  NormalMotion(const std::vector<SolverBody>& bodies, const ContactBlock& block, const V3& n,
+               const V3& t0, const V3& t1, const FrameOffset& offset) {
     const float* base = reinterpret_cast<const float*>(bodies.data());
     const LaneIndex a = body_offsets(block.body_a), b = body_offsets(block.body_b);
 #if defined(__AVX512F__)
@@ -174,9 +174,8 @@ struct NormalMotion {
     const Lane wa = simd::gather<Lane>(base + kDeltaRotation + 3, a);
     const Lane wb = simd::gather<Lane>(base + kDeltaRotation + 3, b);
 #else
-    // each body's floats 8–15 as records transposed (AVX2 has no fast gather: the fourteen
-    // gathers were a tenth of the kernel on a Zen 3)
-    // (floats 8–15: Δx, padding, Δq as x, y, z, w)
+    // each body's floats 8–15 (Δx, padding, Δq as x, y, z, w) as records transposed (AVX2 has
+    // no fast gather: the fourteen gathers were a tenth of the kernel on a Zen 3)
     static_assert(kDeltaPosition == 8 && kDeltaRotation == 12);
     Lane high[8];
     simd::gather_records(base + 8, a, high);
@@ -186,9 +185,6 @@ struct NormalMotion {
     const V3 dpb = {high[0], high[1], high[2]}, qb = {high[4], high[5], high[6]};
     const Lane wb = high[7];
 #endif
-    const V3 n = load3(block.normal);
-    const Tangents tangents = tangents_of(block, n);
-    const V3 &t0 = tangents.t0, &t1 = tangents.t1;
     const V3 turned_a = rotate_back(qa, wa, n), turned_b = rotate_back(qb, wb, n);
     const V3 b_frame{dot(turned_b, t0), dot(turned_b, t1), dot(turned_b, n)};
     const V3 turned = turned_b - turned_a;
@@ -241,7 +237,7 @@ extern "C" const ContactIsa* RTP_CONTACT_ISA_ENTRY() {
 namespace {
 // The next block's cache lines, asked for a few at a time while this one is solved: a pass
 // streams the blocks in order, and at a large pyramid they come from L3, whose latency the kernel
-// otherwise waits on (docs/solver.md, "Cost"). Asked for all at once, the 54 lines a block fill
+// otherwise waits on (docs/solver.md, "Cost"). Asked for all at once, the 45 lines a block fill
 // the core's line-fill buffers and the prefetches stall the kernel behind them.
 class Prefetch {
  public:
@@ -384,8 +380,8 @@ void ContactPipeline::warm_start(bool first_substep) {
                          masses_[i].inverse_mass > 0.0 ? 1.0f : 0.0f};
   });
   for_each_block([&](const ContactBlock& c, const ContactBlockRest& r, Prefetch& ahead) {
-    // the warm start reads 40 of a block's 54 lanes (the bodies, the directions, the masses, the
-    // friction's centre and impulses, each point's anchor and normal impulse): only those of
+    // the warm start reads 31 of a block's 45 lanes (the bodies, the directions, the friction's
+    // centre and impulses, each point's anchor and normal impulse): only those of
     // the next block are asked for, since at a large pyramid this pass waits on memory more
     // than it computes
     ahead.same(c, &c, offsetof(ContactBlock, friction));
@@ -488,7 +484,7 @@ bool ContactPipeline::solve(double h, bool bias, bool backwards, double toleranc
     const FrameOffset offset(c);
     ahead.ahead(16);
     if (refresh) {
-      const NormalMotion motion(bodies_, c, offset);
+      const NormalMotion motion(bodies_, c, n, t0, t1, offset);
       for (int j = 0; j < 4; ++j)
         c.points[j].separation = motion.separation(c.points[j], r.points[j].base_separation);
     }
