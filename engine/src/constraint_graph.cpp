@@ -152,7 +152,7 @@ void ContactPipeline::colour_contacts() {
     if (block_start[k + 1] > block_start[k]) lanes_->used_colours.push_back(std::uint8_t(k));
   lanes_->blocks.resize(block_start[kColours]);
   lanes_->rest.resize(block_start[kColours]);
-  lanes_->isotropic.resize(block_start[kColours]);
+  lanes_->flags.resize(block_start[kColours]);
 }
 
 }  // namespace RTP_CONTACT_ISA_NAMESPACE

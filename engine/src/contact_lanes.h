@@ -46,7 +46,6 @@ struct ContactBlock {
   Lane centre_a[3], centre_b[3];
   Lane friction_impulse[2], twist_impulse;
   Lane friction, tangent_mass[2], twist_mass, twist_arm;
-  LaneMask fresh;  // a point without a warm start, or hitting: the manifold is solved locally
   struct Point {
     // the point from a's centre of mass in the manifold's frame: its coordinates along
     // tangent[0], tangent[1] and the normal (m). The point is the same for both bodies, so from
@@ -59,25 +58,29 @@ struct ContactBlock {
     Lane normal_mass;  // 1 / the velocity change per unit impulse (kg); 0 for an empty point
   } points[4];
 };
-// 45 floats a lane: 21 for the manifold, 6 for each of four points (180 bytes a manifold; the soft
+// 44 floats a lane: 20 for the manifold, 6 for each of four points (176 bytes a manifold; the soft
 // step's stiffness is chosen in the solve, by whether a body is static). A point's anchors as two
-// world vectors were 9 a point, the tangents 6 lanes and the bodies' masses 4: 66 a lane
-// (docs/solver.md, "Precision and layout")
-static_assert(sizeof(ContactBlock) == 45 * sizeof(float) * kBlockLanes);
+// world vectors were 9 a point, the tangents 6 lanes, the bodies' masses 4 and the fresh lanes 1:
+// 66 a lane (docs/solver.md, "Precision and layout")
+static_assert(sizeof(ContactBlock) == 44 * sizeof(float) * kBlockLanes);
 
 // the rest of a block: what the passes read only now and then (a substep's first separations,
-// a non-isotropic block's inertia, restitution), and what prepare() and store_impulses() read
+// a non-isotropic block's inertia, a fresh block's lanes, restitution), and what prepare() and
+// store_impulses() read
 struct ContactBlockRest {
   std::array<std::uint32_t, kBlockLanes> contact;  // index into contacts_, or kNoContact
   Lane inverse_inertia_a[5], inverse_inertia_b[5];  // yy zz xy xz yz
   Lane restitution;
+  // a point without a warm start, or hitting: the manifold is solved locally (read where the
+  // block's flags say some lane is)
+  LaneMask fresh;
   struct Point {
     Lane base_separation;     // at the step's start, less n·(b's anchor − a's) (m)
     Lane max_normal_impulse;  // the largest this step (N s; kept where some lane bounces)
     Lane approach_velocity;   // relative normal velocity at impact (m/s), < 0 closing
   } points[4];
 };
-static_assert(sizeof(ContactBlockRest) == 24 * sizeof(float) * kBlockLanes);
+static_assert(sizeof(ContactBlockRest) == 25 * sizeof(float) * kBlockLanes);
 inline constexpr std::uint32_t kNoContact = ~std::uint32_t{0};
 
 struct ContactLanes {
@@ -87,10 +90,17 @@ struct ContactLanes {
   // the colours that hold a block, in order: a pass visits these (a small scene's two or three
   // of the 64, whose walk took 16 % of a four-box scene's step by `perf`)
   std::vector<std::uint8_t> used_colours;
-  // per block, 1 where every lane's two bodies have an inverse inertia c·1 (cubes, spheres,
-  // static bodies): the solve then applies it as a number, not a matrix
-  std::vector<std::uint8_t> isotropic;
+  // per block, what a pass asks before it reads the block (kIsotropicBlock, kFreshBlock,
+  // kBouncingBlock): a byte, where the lanes behind the last two are a cache line each
+  std::vector<std::uint8_t> flags;
 };
+// every lane's two bodies have an inverse inertia c·1 (cubes, spheres, static bodies): the solve
+// applies it as a number, not a matrix
+inline constexpr std::uint8_t kIsotropicBlock = 1;
+// some lane is fresh (ContactBlockRest::fresh): the solve runs the block's points several times
+inline constexpr std::uint8_t kFreshBlock = 2;
+// some lane's restitution is above zero: the solve keeps each point's largest impulse
+inline constexpr std::uint8_t kBouncingBlock = 4;
 
 }  // namespace RTP_CONTACT_ISA_NAMESPACE
 }  // namespace rtp

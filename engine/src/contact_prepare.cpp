@@ -214,7 +214,7 @@ void ContactPipeline::prepare(const Vec3& gravity, double h) {
     const Lane inverse_mass_b = rows[0];
     for (int k = 0; k < 5; ++k) rest.inverse_inertia_b[k] = rows[2 + k];
     round &= isotropic(rows);
-    lanes_->isotropic[bi] = simd::all_of(round);
+    const bool isotropic_block = simd::all_of(round);
     for (std::size_t i = 0; first + i < last; ++i) {
       // the gravity along n that free flight closes a gap with (relative, b's less a's)
       const Vec3 normal(double(block.normal[0][i]), double(block.normal[1][i]),
@@ -225,6 +225,10 @@ void ContactPipeline::prepare(const Vec3& gravity, double h) {
     }
     if (prepare_lanes(block, rest, anchors, exists, cold, acceleration, h))
       bounces.store(true, std::memory_order_relaxed);
+    const bool bouncing_block = simd::any_of(rest.restitution > zero_lane);
+    lanes_->flags[bi] = std::uint8_t((isotropic_block ? kIsotropicBlock : 0) |
+                                     (simd::any_of(rest.fresh) ? kFreshBlock : 0) |
+                                     (bouncing_block ? kBouncingBlock : 0));
   };
   // each thread the blocks it solves: of each colour its share (for_each_block; a colour too
   // small to share is split here too, and solved on one thread there), so that the contacts it
@@ -351,7 +355,7 @@ bool ContactPipeline::prepare_lanes(ContactBlock& c, ContactBlockRest& r,
     fresh |= cold[j] | hits;
     bounces |= hits & (r.restitution > zero);
   }
-  c.fresh = fresh;
+  r.fresh = fresh;
   return simd::any_of(bounces);
 }
 

@@ -163,8 +163,8 @@ struct NormalMotion {
   Lane shift;  // n·(Δx_b − Δx_a) + T_b·d
   Lane turn[3];  // T_b − T_a
 
-  NormalMotion(const std::vector<SolverBody>& bodies, const ContactBlock& block, const V3& n,
-               const V3& t0, const V3& t1, const FrameOffset& offset) {
+  NormalMotion(const std::vector<SolverBody>& bodies, const ContactBlock& block,
+               const FrameOffset& offset) {
     const float* base = reinterpret_cast<const float*>(bodies.data());
     const LaneIndex a = body_offsets(block.body_a), b = body_offsets(block.body_b);
 #if defined(__AVX512F__)
@@ -185,6 +185,12 @@ struct NormalMotion {
     const V3 dpb = {high[0], high[1], high[2]}, qb = {high[4], high[5], high[6]};
     const Lane wb = high[7];
 #endif
+    // the frame rebuilt here, not passed in from the pass: passed, the pass's tangents went
+    // through the stack, 22 M more instructions and 76 M more reads and writes over pyramid-100's
+    // first 12 steps (cachegrind, the x86-64-v3 copy)
+    const V3 n = load3(block.normal);
+    const Tangents tangents = tangents_of(block, n);
+    const V3 &t0 = tangents.t0, &t1 = tangents.t1;
     const V3 turned_a = rotate_back(qa, wa, n), turned_b = rotate_back(qb, wb, n);
     const V3 b_frame{dot(turned_b, t0), dot(turned_b, t1), dot(turned_b, n)};
     const V3 turned = turned_b - turned_a;
@@ -461,7 +467,7 @@ bool ContactPipeline::solve(double h, bool bias, bool backwards, double toleranc
   // tolerance tracks the velocities' change
   enum class Rows { kSoft, kBaumgarte, kRelax, kRelaxTracked };
   auto solve_block = [&]<bool kIsotropic, Rows kRows>(ContactBlock& c, ContactBlockRest& r,
-                                                       Prefetch& ahead) {
+                                                       Prefetch& ahead, std::uint8_t flags) {
     LanePair pair(bodies_, c);
     const BlockInertia m = inertia_of<kIsotropic>(pair, r);
     // the soft step's stiffness of each lane, by whether a body is static (soft_lanes)
@@ -484,19 +490,19 @@ bool ContactPipeline::solve(double h, bool bias, bool backwards, double toleranc
     const FrameOffset offset(c);
     ahead.ahead(16);
     if (refresh) {
-      const NormalMotion motion(bodies_, c, n, t0, t1, offset);
+      const NormalMotion motion(bodies_, c, offset);
       for (int j = 0; j < 4; ++j)
         c.points[j].separation = motion.separation(c.points[j], r.points[j].base_separation);
     }
 
     // the largest impulse of each point this step, which only restitution reads: kept where
     // some lane bounces
-    const bool any_bounce = simd::any_of(r.restitution > zero);
+    const bool any_bounce = (flags & kBouncingBlock) != 0;
     // non-penetration: the normal impulse accumulates and stays ≥ 0 (Catto GDC 2006). A
     // manifold with no warm start (a new contact, an impact) runs its points several times in a
     // row: one pass over a face's four points lands the whole impulse on the first and spins the
     // body, where the converged answer pushes all four alike
-    const int rounds = simd::any_of(c.fresh) ? settings_.local_iterations : 1;
+    const int rounds = (flags & kFreshBlock) != 0 ? settings_.local_iterations : 1;
     // an isotropic block's rows in the manifold's frame (BlockFrame), written back after them
     [[maybe_unused]] auto frame = [&] {
       if constexpr (kIsotropic)
@@ -506,7 +512,7 @@ bool ContactPipeline::solve(double h, bool bias, bool backwards, double toleranc
     }();
     LaneMask pushed = zero != zero;
     for (int round = 0; round < rounds; ++round) {
-      const LaneMask active = round == 0 ? LaneMask(zero == zero) : c.fresh;
+      const LaneMask active = round == 0 ? LaneMask(zero == zero) : r.fresh;
       for (int j = 0; j < 4; ++j) {
         ContactBlock::Point& p = c.points[j];
         ahead.ahead(16);
@@ -637,14 +643,15 @@ bool ContactPipeline::solve(double h, bool bias, bool backwards, double toleranc
       moved.store(true, std::memory_order_relaxed);
   };
   const ContactBlock* const first_block = lanes_->blocks.data();
-  const std::uint8_t* const isotropic = lanes_->isotropic.data();
+  const std::uint8_t* const flags = lanes_->flags.data();
   auto pass = [&]<Rows kRows>() {
     for_each_block(
         [&](ContactBlock& c, ContactBlockRest& r, Prefetch& ahead) {
-          if (isotropic[&c - first_block])
-            solve_block.template operator()<true, kRows>(c, r, ahead);
+          const std::uint8_t block_flags = flags[&c - first_block];
+          if (block_flags & kIsotropicBlock)
+            solve_block.template operator()<true, kRows>(c, r, ahead, block_flags);
           else
-            solve_block.template operator()<false, kRows>(c, r, ahead);
+            solve_block.template operator()<false, kRows>(c, r, ahead, block_flags);
         },
         backwards);
   };
