@@ -684,10 +684,11 @@ void ContactPipeline::restitution() {
   const Lane tolerance = splat(float(settings_.restitution_tolerance));
   const Lane half_step = splat(float(0.5 * restitution_step_));
   const bool after_motion = settings_.solver == ContactSolver::SoftStep;
+  const ContactBlock* const first_block = lanes_->blocks.data();
   for (int iteration = 0; iteration < settings_.restitution_iterations; ++iteration) {
     std::atomic<bool> moved{false};
     for_each_block([&](ContactBlock& c, const ContactBlockRest& r, Prefetch&) {
-      if (!simd::any_of(r.restitution > zero)) return;
+      if ((lanes_->flags[std::size_t(&c - first_block)] & kBouncingBlock) == 0) return;
       LanePair pair(bodies_, c);
       const V3 n = load3(c.normal);
       const Tangents tangents = tangents_of(c, n);
