@@ -8,12 +8,9 @@
 #include <limits>
 #include <vector>
 
-#if defined(_OPENMP)
-#include <omp.h>
-#endif
-
 #include "broadphase_internal.h"
 #include "simd.h"
+#include "threads.h"
 
 namespace rtp::detail {
 namespace {
@@ -36,8 +33,54 @@ class BoxPruning final : public ProxyStore {
     added_.clear();
     recycle_removed();
     pairs_.clear();
-    if (!same_boxes || !update_slabs()) rebuild_slabs();
-    sweep();
+    const bool kept = same_boxes && find_arrivals();
+    if (!kept) rebuild_slabs();
+    // on threads, each a run of whole slabs holding about an equal share of the entries (a
+    // pyramid's low slabs hold many more boxes than its high ones): kept slabs sorted and
+    // written as columns, then swept, each thread into a list of its own, the lists joined in
+    // slab order: the same columns, and the same pairs in the same order, as on one thread
+    const std::size_t slabs = members_.size();
+    slab_entries_.resize(slabs + 1);
+    slab_entries_[0] = 0;
+    for (std::size_t k = 0; k < slabs; ++k)
+      slab_entries_[k + 1] =
+          slab_entries_[k] + members_[k].size() + (kept ? arrivals_[k].size() : 0);
+    const std::size_t entries = slab_entries_[slabs];
+    const int threads = threads_ > 1 && slabs > 1 && entries >= kParallelEntries ? threads_ : 1;
+    thread_pairs_.resize(std::size_t(threads));
+    scratch_.resize(std::size_t(threads));
+    parallel_region(threads, threads > 1, [&] {
+      const int parts = team_size(), part = team_index();
+      // the part's slabs: those whose first entry falls in its share of the entries
+      auto first_slab = [&](const std::vector<std::size_t>& starts, int k) {
+        const std::size_t at = starts.back() * std::size_t(k) / std::size_t(parts);
+        return std::size_t(std::lower_bound(starts.begin(), starts.end() - 1, at) -
+                           starts.begin());
+      };
+      if (kept) {
+        const std::size_t from = first_slab(slab_entries_, part);
+        const std::size_t to = first_slab(slab_entries_, part + 1);
+        for (std::size_t k = from; k < to; ++k) sort_slab(k, scratch_[std::size_t(part)]);
+#pragma omp barrier
+#pragma omp single
+        place_columns();  // (a barrier)
+        for (std::size_t k = from; k < to; ++k) write_columns(k);
+#pragma omp barrier
+      }
+      // (the columns by value, and a list on the thread's own stack: pushing into the members
+      // (pairs_ beside the columns' headers, the threads' lists side by side) had the threads
+      // write the cache lines the other read at every pair, and two threads took three times
+      // one's samples for the sweep at pyramid-100, by perf)
+      const Columns columns = this->columns();
+      std::vector<ProxyPair> out;
+      std::vector<ProxyPair>& list = part == 0 ? pairs_ : thread_pairs_[std::size_t(part)];
+      out.swap(list);  // (its capacity kept)
+      out.clear();
+      sweep_slabs(columns, first_slab(first_, part), first_slab(first_, part + 1), out);
+      out.swap(list);
+    });
+    for (std::size_t part = 1; part < std::size_t(threads); ++part)
+      pairs_.insert(pairs_.end(), thread_pairs_[part].begin(), thread_pairs_[part].end());
   }
 
  private:
@@ -126,17 +169,17 @@ class BoxPruning final : public ProxyStore {
       ranges_[k.id] = r;
       for (std::size_t s = r.home; s <= r.last; ++s) members_[s].push_back(k);
     }
-    std::size_t entries = 0;
-    for (const auto& m : members_) entries += m.size();
-    begin_columns(entries);
-    for (const auto& m : members_) append_columns(m);
+    place_columns();
+    for (std::size_t k = 0; k < members_.size(); ++k) write_columns(k);
   }
 
   // While coherent: the kept slabs, each brought back into x order by insertion sort (a slab
   // holds a few hundred boxes, so a box passes few others in it per step: far fewer swaps than
   // one order of every box), with the boxes that left a slab dropped and those that entered it
-  // merged in. False when the scene is not coherent enough for that to pay (the caller rebuilds).
-  bool update_slabs() {
+  // merged in. find_arrivals() finds which boxes enter which slabs, or false when the scene is
+  // not coherent enough for that to pay (the caller rebuilds); sort_slab() then brings one slab
+  // back into order.
+  bool find_arrivals() {
     if (members_.empty()) return false;
     // one pass over the boxes: each box's slabs in the kept layout (a box entering a slab is an
     // arrival there), and the layout the boxes would be given now
@@ -158,37 +201,30 @@ class BoxPruning final : public ProxyStore {
     }
     // the boxes spread or moved by a slab or more, or the slab count would change by a quarter
     const Layout now = boxes_now.layout();
-    if (std::abs(now.low_y - layout_.low_y) > layout_.slab_height ||
-        std::abs(now.high_y - layout_.high_y) > layout_.slab_height ||
-        4 * std::max(now.slabs, layout_.slabs) > 5 * std::min(now.slabs, layout_.slabs))
-      return false;
-    std::size_t entries = 0;  // at most: the members so far and the arrivals
-    for (std::size_t s = 0; s < layout_.slabs; ++s)
-      entries += members_[s].size() + arrivals_[s].size();
-    begin_columns(entries);
-    for (std::size_t s = 0; s < layout_.slabs; ++s) {
-      // the members that stay, with their new min x, in last step's order (kept in place by
-      // advancing a count)
-      std::vector<Keyed>& m = members_[s];
-      std::size_t kept = 0;
-      for (const Keyed& k : m) {
-        const ProxyId id = k.id;
-        m[kept] = {boxes_[id].min[0], id};
-        kept += ranges_[id].covers(s);
-      }
-      m.resize(kept);
-      insertion_sort_or_resort(m);
-      if (!arrivals_[s].empty()) {
-        std::vector<Keyed>& arriving = arrivals_[s];
-        sort_keyed(arriving);
-        keyed_.resize(m.size() + arriving.size());
-        std::merge(m.begin(), m.end(), arriving.begin(), arriving.end(), keyed_.begin(),
-                   [](const Keyed& a, const Keyed& b) { return a.key < b.key; });
-        m.swap(keyed_);
-      }
-      append_columns(m);  // while the slab's boxes are in the cache
+    return !(std::abs(now.low_y - layout_.low_y) > layout_.slab_height ||
+             std::abs(now.high_y - layout_.high_y) > layout_.slab_height ||
+             4 * std::max(now.slabs, layout_.slabs) > 5 * std::min(now.slabs, layout_.slabs));
+  }
+  // slab s's members that stay, with their new min x, in last step's order (kept in place by
+  // advancing a count), sorted, and the arrivals merged in (`scratch`: the calling thread's)
+  void sort_slab(std::size_t s, std::vector<Keyed>& scratch) {
+    std::vector<Keyed>& m = members_[s];
+    std::size_t kept = 0;
+    for (const Keyed& k : m) {
+      const ProxyId id = k.id;
+      m[kept] = {boxes_[id].min[0], id};
+      kept += ranges_[id].covers(s);
     }
-    return true;
+    m.resize(kept);
+    insertion_sort_or_resort(m);
+    if (!arrivals_[s].empty()) {
+      std::vector<Keyed>& arriving = arrivals_[s];
+      sort_keyed(arriving);
+      scratch.resize(m.size() + arriving.size());
+      std::merge(m.begin(), m.end(), arriving.begin(), arriving.end(), scratch.begin(),
+                 [](const Keyed& a, const Keyed& b) { return a.key < b.key; });
+      m.swap(scratch);
+    }
   }
 
   static void sort_keyed(std::vector<Keyed>& keyed) {
@@ -221,18 +257,21 @@ class BoxPruning final : public ProxyStore {
   }
 
   // Each slab's members in x order as columns, slab after slab, each followed by one vector of
-  // boxes starting at +∞ so the sweep needs no scalar tail. begin_columns makes room for that
-  // many members in all; append_columns writes the next slab.
-  void begin_columns(std::size_t members) {
-    const std::size_t total = members + members_.size() * simd::kNativeFloats;
+  // boxes starting at +∞ so the sweep needs no scalar tail. place_columns() gives each slab its
+  // first entry from the members' counts, write_columns() writes one slab there.
+  void place_columns() {
+    first_.resize(members_.size() + 1);
+    first_[0] = 0;
+    for (std::size_t s = 0; s < members_.size(); ++s)
+      first_[s + 1] = first_[s] + members_[s].size() + simd::kNativeFloats;
+    const std::size_t total = first_.back();
     for (auto* column : {&min_x_, &max_x_, &min_y_, &max_y_, &min_z_, &max_z_, &home_})
       if (column->size() < total) column->resize(total);
     if (ids_.size() < total) ids_.resize(total);
-    first_.assign(1, 0);
   }
-  void append_columns(const std::vector<Keyed>& members) {
-    std::size_t i = first_.back();
-    for (const Keyed& k : members) {
+  void write_columns(std::size_t s) {
+    std::size_t i = first_[s];
+    for (const Keyed& k : members_[s]) {
       const ProxyId id = k.id;
       const Aabb& b = boxes_[id];
       min_x_[i] = b.min[0];
@@ -245,66 +284,46 @@ class BoxPruning final : public ProxyStore {
       ids_[i] = id;
       ++i;
     }
-    const std::size_t end = i + simd::kNativeFloats;
-    std::fill(min_x_.begin() + std::ptrdiff_t(i), min_x_.begin() + std::ptrdiff_t(end),
+    std::fill(min_x_.begin() + std::ptrdiff_t(i), min_x_.begin() + std::ptrdiff_t(first_[s + 1]),
               std::numeric_limits<float>::infinity());
-    first_.push_back(end);
   }
 
-  // every slab swept; on threads, each takes a run of whole slabs holding about an equal share
-  // of the entries (a pyramid's low slabs hold many more boxes than its high ones), into its own
-  // list, and the lists are joined in slab order: the same pairs in the same order as on one
-  void sweep() {
-    const std::size_t slabs = members_.size();
-    const std::size_t entries = first_.back();
-#if defined(_OPENMP)
-    if (threads_ > 1 && slabs > 1 && entries >= kParallelEntries) {
-      thread_pairs_.resize(std::size_t(threads_));
-#pragma omp parallel num_threads(threads_)
-      {
-        const std::size_t parts = std::size_t(omp_get_num_threads());
-        const std::size_t part = std::size_t(omp_get_thread_num());
-        // a slab is this part's when its first entry falls in the part's share of the entries
-        auto first_slab = [&](std::size_t k) {
-          const std::size_t at = entries * k / parts;
-          return std::size_t(std::lower_bound(first_.begin(), first_.end() - 1, at) -
-                             first_.begin());
-        };
-        std::vector<ProxyPair>& out = part == 0 ? pairs_ : thread_pairs_[part];
-        out.clear();
-        sweep_slabs(first_slab(part), first_slab(part + 1), out);
-      }
-      for (std::size_t part = 1; part < thread_pairs_.size(); ++part)
-        pairs_.insert(pairs_.end(), thread_pairs_[part].begin(), thread_pairs_[part].end());
-      return;
-    }
-#endif
-    sweep_slabs(0, slabs, pairs_);
+  // the slabs' columns as the sweep reads them
+  struct Columns {
+    const std::size_t* first;  // each slab's first entry, and one past its padding
+    const float *min_x, *max_x, *min_y, *max_y, *min_z, *max_z, *home;
+    const ProxyId* ids;
+  };
+  Columns columns() const {
+    return {first_.data(), min_x_.data(), max_x_.data(), min_y_.data(), max_y_.data(),
+            min_z_.data(), max_z_.data(), home_.data(),  ids_.data()};
   }
 
   // in each slab of [from, to), each box against the boxes after it that start before it ends
   // on x
-  void sweep_slabs(std::size_t from, std::size_t to, std::vector<ProxyPair>& out) const {
+  // (the columns by value: the thread's own copy, which no push can alias)
+  static void sweep_slabs(const Columns c, std::size_t from, std::size_t to,
+                          std::vector<ProxyPair>& out) {
     using simd::at_least, simd::at_most, simd::load_floats, simd::splat_floats;
     for (std::size_t s = from; s < to; ++s) {
       const Lanes this_slab = splat_floats(float(s));
-      const std::size_t end = first_[s] + members_[s].size();
-      for (std::size_t i = first_[s]; i < end; ++i) {
-        const float end_x = max_x_[i], lo_y = min_y_[i], hi_y = max_y_[i], lo_z = min_z_[i],
-                    hi_z = max_z_[i], home = home_[i];
+      const std::size_t end = c.first[s + 1] - simd::kNativeFloats;
+      for (std::size_t i = c.first[s]; i < end; ++i) {
+        const float end_x = c.max_x[i], lo_y = c.min_y[i], hi_y = c.max_y[i], lo_z = c.min_z[i],
+                    hi_z = c.max_z[i], home = c.home[i];
         for (std::size_t j = i + 1;; j += simd::kNativeFloats) {
-          const simd::MaskN on_x = at_most(load_floats(&min_x_[j]), splat_floats(end_x));
+          const simd::MaskN on_x = at_most(load_floats(&c.min_x[j]), splat_floats(end_x));
           if (!simd::any_of(on_x)) break;
           const simd::MaskN hit =
-              on_x & at_most(load_floats(&min_y_[j]), splat_floats(hi_y)) &
-              at_least(load_floats(&max_y_[j]), splat_floats(lo_y)) &
-              at_most(load_floats(&min_z_[j]), splat_floats(hi_z)) &
-              at_least(load_floats(&max_z_[j]), splat_floats(lo_z)) &
-              simd::equal(simd::max(load_floats(&home_[j]), splat_floats(home)), this_slab);
+              on_x & at_most(load_floats(&c.min_y[j]), splat_floats(hi_y)) &
+              at_least(load_floats(&c.max_y[j]), splat_floats(lo_y)) &
+              at_most(load_floats(&c.min_z[j]), splat_floats(hi_z)) &
+              at_least(load_floats(&c.max_z[j]), splat_floats(lo_z)) &
+              simd::equal(simd::max(load_floats(&c.home[j]), splat_floats(home)), this_slab);
           if (simd::any_of(hit)) {
             // the hits as bits, then one pass per set bit: usually one, and no branch per lane
             for (unsigned bits = simd::lane_bits(hit); bits != 0; bits &= bits - 1)
-              out.push_back(ordered(ids_[i], ids_[j + std::size_t(std::countr_zero(bits))]));
+              out.push_back(ordered(c.ids[i], c.ids[j + std::size_t(std::countr_zero(bits))]));
           }
           if (!simd::all_of(on_x)) break;  // sorted: the boxes after these start later still
         }
@@ -325,10 +344,12 @@ class BoxPruning final : public ProxyStore {
   std::vector<std::vector<Keyed>> members_;   // each slab's boxes with their min x, in x order
   std::vector<SlabRange> ranges_;             // each box's slabs (by handle)
   std::vector<std::vector<Keyed>> arrivals_;  // boxes entering each slab this update
-  std::vector<Keyed> keyed_;                  // scratch: one slab (or every box) with its keys
+  std::vector<Keyed> keyed_;                  // scratch: every box with its keys (a rebuild)
   // the slabs' members as columns, each slab in x order; home = the slab of the box's min y
   // each slab's first entry, and one past the last slab's padding
   std::vector<std::size_t> first_;
+  std::vector<std::size_t> slab_entries_;  // each slab's first entry at most, as update() shares
+  std::vector<std::vector<Keyed>> scratch_;  // a merge's scratch, one a thread
   std::vector<float> min_x_, max_x_, min_y_, max_y_, min_z_, max_z_, home_;
   std::vector<ProxyId> ids_;
   std::vector<ProxyPair> pairs_;
