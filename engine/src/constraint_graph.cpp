@@ -85,13 +85,13 @@ void ContactPipeline::colour_greedily() {
 }
 
 void ContactPipeline::balance_shares() {
-  // thread 0's share of each wide colour, from the two threads' clocked blocks since the last
-  // step's colouring (balanced_split); halves on other teams
+  // thread 0's share of each wide colour on two threads, from the two threads' blocks clocked
+  // since the last step on two (balanced_split); a step on another team (the governor's probe
+  // of one thread) uses no split and keeps it, and the clocks, for the next step on two
+  if (threads_ != 2) return;
   ThreadWork& first = thread_work_[0];
   ThreadWork& second = thread_work_[1];
-  split_ = threads_ != 2 ? 0.5
-                         : balanced_split(split_, first.blocks, first.ticks, second.blocks,
-                                          second.ticks);
+  split_ = balanced_split(split_, first.blocks, first.ticks, second.blocks, second.ticks);
   first = second = ThreadWork{};
 }
 
