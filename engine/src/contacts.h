@@ -19,7 +19,6 @@
 // step's start, as Box2D, Jolt and Bullet do; the world converts back to momenta at the end.
 #pragma once
 
-#include <algorithm>
 #include <array>
 #include <cstdint>
 #include <memory>
@@ -188,7 +187,8 @@ class ContactPipeline final : public ContactStages {
   const ContactSettings settings_;
   int threads_ = 1;  // this step's team (set_threads): settings_.threads, or fewer on a busy machine
   // The shares of a colour's blocks on two threads: thread 0 takes the first `split_` of them. The
-  // two vCPUs of these machines run at speeds up to a third apart for seconds at a time, and with
+  // two vCPUs of these machines do not run at one speed (pinned, the second took 6–10 % longer for
+  // the same share; in slow spells one thread took up to 1.6 times the other's samples), and with
   // halves the faster waited at every colour's barrier; so each pass's threads clock the blocks
   // they solve (thread_work_), and each step's colouring moves the split toward the measured
   // speeds (balance_shares). Which thread solves a block changes no result: a colour's blocks

@@ -380,7 +380,7 @@ void World::load_pose_lanes() {
   const std::size_t groups = (n + kPoseGroup - 1) / kPoseGroup;
   pose_lanes_.resize(groups * kPoseDoubles);  // allocates only when the body count grows
   // a group of bodies at a time on the threads, each writing its own groups' lanes (serial, the
-  // two copies took about 2 % of a two-thread step at pyramid-100 while the other thread waited)
+  // two copies took about 1.5 % of a two-thread step at pyramid-100 while the other thread waited)
   parallel_for(active_threads_, std::ptrdiff_t(groups), n >= 2048, [&](std::ptrdiff_t group) {
     const std::size_t first = std::size_t(group) * kPoseGroup;
     const std::size_t last = std::min(n, first + kPoseGroup);
