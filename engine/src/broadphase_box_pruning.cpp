@@ -48,6 +48,8 @@ class BoxPruning final : public ProxyStore {
     const std::size_t entries = slab_entries_[slabs];
     const int threads = threads_ > 1 && slabs > 1 && entries >= kParallelEntries ? threads_ : 1;
     thread_pairs_.resize(std::size_t(threads));
+    // (emptied here: a team OpenMP gives fewer threads than asked leaves some unwritten)
+    for (std::vector<ProxyPair>& list : thread_pairs_) list.clear();
     scratch_.resize(std::size_t(threads));
     parallel_region(threads, threads > 1, [&] {
       const int parts = team_size(), part = team_index();
