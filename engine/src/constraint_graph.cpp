@@ -84,17 +84,6 @@ void ContactPipeline::colour_greedily() {
     by_colour[next[colour_of[i] & ~(kColdContact | kQuietContact)]++] = std::uint32_t(i);
 }
 
-void ContactPipeline::balance_shares() {
-  // thread 0's share of each wide colour on two threads, from the two threads' blocks clocked
-  // since the last step on two (balanced_split); a step on another team (the governor's probe
-  // of one thread) uses no split and keeps it, and the clocks, for the next step on two
-  if (threads_ != 2) return;
-  ThreadWork& first = thread_work_[0];
-  ThreadWork& second = thread_work_[1];
-  split_ = balanced_split(split_, first.blocks, first.ticks, second.blocks, second.ticks);
-  first = second = ThreadWork{};
-}
-
 void ContactPipeline::colour_contacts() {
   // each contact's colour, and its class (contact_class_) in the top bits; read from the keys
   // and the classes alone, not the contacts (a 5,050-box pyramid's are 3.4 MB)
@@ -106,7 +95,6 @@ void ContactPipeline::colour_contacts() {
   // then, take the same colours: only the classes are new
   const bool same_pairs = lanes_ && contact_keys_ == previous_keys_;
   if (!same_pairs) colour_greedily();
-  balance_shares();
   // within a colour, the cold contacts (a point that may push with no warm start) first: a block
   // holding one solves its points several times in a row (solve()), and spread by pair order
   // they put one in most blocks. The quiet ones last: a block of them alone has no warm start
@@ -141,7 +129,7 @@ void ContactPipeline::colour_contacts() {
       const std::size_t blocks = (n + W - 1) / W;
       const int parts = blocks >= kParallelColour / W ? threads : 1;  // as for_each_block's
       for (int part = index; part < parts; part += size) {
-        const auto [begin, end] = colour_share(blocks, parts, part);
+        const auto [begin, end] = share_of(blocks, parts, part);
         const std::size_t from = first + begin * W, to = first + std::min(end * W, n);
         std::size_t at = from;
         for (const std::uint8_t pass : {kCold, std::uint8_t(0), kQuiet})

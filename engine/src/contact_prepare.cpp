@@ -240,7 +240,7 @@ void ContactPipeline::prepare(const Vec3& gravity, double h) {
   parallel_region(threads_, block_count >= 64, [&] {
     for (int k = 0; k < colours; ++k) {
       const auto [begin, end] =
-          colour_share(block_start[k + 1] - block_start[k], team_size(), team_index());
+          share_of(block_start[k + 1] - block_start[k], team_size(), team_index());
       for (std::size_t bi = block_start[k] + begin; bi < block_start[k] + end; ++bi)
         prepare_block(bi);
     }

@@ -334,18 +334,11 @@ void ContactPipeline::for_each_block(Kernel&& kernel, bool backwards) {
       const Visit& visit = visits[std::size_t(v)];
       if (v > 0) barrier.wait(size);
       if (visit.wide) {
-        // each thread its share of the colour's blocks, the share the colouring packed for it,
-        // clocked (balance_shares)
+        // each thread its share of the colour's blocks, the share the colouring packed for it
         const int c = colour(visit.first);
-        const auto [begin, end] = colour_share(start[c + 1] - start[c], size, index);
-        const std::uint64_t started = size == 2 ? work_ticks() : 0;
+        const auto [begin, end] = share_of(start[c + 1] - start[c], size, index);
         for (std::size_t i = start[c] + begin; i < start[c] + end; ++i)
           run_block(i, start[c] + end);
-        if (size == 2) {
-          ThreadWork& work = thread_work_[std::size_t(index)];
-          work.ticks += work_ticks() - started;
-          work.blocks += end - begin;
-        }
       } else if (index == 0) {
         for (int j = visit.first; j < visit.last; ++j) run_colour(j);
       }

@@ -19,7 +19,6 @@
 // step's start, as Box2D, Jolt and Bullet do; the world converts back to momenta at the end.
 #pragma once
 
-#include <array>
 #include <cstdint>
 #include <memory>
 #include <span>
@@ -28,7 +27,6 @@
 
 #include "contact_lanes.h"
 #include "contact_stages.h"
-#include "threads.h"
 #include "rtp/broadphase.h"
 #include "rtp/collision.h"
 #include "rtp/world.h"
@@ -186,24 +184,6 @@ class ContactPipeline final : public ContactStages {
                  Shape& grown_b) const;
   const ContactSettings settings_;
   int threads_ = 1;  // this step's team (set_threads): settings_.threads, or fewer on a busy machine
-  // The shares of a colour's blocks on two threads: thread 0 takes the first `split_` of them. The
-  // two vCPUs of these machines do not run at one speed (pinned, the second took 6–10 % longer for
-  // the same share; in slow spells one thread took up to 1.6 times the other's samples), and with
-  // halves the faster waited at every colour's barrier; so each pass's threads clock the blocks
-  // they solve (thread_work_), and each step's colouring moves the split toward the measured
-  // speeds (balance_shares). Which thread solves a block changes no result: a colour's blocks
-  // share no dynamic body (for_each_block)
-  double split_ = 0.5;
-  struct alignas(64) ThreadWork {
-    std::uint64_t ticks = 0, blocks = 0;
-  };
-  std::array<ThreadWork, 2> thread_work_{};
-  void balance_shares();
-  // part `part` of `parts` of n blocks of a colour (the colouring's packing, prepare() and the
-  // passes take the same): split_ of them and the rest on two threads, share_of otherwise
-  std::pair<std::size_t, std::size_t> colour_share(std::size_t n, int parts, int part) const {
-    return split_share(n, parts, part, split_);
-  }
   std::vector<BodyShapeData> shapes_;  // per body
   std::vector<ConvexHull> hulls_;      // the grown hulls: the pool Shape::hull indexes
   std::unique_ptr<BroadPhase> broad_phase_;

@@ -5,17 +5,12 @@
 
 #include <algorithm>
 #include <atomic>
-#include <chrono>
 #include <cstddef>
-#include <cstdint>
 #include <thread>
 #include <utility>
 
 #if defined(_OPENMP)
 #include <omp.h>
-#endif
-#if defined(__x86_64__) || defined(__i386__)
-#include <x86intrin.h>
 #endif
 
 namespace rtp {
@@ -24,26 +19,6 @@ namespace rtp {
 inline std::pair<std::size_t, std::size_t> share_of(std::size_t n, int parts, int part) {
   return {n * std::size_t(part) / std::size_t(parts),
           n * std::size_t(part + 1) / std::size_t(parts)};
-}
-
-// the share of n items that part `part` of `parts` takes where the first of two parts takes
-// `split` of them (rounded): [first, last); share_of on other teams
-inline std::pair<std::size_t, std::size_t> split_share(std::size_t n, int parts, int part,
-                                                       double split) {
-  if (parts != 2) return share_of(n, parts, part);
-  const std::size_t cut = std::min(n, std::size_t(double(n) * split + 0.5));
-  return part == 0 ? std::pair<std::size_t, std::size_t>{0, cut}
-                   : std::pair<std::size_t, std::size_t>{cut, n};
-}
-
-// the first of two threads' next split (split_share) from the items each did and the ticks each
-// took: halfway from `split` toward its share of the two speeds (items a tick), kept within
-// [0.25, 0.75]; `split` as it is until both have done some
-inline double balanced_split(double split, std::uint64_t items0, std::uint64_t ticks0,
-                             std::uint64_t items1, std::uint64_t ticks1) {
-  if (items0 == 0 || items1 == 0 || ticks0 == 0 || ticks1 == 0) return split;
-  const double speed0 = double(items0) / double(ticks0), speed1 = double(items1) / double(ticks1);
-  return std::clamp(0.5 * split + 0.5 * speed0 / (speed0 + speed1), 0.25, 0.75);
 }
 
 // the calling thread's place in its team (one thread, the first, without OpenMP)
@@ -92,16 +67,6 @@ inline void parallel_region(int threads, bool worth, Body&& body) {
   }
 #endif
   body();
-}
-
-// a cheap clock for the threads' shares of work: the time-stamp counter where there is one (a few
-// ns to read), else the steady clock; only differences on one thread mean anything
-inline std::uint64_t work_ticks() {
-#if defined(__x86_64__) || defined(__i386__)
-  return __rdtsc();
-#else
-  return std::uint64_t(std::chrono::steady_clock::now().time_since_epoch().count());
-#endif
 }
 
 // a hint to the core that this thread spins on a flag

@@ -14,9 +14,7 @@
 
 namespace {
 
-using rtp::balanced_split;
 using rtp::share_of;
-using rtp::split_share;
 using rtp::SpinBarrier;
 
 TEST(Threads, SharesCoverTheItemsOnceInOrder) {
@@ -32,38 +30,6 @@ TEST(Threads, SharesCoverTheItemsOnceInOrder) {
       }
       EXPECT_EQ(next, n) << n << " items in " << parts << " parts";
     }
-}
-
-TEST(Threads, SplitSharesCoverTheItemsOnceWithTheFirstTakingItsSplit) {
-  for (const std::size_t n : {0u, 1u, 7u, 312u, 14950u})
-    for (const double split : {0.25, 0.4, 0.5, 0.6, 0.75}) {
-      const auto [first0, last0] = split_share(n, 2, 0, split);
-      const auto [first1, last1] = split_share(n, 2, 1, split);
-      EXPECT_EQ(first0, 0u);
-      EXPECT_EQ(last0, first1) << n << " items at " << split;
-      EXPECT_EQ(last1, n);
-      EXPECT_NEAR(double(last0), split * double(n), 0.5) << n << " items at " << split;
-    }
-  // other teams than two take share_of's
-  EXPECT_EQ(split_share(14950, 3, 1, 0.7), share_of(14950, 3, 1));
-  EXPECT_EQ(split_share(14950, 1, 0, 0.7), share_of(14950, 1, 0));
-}
-
-TEST(Threads, TheFasterThreadIsGivenMoreItemsHalfwayAndWithinAQuarter) {
-  // thread 0 did 100 items in 1,000 ticks, thread 1 as many in 1,500: their speeds are 3 : 2,
-  // so the balanced split is 0.6, and a step moves halfway toward it from 0.5
-  EXPECT_DOUBLE_EQ(balanced_split(0.5, 100, 1000, 100, 1500), 0.55);
-  EXPECT_DOUBLE_EQ(balanced_split(0.55, 100, 1000, 100, 1500), 0.575);
-  // the same the other way round
-  EXPECT_DOUBLE_EQ(balanced_split(0.5, 100, 1500, 100, 1000), 0.45);
-  // speeds, not counts: more items in proportionally more ticks is the same speed
-  EXPECT_DOUBLE_EQ(balanced_split(0.6, 120, 1200, 80, 800), 0.55);
-  // a thread ten times slower does not get under a quarter
-  EXPECT_DOUBLE_EQ(balanced_split(0.25, 100, 10000, 100, 1000), 0.25);
-  EXPECT_DOUBLE_EQ(balanced_split(0.75, 100, 1000, 100, 10000), 0.75);
-  // nothing clocked on one thread: the split stays
-  EXPECT_DOUBLE_EQ(balanced_split(0.6, 0, 0, 100, 1000), 0.6);
-  EXPECT_DOUBLE_EQ(balanced_split(0.4, 100, 1000, 0, 0), 0.4);
 }
 
 // each round: every thread writes the round into its slot, waits, reads every slot (each must
