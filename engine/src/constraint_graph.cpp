@@ -99,18 +99,22 @@ void ContactPipeline::colour_contacts() {
   // holding one solves its points several times in a row (solve()), and spread by pair order
   // they put one in most blocks. The quiet ones last: a block of them alone has no warm start
   // to apply, and while its points push nothing the solve skips their responses and friction.
-  // On threads, each takes a contiguous share of a colour's blocks (for_each_block), and the
-  // packing is done within each share: the shares then hold the same bodies from colour to colour
-  // in pair order, so a body's lines stay with one core (packed across the whole colour, two
-  // threads took 10 % longer a step at base 100). A colour's contacts share no dynamic body, so
-  // their order in it, and which block each lands in, changes no result
-  // (each colour in pair order first, then each share packed from there into colour_order_, by
-  // the thread that solves it: on one thread this took 0.08 ms of a base-100 step)
+  // A colour wide enough for threads is packed in kPackParts contiguous parts of its blocks, the
+  // shares two threads solve (for_each_block), on any team: the shares then hold the same bodies
+  // from colour to colour in pair order, so a body's lines stay with one core (packed across the
+  // whole colour, two threads took 10 % longer a step at base 100). A colour's contacts share no
+  // dynamic body, so their order in it changes no result; but which contacts share a block
+  // decides whether it takes the isotropic rows (every body's inertia a multiple of 1), which
+  // round differently from the general ones, so the parts may not follow the team: packed whole
+  // on one thread and in halves on two, a colour mixing cubes and flat boxes gave other bits
+  // (Contacts.MixedInertiaWideColoursGiveTheSameBitsOnOneAndTwoThreads)
+  // (each colour in pair order first, then each part packed from there into colour_order_, by
+  // the thread that solves it on a team of two: on one thread this took 0.08 ms of a base-100
+  // step)
   const std::vector<std::uint32_t>& by_colour = colour_scratch_order_;
   const std::size_t count = contacts_.size();
   colour_order_.resize(count);
-  const int threads = std::max(1, threads_);
-  parallel_region(threads, count >= 2048, [&] {
+  parallel_region(std::max(1, threads_), count >= 2048, [&] {
     const int size = team_size(), index = team_index();
     if (same_pairs) {
       const auto [first, last] = share_of(count, size, index);
@@ -127,7 +131,7 @@ void ContactPipeline::colour_contacts() {
         continue;
       }
       const std::size_t blocks = (n + W - 1) / W;
-      const int parts = blocks >= kParallelColour / W ? threads : 1;  // as for_each_block's
+      const int parts = blocks >= kParallelColour / W ? kPackParts : 1;
       for (int part = index; part < parts; part += size) {
         const auto [begin, end] = share_of(blocks, parts, part);
         const std::size_t from = first + begin * W, to = first + std::min(end * W, n);

@@ -88,6 +88,10 @@ inline double effective_mass(const Vec3& ra, const Vec3& rb, const Vec3& d, cons
 // a colour's blocks go to threads only past this many contacts: below it the barrier costs more
 inline constexpr std::size_t kParallelColour = 256;
 
+// such a colour is packed into blocks in this many parts on any team (colour_contacts), so that
+// its blocks hold the same contacts on one thread as on two: a team of two solves a part each
+inline constexpr int kPackParts = 2;
+
 // colours beyond the 63rd are one last group, solved one contact a block, in order
 inline constexpr int kColours = 64;
 

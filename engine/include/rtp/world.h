@@ -174,8 +174,9 @@ struct ContactSettings {
 };
 
 // how many manifolds the contact solver's lanes hold in a world with the default settings: the
-// widest float register of the contact passes it runs (it changes no result: a block's manifolds
-// share no dynamic body)
+// widest float register of the contact passes it runs (a block's manifolds share no dynamic body,
+// but which share a block decides whether it takes the isotropic rows, which round differently:
+// docs/solver.md, "The step, stage by stage")
 std::size_t contact_block_lanes();
 
 // the instruction set this build of rtp was compiled for, in words ("AVX-512F, AVX2, FMA",
