@@ -96,11 +96,13 @@ int main(int argc, char** argv) {
   const int per_line = std::max(1, int(std::lround(every / scene.dt)));
   double drift = 0.0, seconds_stepping = 0.0, deepest = 0.0, energy_added_max = 0.0;
   std::size_t relax_passes = 0, touching = 0, moved = 0;
+  std::size_t line_relax_passes = 0;  // since the last progress line
   std::array<double, rtp::StepProfile::kStageNames.size()> stage_seconds{};
   for (int k = 0; k < steps; ++k) {
     world.step(scene.dt);
     seconds_stepping += world.profile().total;
     relax_passes += world.profile().relax_passes;
+    line_relax_passes += world.profile().relax_passes;
     const auto stages = world.profile().stage_seconds();
     for (std::size_t i = 0; i < stages.size(); ++i) stage_seconds[i] += stages[i];
     touching += world.profile().contact_pairs;
@@ -112,10 +114,15 @@ int main(int argc, char** argv) {
       const rtp::Vec3 d = world.state(i).position - start[i];
       drift = std::max(drift, std::hypot(d.x(), d.z()));
     }
-    if ((k + 1) % per_line == 0)
-      std::fprintf(stderr, "t = %.2f s  drift %.4f m  top x %+.4f m, height %+.4f m  deepest %.4f m\n",
+    if ((k + 1) % per_line == 0) {
+      std::fprintf(stderr,
+                   "t = %.2f s  drift %.4f m  top x %+.4f m, height %+.4f m  deepest %.4f m  "
+                   "%.1f relax passes a step\n",
                    (k + 1) * scene.dt, drift, world.state(top).position.x() - start[top].x(),
-                   world.state(top).position.y() - start[top].y(), world.deepest_penetration());
+                   world.state(top).position.y() - start[top].y(), world.deepest_penetration(),
+                   double(line_relax_passes) / per_line);
+      line_relax_passes = 0;
+    }
   }
   std::uint64_t fingerprint = 0xcbf29ce484222325u;  // FNV-1a, 64 bits
   auto hash = [&](double x) {
