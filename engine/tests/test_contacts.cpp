@@ -649,6 +649,19 @@ TEST(Contacts, RelaxPassesGrowWhileAStackSettlesAndFallToTheMinimumAtRest) {
   }
 }
 
+// every body's pose and momenta, number by number (to compare two runs' bits)
+std::vector<double> state_numbers(const World& world) {
+  std::vector<double> state;
+  for (BodyId b = 0; b < world.body_count(); ++b) {
+    const BodyState& s = world.state(b);
+    state.insert(state.end(), s.position.data(), s.position.data() + 3);
+    state.insert(state.end(), s.orientation.coeffs().data(), s.orientation.coeffs().data() + 4);
+    state.insert(state.end(), s.linear_momentum.data(), s.linear_momentum.data() + 3);
+    state.insert(state.end(), s.angular_momentum.data(), s.angular_momentum.data() + 3);
+  }
+  return state;
+}
+
 // the same scene run twice gives bit-identical states
 TEST(Contacts, SameSceneTwiceIsBitIdentical) {
   auto run = [] {
@@ -658,15 +671,7 @@ TEST(Contacts, SameSceneTwiceIsBitIdentical) {
       add_box(world, {0.05 * i, 0.5 + 1.02 * i, 0.0}, 1.0, 0.6, 0.0,
               Quat(Eigen::AngleAxisd(0.1 * i, Vec3::UnitY())));
     for (int i = 0; i < 300; ++i) world.step(kDt);
-    std::vector<double> state;
-    for (BodyId b = 0; b < world.body_count(); ++b) {
-      const BodyState& s = world.state(b);
-      state.insert(state.end(), s.position.data(), s.position.data() + 3);
-      state.insert(state.end(), s.orientation.coeffs().data(), s.orientation.coeffs().data() + 4);
-      state.insert(state.end(), s.linear_momentum.data(), s.linear_momentum.data() + 3);
-      state.insert(state.end(), s.angular_momentum.data(), s.angular_momentum.data() + 3);
-    }
-    return state;
+    return state_numbers(world);
   };
   const std::vector<double> first = run(), second = run();
   ASSERT_EQ(first.size(), second.size());
@@ -699,15 +704,7 @@ TEST(Contacts, MixedInertiaWideColoursGiveTheSameBitsOnOneAndTwoThreads) {
                   1.0, 0.6, 0.0, Quat::Identity(), half);
       }
     for (int i = 0; i < 60; ++i) world.step(kDt);
-    std::vector<double> state;
-    for (BodyId b = 0; b < world.body_count(); ++b) {
-      const BodyState& s = world.state(b);
-      state.insert(state.end(), s.position.data(), s.position.data() + 3);
-      state.insert(state.end(), s.orientation.coeffs().data(), s.orientation.coeffs().data() + 4);
-      state.insert(state.end(), s.linear_momentum.data(), s.linear_momentum.data() + 3);
-      state.insert(state.end(), s.angular_momentum.data(), s.angular_momentum.data() + 3);
-    }
-    return state;
+    return state_numbers(world);
   };
   const std::vector<double> one = run(1), two = run(2);
   ASSERT_EQ(one.size(), two.size());
