@@ -104,10 +104,10 @@ void ContactPipeline::colour_contacts() {
   // from colour to colour in pair order, so a body's lines stay with one core (packed across the
   // whole colour, two threads took 10 % longer a step at base 100). A colour's contacts share no
   // dynamic body, so their order in it changes no result; but which contacts share a block
-  // decides whether it takes the isotropic rows (every body's inertia a multiple of 1), which
-  // round differently from the general ones, so the parts may not follow the team: packed whole
-  // on one thread and in halves on two, a colour mixing cubes and flat boxes gave other bits
-  // (Contacts.MixedInertiaWideColoursGiveTheSameBitsOnOneAndTwoThreads)
+  // decides whether it takes the isotropic rows (each inverse inertia a multiple of the
+  // identity), which round differently from the general ones, so the parts may not follow the
+  // team: packed whole on one thread and in halves on two, a colour mixing cubes and flat boxes
+  // gave other bits (Contacts.MixedInertiaWideColoursGiveTheSameBitsOnOneAndTwoThreads)
   // (each colour in pair order first, then each part packed from there into colour_order_, by
   // the thread that solves it on a team of two: on one thread this took 0.08 ms of a base-100
   // step)
