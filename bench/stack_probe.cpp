@@ -97,12 +97,15 @@ int main(int argc, char** argv) {
   double drift = 0.0, seconds_stepping = 0.0, deepest = 0.0, energy_added_max = 0.0;
   std::size_t relax_passes = 0, touching = 0, moved = 0;
   std::size_t line_relax_passes = 0;  // since the last progress line
+  std::size_t team_steps = 0, line_team_steps = 0;  // steps on more than one thread (the governor)
   std::array<double, rtp::StepProfile::kStageNames.size()> stage_seconds{};
   for (int k = 0; k < steps; ++k) {
     world.step(scene.dt);
     seconds_stepping += world.profile().total;
     relax_passes += world.profile().relax_passes;
     line_relax_passes += world.profile().relax_passes;
+    team_steps += world.profile().threads > 1;
+    line_team_steps += world.profile().threads > 1;
     const auto stages = world.profile().stage_seconds();
     for (std::size_t i = 0; i < stages.size(); ++i) stage_seconds[i] += stages[i];
     touching += world.profile().contact_pairs;
@@ -117,11 +120,12 @@ int main(int argc, char** argv) {
     if ((k + 1) % per_line == 0) {
       std::fprintf(stderr,
                    "t = %.2f s  drift %.4f m  top x %+.4f m, height %+.4f m  deepest %.4f m  "
-                   "%.1f relax passes a step\n",
+                   "%.1f relax passes a step  %.0f %% of steps on the team\n",
                    (k + 1) * scene.dt, drift, world.state(top).position.x() - start[top].x(),
                    world.state(top).position.y() - start[top].y(), world.deepest_penetration(),
-                   double(line_relax_passes) / per_line);
+                   double(line_relax_passes) / per_line, 100.0 * double(line_team_steps) / per_line);
       line_relax_passes = 0;
+      line_team_steps = 0;
     }
   }
   std::uint64_t fingerprint = 0xcbf29ce484222325u;  // FNV-1a, 64 bits

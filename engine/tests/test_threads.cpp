@@ -137,6 +137,38 @@ TEST(ThreadGovernor, TurnsBackWhenTheMachineChanges) {
   EXPECT_LE(steps_on_one_thread(g, 320, 4.8e-3, 9.3e-3), 320 / rtp::ThreadGovernor::kProbeEvery + 1);
 }
 
+// a busy spell long past does not hold the team off: the first probe after the machine is idle
+// again turns it back (blended with the busy estimate, it took four probes: 2 s at 60 Hz)
+TEST(ThreadGovernor, TheFirstProbeOnAnIdleMachineTurnsBackToTheTeam) {
+  rtp::ThreadGovernor g(2, true);
+  steps_on_one_thread(g, 200, 30e-3, 10e-3);  // busy: one thread
+  // idle: one thread until the next probe of the team, at most kProbeEvery steps away
+  int steps = 0;
+  for (int threads = 1; threads == 1; ++steps) {
+    ASSERT_LE(steps, rtp::ThreadGovernor::kProbeEvery) << "no probe of the team";
+    threads = g.next();
+    g.record(threads, threads == 1 ? 9.3e-3 : 4.8e-3);
+  }
+  // and from that probe on, the team, until it probes one thread again
+  EXPECT_EQ(steps_on_one_thread(g, rtp::ThreadGovernor::kProbeEvery - 1, 4.8e-3, 9.3e-3), 0);
+}
+
+// a probe that finds the team fast once, where the machine is still busy, costs a step or two on
+// the team, not a run of them: the team's own steps raise its estimate at once
+TEST(ThreadGovernor, OneLuckyProbeOfTheTeamCostsAFewSteps) {
+  rtp::ThreadGovernor g(2, true);
+  steps_on_one_thread(g, 200, 30e-3, 10e-3);  // busy: one thread
+  int on_team = 0, probes_seen = 0;
+  for (int i = 0; i < 64; ++i) {
+    const int threads = g.next();
+    // the first probe of the team finds it at 5 ms; every team step after that takes 30
+    const bool lucky = threads == 2 && probes_seen++ == 0;
+    on_team += threads == 2;
+    g.record(threads, threads == 1 ? 10e-3 : lucky ? 5e-3 : 30e-3);
+  }
+  EXPECT_LE(on_team, 4);
+}
+
 TEST(ThreadGovernor, FixedOrOneThreadNeverChanges) {
   rtp::ThreadGovernor fixed(2, false), single(1, true);
   for (int i = 0; i < 100; ++i) {
