@@ -97,14 +97,13 @@ int main(int argc, char** argv) {
   double drift = 0.0, seconds_stepping = 0.0, deepest = 0.0, energy_added_max = 0.0;
   std::size_t relax_passes = 0, touching = 0, moved = 0;
   std::size_t line_relax_passes = 0;  // since the last progress line
-  std::size_t team_steps = 0, line_team_steps = 0;  // steps on more than one thread (the governor)
+  std::size_t line_team_steps = 0;  // steps on more than one thread since then (the governor)
   std::array<double, rtp::StepProfile::kStageNames.size()> stage_seconds{};
   for (int k = 0; k < steps; ++k) {
     world.step(scene.dt);
     seconds_stepping += world.profile().total;
     relax_passes += world.profile().relax_passes;
     line_relax_passes += world.profile().relax_passes;
-    team_steps += world.profile().threads > 1;
     line_team_steps += world.profile().threads > 1;
     const auto stages = world.profile().stage_seconds();
     for (std::size_t i = 0; i < stages.size(); ++i) stage_seconds[i] += stages[i];

@@ -4,8 +4,8 @@
 // (pyramid-100 beside a busy loop: 30 ms a step on two threads against 10 on one). The governor
 // times each step and keeps an estimate for the whole team and for one thread; it runs the faster,
 // and the other one step in kProbeEvery, so a change in the machine turns it around at the first
-// probe that finds it (a probe's time replaces its team's estimate). While the team is the faster, each probe that finds it so doubles the steps to the next
-// one, up to kMostProbeEvery: one thread's probe is a step at twice the time (2.6 % of an idle
+// probe that finds it (a probe's time replaces its team's estimate). While the team is the faster,
+// each probe that finds it so doubles the steps to the next one, up to kMostProbeEvery: one thread's probe is a step at twice the time (2.6 % of an idle
 // two-thread pyramid-100's steps at one in 32), and a team slowed by a busy machine needs no probe
 // to be left, since its own estimate rises at once. The results are the same on any team (a
 // colour's contacts share no dynamic body), so only the time depends on it.
@@ -41,17 +41,19 @@ class ThreadGovernor {
                                                                         : interval_ * 2;
     return preferred == 1 ? most_ : 1;
   }
-  // the step just run on `team` took `seconds`. A step on the other team than the step before
-  // (a probe, or the first after a turn) replaces that team's estimate: the estimate was last
-  // measured a probe's interval ago or more, and blended with it a busy spell's figure held the
-  // team off for four probes (2 s at 60 Hz) after the machine was idle again
+  // the step just run on `team` took `seconds`. An estimate last measured more than two steps
+  // ago (at a probe, or at the first step after a turn) is replaced, not blended: it is a probe's
+  // interval old or more, and blended with it a busy spell's figure held the team off for four
+  // probes (2 s at 60 Hz) after the machine was idle again. The step after a probe, back on the
+  // preferred team, joins that team's running mean
   void record(int team, double seconds) {
     if (most_ == 1 || !adaptive_ || !(seconds >= 0.0)) return;
     double& estimate = team == 1 ? one_seconds_ : team_seconds_;
-    estimate = estimate < 0.0 || team != last_team_
+    long& measured = team == 1 ? one_measured_ : team_measured_;
+    estimate = estimate < 0.0 || step_ - measured > 2
                    ? seconds
                    : (1.0 - kWeight) * estimate + kWeight * seconds;
-    last_team_ = team;
+    measured = step_;
   }
 
  private:
@@ -62,7 +64,7 @@ class ThreadGovernor {
   int preferred_ = 0;     // the team the estimates last preferred (0: none yet)
   int interval_ = kProbeEvery;  // steps from one probe of the other team to the next
   int since_probe_ = 0;
-  int last_team_ = 0;     // the team of the step last recorded (0: none yet)
+  long team_measured_ = 0, one_measured_ = 0;  // the steps each estimate was last recorded at
 };
 
 }  // namespace rtp
