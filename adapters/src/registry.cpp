@@ -6,14 +6,16 @@ namespace physbench {
 #ifdef PHYSBENCH_RTP_ISA_SUFFIX
 namespace {
 
-// rtp's default variants (the contact step and the rigid-body integrator) under names that say
-// the instruction set, for physbench-rtp-baseline; every call strips the suffix again
+// rtp's default variants (the contact step and the rigid-body integrator), and the contact step at
+// Box2D v3's settings (soft-step-4: Box3D's rules, for a ratio at equal settings and equal
+// instruction set), under names that say the instruction set, for physbench-rtp-baseline; every
+// call strips the suffix again
 EngineInfo with_isa_suffix(EngineInfo rtp, const std::string& suffix) {
   const EngineInfo inner = rtp;
   auto strip = [suffix](const std::string& variant) {
     return variant.ends_with(suffix) ? variant.substr(0, variant.size() - suffix.size()) : variant;
   };
-  rtp.variants = {"soft-step" + suffix, "rk4" + suffix};
+  rtp.variants = {"soft-step" + suffix, "soft-step-4" + suffix, "rk4" + suffix};
   rtp.unsupported = [inner, strip](const Scene& scene, const std::string& variant) {
     return inner.unsupported(scene, strip(variant));
   };

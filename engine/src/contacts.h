@@ -36,6 +36,17 @@ namespace rtp {
 // its namespace (contact_lanes.h)
 inline namespace RTP_CONTACT_ISA_NAMESPACE {
 
+// the box pair's test this copy calls: its own, compiled with it (narrowphase_box.cpp), where the
+// build carries a copy for each instruction set; the library's otherwise
+namespace box_pairs {
+#ifdef RTP_CONTACT_ISA_ENTRY
+bool collide_boxes(std::span<const ConvexHull> hulls, const Shape& a, const Pose& pose_a,
+                   const Shape& b, const Pose& pose_b, Manifold& out);
+#else
+using rtp::collide_boxes;
+#endif
+}  // namespace box_pairs
+
 // a point of a manifold as the narrow phase made it, with the impulse it starts the step with:
 // what prepare() packs and the next step's match needs (the solver's own per-step numbers live
 // in its lanes, packed by contact_prepare.cpp; the impulses it ends the step with, in the pipeline's

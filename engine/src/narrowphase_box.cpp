@@ -11,6 +11,14 @@
 #include "narrowphase_internal.h"
 
 namespace rtp {
+// Compiled once more in each copy of the contact pipeline (engine/CMakeLists.txt), whose narrow
+// phase calls its own (contacts.h, box_pairs): a box pair's test then runs at the copy's
+// instruction set, not the baseline's, where its 4-lane doubles are two SSE2 registers each and
+// spill (docs/solver.md, "One binary, the widest passes the core has")
+#ifdef RTP_CONTACT_ISA_ENTRY
+inline namespace RTP_CONTACT_ISA_NAMESPACE {
+namespace box_pairs {
+#endif
 using namespace detail;
 namespace {
 
@@ -369,4 +377,8 @@ bool collide_boxes(std::span<const ConvexHull>, const Shape& a, const Pose& pose
   return true;
 }
 
+#ifdef RTP_CONTACT_ISA_ENTRY
+}  // namespace box_pairs
+}  // namespace RTP_CONTACT_ISA_NAMESPACE
+#endif
 }  // namespace rtp

@@ -94,14 +94,16 @@ std::vector<EngineVariant> engine_catalog(const fs::path& self) {
     for (const std::string& v : info.variants)
       catalog.push_back({info.name, v, info.version, self, info.test_only});
 #ifdef PHYSBENCH_HAVE_RTP_BASELINE
-  // rtp's default variants at the baseline instruction set live in their own executable beside
-  // this one (the same engine compiled without -march), after rtp's own variants
+  // rtp's default variants, and soft-step-4 (Box2D v3's settings), at the baseline instruction set
+  // live in their own executable beside this one (the same engine compiled without -march), after
+  // rtp's own variants
   for (std::size_t i = catalog.size(); i-- > 0;)
     if (catalog[i].engine == "rtp") {
       const fs::path host = self.parent_path() / "physbench-rtp-baseline";
       const std::string version = catalog[i].version;
       catalog.insert(catalog.begin() + long(i) + 1,
                      {{"rtp", std::string("soft-step") + PHYSBENCH_RTP_ISA_SUFFIX, version, host},
+                      {"rtp", std::string("soft-step-4") + PHYSBENCH_RTP_ISA_SUFFIX, version, host},
                       {"rtp", std::string("rk4") + PHYSBENCH_RTP_ISA_SUFFIX, version, host}});
       break;
     }

@@ -575,6 +575,37 @@ TEST(Runner, RtpAtTheBaselineInstructionSetRunsBesideTheBuildsOwn) {
   EXPECT_EQ(first["name"], "instruction set");
   EXPECT_NE(first["value"].get<std::string>().find("baseline"), std::string::npos) << first.dump();
 }
+
+TEST(Runner, RtpAtBox2dsSettingsRunsAtTheBaselineInstructionSetToo) {
+  // soft-step-4 at the baseline instruction set: rtp at Box3D's rules and Box3D's instruction
+  // set, the ratio at equal settings and equal ISA. The host must map the name to Box2D v3's
+  // settings (4 substeps, one relax pass), not to the default's 8
+  const fs::path dir = fresh_dir("baseline-isa-4");
+  const std::string baseline = std::string("soft-step-4") + PHYSBENCH_RTP_ISA_SUFFIX;
+  const Invocation inv = physbench({"run", "-s", "tower-10", "-e", "rtp", "--variant",
+                                    "soft-step-4," + baseline, "--duration", "1", "--budget", "0",
+                                    "--no-sweep", "--out", (dir / "r").string()},
+                                   dir);
+  ASSERT_EQ(inv.outcome.exit_code, 0) << inv.output;
+  std::map<std::string, std::map<std::string, std::string>> by;
+  for (const auto& row : read_rows(dir / "r" / "results.csv")) by[row.at("variant")] = row;
+  ASSERT_TRUE(by.count("soft-step-4") && by.count(baseline)) << inv.output;
+  EXPECT_EQ(by[baseline].at("status"), "ok") << by[baseline].at("message");
+  EXPECT_EQ(by[baseline].at("contact_verdict"), by["soft-step-4"].at("contact_verdict"));
+  EXPECT_NEAR(std::stod(by[baseline].at("stack_drift_max")),
+              std::stod(by["soft-step-4"].at("stack_drift_max")), 1e-3);
+  std::ifstream meta_file(dir / "r" / "metadata.json");
+  const nlohmann::json variants = nlohmann::json::parse(meta_file)["engines"]["rtp"]["variants"];
+  ASSERT_TRUE(variants.contains(baseline)) << variants.dump(1);
+  auto setting = [&](const std::string& variant, const std::string& name) {
+    for (const auto& s : variants[variant])
+      if (s["name"] == name) return s["value"].get<std::string>();
+    return std::string("(none)");
+  };
+  EXPECT_EQ(setting(baseline, "substeps"), "4");
+  EXPECT_EQ(setting(baseline, "relax iterations"), "1");
+  EXPECT_NE(setting(baseline, "instruction set").find("baseline"), std::string::npos);
+}
 #endif
 
 #ifdef PHYSBENCH_WORKERS_BUILT
