@@ -83,6 +83,86 @@ template <typename T, std::size_t N>
 struct VectorOf {
   using type [[gnu::vector_size(N * sizeof(T))]] = T;
 };
+#if defined(__SSE2__) && !defined(__AVX__)
+// The x86-64 baseline: 4 or 8 doubles (or their 64-bit mask lanes) are held as SSE2 registers of
+// two lanes, each operator applied to the halves. As GCC's vector types of 32 or 64 bytes a core
+// without AVX computes their comparisons, selects and shuffles a lane at a time through the stack
+// (comisd, seta, a store, and a wide load that waits on the narrow stores: the box pair's test
+// took 4 times its AVX-512 build's time); the halves compute the same IEEE operations lane by lane
+#define RTP_SIMD_SPLIT_DOUBLES 1
+template <typename T, std::size_t N>
+struct Split {
+  static_assert(sizeof(T) == 8 && N % 2 == 0);
+  static constexpr std::size_t kHalves = N / 2;
+  using Half [[gnu::vector_size(16)]] = T;
+  using MaskType = Split<LaneInt<T>, N>;
+  Half h[kHalves];
+  Split() = default;  // lanes undefined, as a scalar's; Split{} is all zero
+  constexpr Split(T x) {  // every lane x, so that scalars mix with packs
+    for (Half& half : h) half = Half{x, x};
+  }
+  template <typename... A>
+    requires(sizeof...(A) == N)
+  constexpr Split(A... a) {
+    const T lanes[N] = {T(a)...};
+    for (std::size_t k = 0; k < kHalves; ++k) h[k] = Half{lanes[2 * k], lanes[2 * k + 1]};
+  }
+  T operator[](std::size_t i) const { return h[i / 2][i % 2]; }
+  // (GCC's vector types alias their lane type)
+  T& operator[](std::size_t i) { return reinterpret_cast<T*>(h)[i]; }
+  template <typename R, typename F>
+  static R each(const Split& a, const Split& b, F f) {
+    R r;
+    for (std::size_t k = 0; k < kHalves; ++k) r.h[k] = f(a.h[k], b.h[k]);
+    return r;
+  }
+  friend Split operator+(Split a, Split b) { return each<Split>(a, b, std::plus<>()); }
+  friend Split operator-(Split a, Split b) { return each<Split>(a, b, std::minus<>()); }
+  friend Split operator*(Split a, Split b) { return each<Split>(a, b, std::multiplies<>()); }
+  friend Split operator/(Split a, Split b) { return each<Split>(a, b, std::divides<>()); }
+  friend Split operator-(Split a) {
+    return each<Split>(a, a, [](Half x, Half) { return -x; });
+  }
+  friend Split operator&(Split a, Split b) { return each<Split>(a, b, std::bit_and<>()); }
+  friend Split operator|(Split a, Split b) { return each<Split>(a, b, std::bit_or<>()); }
+  friend Split operator^(Split a, Split b) { return each<Split>(a, b, std::bit_xor<>()); }
+  friend Split operator~(Split a) {
+    return each<Split>(a, a, [](Half x, Half) { return ~x; });
+  }
+  Split& operator+=(Split b) { return *this = *this + b; }
+  Split& operator-=(Split b) { return *this = *this - b; }
+  Split& operator*=(Split b) { return *this = *this * b; }
+  Split& operator|=(Split b) { return *this = *this | b; }
+  Split& operator&=(Split b) { return *this = *this & b; }
+  friend MaskType operator<(Split a, Split b) { return each<MaskType>(a, b, std::less<>()); }
+  friend MaskType operator<=(Split a, Split b) { return each<MaskType>(a, b, std::less_equal<>()); }
+  friend MaskType operator>(Split a, Split b) { return each<MaskType>(a, b, std::greater<>()); }
+  friend MaskType operator>=(Split a, Split b) {
+    return each<MaskType>(a, b, std::greater_equal<>());
+  }
+  friend MaskType operator==(Split a, Split b) { return each<MaskType>(a, b, std::equal_to<>()); }
+  friend MaskType operator!=(Split a, Split b) {
+    return each<MaskType>(a, b, std::not_equal_to<>());
+  }
+};
+template <std::size_t N>
+  requires(N >= 4)
+struct VectorOf<double, N> {
+  using type = Split<double, N>;
+};
+template <std::size_t N>
+  requires(N >= 4)
+struct VectorOf<std::int64_t, N> {
+  using type = Split<std::int64_t, N>;
+};
+template <typename V>
+inline constexpr bool kSplit = false;
+template <typename T, std::size_t N>
+inline constexpr bool kSplit<Split<T, N>> = true;
+#else
+template <typename V>
+inline constexpr bool kSplit = false;
+#endif
 template <typename T, std::size_t N>
 using Pack = typename VectorOf<T, N>::type;
 template <typename T, std::size_t N>
@@ -168,7 +248,13 @@ using MaskOf = decltype(std::declval<V>() < std::declval<V>());
 template <typename To, typename From>
 To convert(const From& from) {
 #ifdef RTP_SIMD_VECTORS
-  return __builtin_convertvector(from, To);
+  if constexpr (kSplit<To> || kSplit<From>) {
+    To to;
+    for (std::size_t i = 0; i < kLanesOf<To>; ++i) to[i] = LaneOf<To>(from[i]);
+    return to;
+  } else {
+    return __builtin_convertvector(from, To);
+  }
 #else
   To to;
   for (std::size_t i = 0; i < kLanesOf<To>; ++i) to[i] = LaneOf<To>(from[i]);
@@ -221,7 +307,13 @@ inline Double8 load8(const double* p) { return load<Double8>(p); }
 template <typename M, typename V>
 V select(M m, V a, V b) {
 #ifdef RTP_SIMD_VECTORS
-  return m ? a : b;
+  if constexpr (kSplit<V>) {
+    V r;
+    for (std::size_t k = 0; k < V::kHalves; ++k) r.h[k] = m.h[k] ? a.h[k] : b.h[k];
+    return r;
+  } else {
+    return m ? a : b;
+  }
 #else
   V r;
   for (std::size_t i = 0; i < kLanesOf<V>; ++i) r[i] = m[i] ? a[i] : b[i];
@@ -234,7 +326,13 @@ template <typename To, typename From>
 To bits_as(From x) {
   static_assert(sizeof(To) == sizeof(From));
 #ifdef RTP_SIMD_VECTORS
-  return reinterpret_cast<To>(x);
+  if constexpr (kSplit<To>) {
+    To r;
+    for (std::size_t k = 0; k < To::kHalves; ++k) r.h[k] = reinterpret_cast<typename To::Half>(x.h[k]);
+    return r;
+  } else {
+    return reinterpret_cast<To>(x);
+  }
 #else
   To r;
   std::memcpy(&r, &x, sizeof r);
@@ -266,6 +364,15 @@ V extreme(V a, V b) {
 #if defined(RTP_SIMD_VECTORS) && defined(__AVX__)
   if constexpr (std::is_same_v<V, Double4> && Least) return __builtin_ia32_minpd256(a, b);
   if constexpr (std::is_same_v<V, Double4> && !Least) return __builtin_ia32_maxpd256(a, b);
+#endif
+#ifdef RTP_SIMD_SPLIT_DOUBLES
+  // (minpd and maxpd compute a < b ? a : b and a > b ? a : b, as the select does)
+  if constexpr (kSplit<V> && std::is_same_v<LaneOf<V>, double>) {
+    V r;
+    for (std::size_t k = 0; k < V::kHalves; ++k)
+      r.h[k] = Least ? _mm_min_pd(a.h[k], b.h[k]) : _mm_max_pd(a.h[k], b.h[k]);
+    return r;
+  }
 #endif
   return select(Least ? a < b : a > b, a, b);
 }
@@ -334,7 +441,10 @@ template <std::size_t... I, typename V>
 V shuffle(V x) {
   static_assert(sizeof...(I) == kLanesOf<V>);
 #ifdef RTP_SIMD_VECTORS
-  return __builtin_shuffle(x, MaskOf<V>{I...});
+  if constexpr (kSplit<V>)
+    return shuffle<I...>(x, x);
+  else
+    return __builtin_shuffle(x, MaskOf<V>{I...});
 #else
   return V{x[I]...};
 #endif
@@ -345,7 +455,24 @@ V shuffle(V x, V y) {
   constexpr std::size_t N = kLanesOf<V>;
   static_assert(sizeof...(I) == N);
 #ifdef RTP_SIMD_VECTORS
-  return __builtin_shuffle(x, y, MaskOf<V>{I...});
+  if constexpr (kSplit<V>) {
+    // each half of the result from the two halves that hold its lanes (shufpd)
+    using Half = typename V::Half;
+    constexpr std::size_t lanes[N] = {I...};
+    V r;
+    [&]<std::size_t... K>(std::index_sequence<K...>) {
+      auto half = [&](std::size_t lane) -> Half {
+        return lane < N ? x.h[lane / 2] : y.h[(lane - N) / 2];
+      };
+      ((r.h[K] = reinterpret_cast<Half>(_mm_shuffle_pd(
+            reinterpret_cast<__m128d>(half(lanes[2 * K])),
+            reinterpret_cast<__m128d>(half(lanes[2 * K + 1])),
+            int(lanes[2 * K] % 2 | (lanes[2 * K + 1] % 2) << 1)))), ...);
+    }(std::make_index_sequence<V::kHalves>{});
+    return r;
+  } else {
+    return __builtin_shuffle(x, y, MaskOf<V>{I...});
+  }
 #else
   return V{(I < N ? x[I % N] : y[I % N])...};
 #endif
@@ -384,6 +511,14 @@ unsigned lane_bits(M m) {
 #endif
 #if defined(RTP_SIMD_VECTORS) && defined(__SSE__)
   if constexpr (width == 4 && N == 4) return unsigned(_mm_movemask_ps(bits_as<Pack<float, 4>>(m)));
+#endif
+#ifdef RTP_SIMD_SPLIT_DOUBLES
+  if constexpr (kSplit<M>) {
+    unsigned bits = 0;
+    for (std::size_t k = 0; k < M::kHalves; ++k)
+      bits |= unsigned(_mm_movemask_pd(reinterpret_cast<__m128d>(m.h[k]))) << (2 * k);
+    return bits;
+  }
 #endif
 #if defined(RTP_SIMD_VECTORS) && defined(__AVX512F__)
   // the sign bits, by one compare into a mask register (a loop over the lanes extracts each)

@@ -3,7 +3,11 @@
 // portable, and for AVX2 and for AVX-512 where the machine runs them (engine/tests/CMakeLists.txt).
 #include <gtest/gtest.h>
 
+#include <bit>
+#include <cmath>
 #include <cstdint>
+#include <limits>
+#include <string>
 #include <vector>
 
 #include "simd.h"
@@ -76,3 +80,72 @@ TEST(Simd, RecordsGatherAndScatterAsALoopWould) {
 }
 
 }  // namespace
+
+// the narrow phase's 4 and 8 doubles: each operation gives what its lanes computed one at a time
+// give, with NaN, infinities and signed zeros among the lanes. On the x86-64 baseline these are
+// SSE2 halves (simd.h, Split): a half's shuffle immediate or mask bit in the wrong place shows here
+template <typename V>
+void double_packs_compute_as_their_lanes_do() {
+  using M = simd::MaskOf<V>;
+  constexpr std::size_t N = simd::kLanesOf<V>;
+  const double values[] = {1.5, -2.25, 0.0, -0.0, 3.0, std::numeric_limits<double>::infinity(),
+                           std::numeric_limits<double>::quiet_NaN(), -7.0, 1e-300, 2.0, -1.5,
+                           0.5};
+  constexpr std::size_t kValues = sizeof(values) / sizeof(values[0]);
+  auto same = [](double a, double b) {
+    return (std::isnan(a) && std::isnan(b)) || std::bit_cast<std::uint64_t>(a) == std::bit_cast<std::uint64_t>(b);
+  };
+  for (std::size_t shift = 0; shift < kValues; ++shift) {
+    V a, b;
+    for (std::size_t i = 0; i < N; ++i) {
+      a[i] = values[(i + shift) % kValues];
+      b[i] = values[(3 * i + 2 * shift + 1) % kValues];
+    }
+    const V sum = a + b, difference = a - b, product = a * b, quotient = a / b, negated = -a;
+    const V scaled = a * 2.0;
+    const M less = a < b, not_equal = a != b, greater_equal = a >= b;
+    const V chosen = simd::select(less, a, b), least = simd::min(a, b), largest = simd::max(a, b);
+    const V magnitude = simd::abs(a), flipped = simd::flip_where(a, greater_equal);
+    const unsigned bits = simd::lane_bits(less);
+    for (std::size_t i = 0; i < N; ++i) {
+      const double x = a[i], y = b[i];
+      const std::string at = "lane " + std::to_string(i) + " of " + std::to_string(x) + ", " +
+                             std::to_string(y);
+      EXPECT_TRUE(same(sum[i], x + y)) << at;
+      EXPECT_TRUE(same(difference[i], x - y)) << at;
+      EXPECT_TRUE(same(product[i], x * y)) << at;
+      EXPECT_TRUE(same(quotient[i], x / y)) << at;
+      EXPECT_TRUE(same(negated[i], -x)) << at;
+      EXPECT_TRUE(same(scaled[i], x * 2.0)) << at;
+      EXPECT_EQ(less[i], x < y ? -1 : 0) << at;
+      EXPECT_EQ(not_equal[i], x != y ? -1 : 0) << at;
+      EXPECT_EQ(greater_equal[i], x >= y ? -1 : 0) << at;
+      EXPECT_TRUE(same(chosen[i], x < y ? x : y)) << at;
+      EXPECT_TRUE(same(least[i], x < y ? x : y)) << at;
+      EXPECT_TRUE(same(largest[i], x > y ? x : y)) << at;
+      EXPECT_TRUE(same(magnitude[i], std::fabs(x))) << at;
+      EXPECT_TRUE(same(flipped[i], x >= y ? -x : x)) << at;
+      EXPECT_EQ((bits >> i) & 1u, x < y ? 1u : 0u) << at;
+    }
+    // the box test's rotate (lane 3 stays; lanes 0, 1, 2 take 1, 2, 0), its next, a transpose's
+    // pick from two packs
+    if constexpr (N == 4) {
+      const V turned = simd::shuffle<1, 2, 0, 3>(a);
+      const double first[4] = {a[1], a[2], a[0], a[3]};
+      for (std::size_t i = 0; i < 4; ++i) EXPECT_TRUE(same(turned[i], first[i])) << "lane " << i;
+      const V mixed = simd::shuffle<7, 0, 5, 2>(a, b);
+      const V next = simd::shuffle<1, 2, 3, 0>(a);
+      const double want[4] = {b[3], a[0], b[1], a[2]}, want_next[4] = {a[1], a[2], a[3], a[0]};
+      for (std::size_t i = 0; i < 4; ++i) {
+        EXPECT_TRUE(same(mixed[i], want[i])) << "lane " << i;
+        EXPECT_TRUE(same(next[i], want_next[i])) << "lane " << i;
+      }
+    }
+  }
+}
+
+TEST(Simd, DoublePacksComputeAsTheirLanesDo) {
+  if (!machine_runs_this_build()) GTEST_SKIP() << "this machine lacks the instructions";
+  double_packs_compute_as_their_lanes_do<simd::Double4>();
+  double_packs_compute_as_their_lanes_do<simd::Double8>();
+}
