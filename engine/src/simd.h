@@ -11,6 +11,8 @@
 //                           the compiler's own and an expression keeps its order of evaluation
 //                           (an overloaded operator's operands may be evaluated in either order,
 //                           which changes which product a multiply-add fuses where FMA is on).
+//                           4 and 8 doubles on the x86-64 baseline are the exception: Split, SSE2
+//                           halves with operators of their own (no FMA there to fuse).
 //                           Without SIMD they are structs of arrays with the same operators.
 //   Float16, Mask16         16 floats in one AVX-512 register and a 16-bit lane mask, for the
 //                           particle kernels, which run on cores found at run time to have
@@ -111,37 +113,48 @@ struct Split {
   // (GCC's vector types alias their lane type)
   T& operator[](std::size_t i) { return reinterpret_cast<T*>(h)[i]; }
   template <typename R, typename F>
-  static R each(const Split& a, const Split& b, F f) {
+  [[gnu::always_inline]] static R each(const Split& a, const Split& b, F f) {
     R r;
     for (std::size_t k = 0; k < kHalves; ++k) r.h[k] = f(a.h[k], b.h[k]);
     return r;
   }
+  [[gnu::always_inline]]
   friend Split operator+(Split a, Split b) { return each<Split>(a, b, std::plus<>()); }
+  [[gnu::always_inline]]
   friend Split operator-(Split a, Split b) { return each<Split>(a, b, std::minus<>()); }
+  [[gnu::always_inline]]
   friend Split operator*(Split a, Split b) { return each<Split>(a, b, std::multiplies<>()); }
+  [[gnu::always_inline]]
   friend Split operator/(Split a, Split b) { return each<Split>(a, b, std::divides<>()); }
-  friend Split operator-(Split a) {
+  [[gnu::always_inline]] friend Split operator-(Split a) {
     return each<Split>(a, a, [](Half x, Half) { return -x; });
   }
+  [[gnu::always_inline]]
   friend Split operator&(Split a, Split b) { return each<Split>(a, b, std::bit_and<>()); }
+  [[gnu::always_inline]]
   friend Split operator|(Split a, Split b) { return each<Split>(a, b, std::bit_or<>()); }
+  [[gnu::always_inline]]
   friend Split operator^(Split a, Split b) { return each<Split>(a, b, std::bit_xor<>()); }
-  friend Split operator~(Split a) {
+  [[gnu::always_inline]] friend Split operator~(Split a) {
     return each<Split>(a, a, [](Half x, Half) { return ~x; });
   }
-  Split& operator+=(Split b) { return *this = *this + b; }
-  Split& operator-=(Split b) { return *this = *this - b; }
-  Split& operator*=(Split b) { return *this = *this * b; }
-  Split& operator|=(Split b) { return *this = *this | b; }
-  Split& operator&=(Split b) { return *this = *this & b; }
+  [[gnu::always_inline]] Split& operator+=(Split b) { return *this = *this + b; }
+  [[gnu::always_inline]] Split& operator-=(Split b) { return *this = *this - b; }
+  [[gnu::always_inline]] Split& operator*=(Split b) { return *this = *this * b; }
+  [[gnu::always_inline]] Split& operator|=(Split b) { return *this = *this | b; }
+  [[gnu::always_inline]] Split& operator&=(Split b) { return *this = *this & b; }
+  [[gnu::always_inline]]
   friend MaskType operator<(Split a, Split b) { return each<MaskType>(a, b, std::less<>()); }
+  [[gnu::always_inline]]
   friend MaskType operator<=(Split a, Split b) { return each<MaskType>(a, b, std::less_equal<>()); }
+  [[gnu::always_inline]]
   friend MaskType operator>(Split a, Split b) { return each<MaskType>(a, b, std::greater<>()); }
-  friend MaskType operator>=(Split a, Split b) {
+  [[gnu::always_inline]] friend MaskType operator>=(Split a, Split b) {
     return each<MaskType>(a, b, std::greater_equal<>());
   }
+  [[gnu::always_inline]]
   friend MaskType operator==(Split a, Split b) { return each<MaskType>(a, b, std::equal_to<>()); }
-  friend MaskType operator!=(Split a, Split b) {
+  [[gnu::always_inline]] friend MaskType operator!=(Split a, Split b) {
     return each<MaskType>(a, b, std::not_equal_to<>());
   }
 };
@@ -305,7 +318,7 @@ inline Double8 load8(const double* p) { return load<Double8>(p); }
 
 // a where m is set, b elsewhere
 template <typename M, typename V>
-V select(M m, V a, V b) {
+[[gnu::always_inline]] inline V select(M m, V a, V b) {
 #ifdef RTP_SIMD_VECTORS
   if constexpr (kSplit<V>) {
     V r;
@@ -323,12 +336,13 @@ V select(M m, V a, V b) {
 
 // the lanes' bits reinterpreted: a pack as its mask type and back
 template <typename To, typename From>
-To bits_as(From x) {
+[[gnu::always_inline]] inline To bits_as(From x) {
   static_assert(sizeof(To) == sizeof(From));
 #ifdef RTP_SIMD_VECTORS
   if constexpr (kSplit<To>) {
     To r;
-    for (std::size_t k = 0; k < To::kHalves; ++k) r.h[k] = reinterpret_cast<typename To::Half>(x.h[k]);
+    for (std::size_t k = 0; k < To::kHalves; ++k)
+      r.h[k] = reinterpret_cast<typename To::Half>(x.h[k]);
     return r;
   } else {
     return reinterpret_cast<To>(x);
@@ -342,7 +356,7 @@ To bits_as(From x) {
 
 // |x| by clearing the sign bits: no compare and select
 template <typename V>
-V abs(V x) {
+[[gnu::always_inline]] inline V abs(V x) {
   using M = MaskOf<V>;
   const M magnitude = splat<M>(std::numeric_limits<LaneOf<M>>::max());
   return bits_as<V>(bits_as<M>(x) & magnitude);
@@ -350,7 +364,7 @@ V abs(V x) {
 
 // −x where m is set, by the sign bit (a compiler branches on a scalar condition's ?:)
 template <typename V>
-V flip_where(V x, MaskOf<V> m) {
+[[gnu::always_inline]] inline V flip_where(V x, MaskOf<V> m) {
   using M = MaskOf<V>;
   const M sign = splat<M>(std::numeric_limits<LaneOf<M>>::min());
   return bits_as<V>(bits_as<M>(x) ^ (m & sign));
@@ -360,7 +374,7 @@ V flip_where(V x, MaskOf<V> m) {
 // the one instruction that computes exactly that where there is one (docs/narrowphase.md, code
 // generation)
 template <bool Least, typename V>
-V extreme(V a, V b) {
+[[gnu::always_inline]] inline V extreme(V a, V b) {
 #if defined(RTP_SIMD_VECTORS) && defined(__AVX__)
   if constexpr (std::is_same_v<V, Double4> && Least) return __builtin_ia32_minpd256(a, b);
   if constexpr (std::is_same_v<V, Double4> && !Least) return __builtin_ia32_maxpd256(a, b);
@@ -377,11 +391,11 @@ V extreme(V a, V b) {
   return select(Least ? a < b : a > b, a, b);
 }
 template <typename V>
-V min(V a, V b) {
+[[gnu::always_inline]] inline V min(V a, V b) {
   return extreme<true>(a, b);
 }
 template <typename V>
-V max(V a, V b) {
+[[gnu::always_inline]] inline V max(V a, V b) {
   return extreme<false>(a, b);
 }
 
@@ -438,7 +452,7 @@ void scatter(LaneOf<V>* base, MaskOf<V> index, V value, MaskOf<V> where) {
 
 // lanes rearranged: lane i of the result is lane I_i of x
 template <std::size_t... I, typename V>
-V shuffle(V x) {
+[[gnu::always_inline]] inline V shuffle(V x) {
   static_assert(sizeof...(I) == kLanesOf<V>);
 #ifdef RTP_SIMD_VECTORS
   if constexpr (kSplit<V>)
@@ -451,7 +465,7 @@ V shuffle(V x) {
 }
 // lanes from two packs: I < N picks lane I of x, I ≥ N lane I − N of y
 template <std::size_t... I, typename V>
-V shuffle(V x, V y) {
+[[gnu::always_inline]] inline V shuffle(V x, V y) {
   constexpr std::size_t N = kLanesOf<V>;
   static_assert(sizeof...(I) == N);
 #ifdef RTP_SIMD_VECTORS
@@ -501,7 +515,7 @@ inline void prefetch(const void* data, std::size_t bytes) {
 // bit i set where lane i is: by the instruction that gathers the sign bits where the build has
 // one, not lane by lane
 template <typename M>
-unsigned lane_bits(M m) {
+[[gnu::always_inline]] inline unsigned lane_bits(M m) {
   constexpr std::size_t N = kLanesOf<M>, width = sizeof(LaneOf<M>);
 #if defined(RTP_SIMD_VECTORS) && defined(__AVX__)
   if constexpr (width == 8 && N == 4)
