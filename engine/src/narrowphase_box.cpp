@@ -13,8 +13,8 @@
 namespace rtp {
 // Compiled once more in each copy of the contact pipeline (engine/CMakeLists.txt), whose narrow
 // phase calls its own (contacts.h, box_pairs): a box pair's test then runs at the copy's
-// instruction set, not the baseline's, where its 4-lane doubles are two SSE2 registers each and
-// spill (docs/solver.md, "One binary, the widest passes the core has")
+// instruction set, its 4-lane doubles one register, not the baseline's two SSE2 halves
+// (docs/solver.md, "One binary, the widest passes the core has")
 #ifdef RTP_CONTACT_ISA_ENTRY
 inline namespace RTP_CONTACT_ISA_NAMESPACE {
 namespace box_pairs {

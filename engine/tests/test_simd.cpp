@@ -1,5 +1,6 @@
 // The SIMD vocabulary's record moves (engine/src/simd.h): whichever way a build moves them —
-// loads and transposes, gathers, or lane by lane — the same floats land in the same places. Built
+// loads and transposes, gathers, or lane by lane — the same floats land in the same places; and
+// its packs of doubles compute what their lanes do one at a time. Built
 // portable, and for AVX2 and for AVX-512 where the machine runs them (engine/tests/CMakeLists.txt).
 #include <gtest/gtest.h>
 
