@@ -93,14 +93,16 @@ void ContactPipeline::add_body(BodyId id, const ShapeDef& def, double friction,
       break;
     case BodyShape::Box: {
       const Vec3 half = def.half_extents.array() + grow;
-      // boxes of one size share one hull
-      std::uint32_t hull = kNoHull;
-      for (const BodyShapeData& other : shapes_)
-        if (other.kind == BodyShape::Box && other.shape.half_extents == half)
-          hull = other.shape.hull;
+      // boxes of one size share one hull, found by its size (a search through every shape made a
+      // world of n boxes in n² steps: 6 % of a 1.5 s run of many-pyramids' 10,780). A size that
+      // is not finite is never looked up: make_box_hull refuses it
+      const std::array<double, 3> size = {half.x(), half.y(), half.z()};
+      const auto found = half.allFinite() ? box_hulls_.find(size) : box_hulls_.end();
+      std::uint32_t hull = found != box_hulls_.end() ? found->second : kNoHull;
       if (hull == kNoHull) {
         hull = std::uint32_t(hulls_.size());
         hulls_.push_back(make_box_hull(half));
+        box_hulls_.emplace(size, hull);
       }
       data.shape = Shape::box(hull, half);
       data.reach = def.half_extents.norm();

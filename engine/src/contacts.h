@@ -19,7 +19,9 @@
 // step's start, as Box2D, Jolt and Bullet do; the world converts back to momenta at the end.
 #pragma once
 
+#include <array>
 #include <cstdint>
+#include <map>
 #include <memory>
 #include <span>
 #include <utility>
@@ -201,6 +203,7 @@ class ContactPipeline final : public ContactStages {
   int threads_ = 1;  // this step's team (set_threads): settings_.threads, or fewer on a busy machine
   std::vector<BodyShapeData> shapes_;  // per body
   std::vector<ConvexHull> hulls_;      // the grown hulls: the pool Shape::hull indexes
+  std::map<std::array<double, 3>, std::uint32_t> box_hulls_;  // a grown box size's hull
   std::unique_ptr<BroadPhase> broad_phase_;
   std::vector<BodyId> proxy_body_;     // proxy id → body
   std::vector<std::uint8_t> proxy_static_;  // proxy id → 1 for a static body's
