@@ -1,7 +1,8 @@
 // rtp's SIMD vocabulary: the lane types the engine computes in, and the few operations on them.
 //
 // This is the only file that knows instruction sets: no other source has an instruction-set #if,
-// a target attribute or an intrinsic. Two kinds of type:
+// a target attribute or an intrinsic (which is why it is long: each operation's every instruction
+// set, side by side, so that a reader compares them in one place). Two kinds of type:
 //
 //   Pack<T, N>, Mask<T, N>  N lanes of T, and a mask of the same shape whose lanes are all ones
 //                           or zero: the narrow phase's 4 and 8 doubles and the broad phase's
