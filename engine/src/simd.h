@@ -12,8 +12,8 @@
 //                           the compiler's own and an expression keeps its order of evaluation
 //                           (an overloaded operator's operands may be evaluated in either order,
 //                           which changes which product a multiply-add fuses where FMA is on).
-//                           4 and 8 doubles on the x86-64 baseline are the exception: Split, SSE2
-//                           halves with operators of their own (no FMA there to fuse).
+//                           4 and 8 doubles and 8 floats on the x86-64 baseline are the exception:
+//                           Split, SSE2 halves with operators of their own (no FMA there to fuse).
 //                           Without SIMD they are structs of arrays with the same operators.
 //   Float16, Mask16         16 floats in one AVX-512 register and a 16-bit lane mask, for the
 //                           particle kernels, which run on cores found at run time to have
@@ -87,30 +87,35 @@ struct VectorOf {
   using type [[gnu::vector_size(N * sizeof(T))]] = T;
 };
 #if defined(__SSE2__) && !defined(__AVX__)
-// The x86-64 baseline: 4 or 8 doubles (or their 64-bit mask lanes) are held as SSE2 registers of
-// two lanes, each operator applied to the halves. As GCC's vector types of 32 or 64 bytes a core
+// The x86-64 baseline: 4 or 8 doubles, 8 floats (and their mask lanes) are held as SSE2 registers
+// of 16 bytes, each operator applied to the halves. As GCC's vector types of 32 or 64 bytes a core
 // without AVX computes their comparisons, selects and shuffles a lane at a time through the stack
 // (comisd, seta, a store, and a wide load that waits on the narrow stores: the box pair's test
 // took 4 times its AVX-512 build's time); the halves compute the same IEEE operations lane by lane
-#define RTP_SIMD_SPLIT_DOUBLES 1
+#define RTP_SIMD_SPLIT 1
 template <typename T, std::size_t N>
 struct Split {
-  static_assert(sizeof(T) == 8 && N % 2 == 0);
-  static constexpr std::size_t kHalves = N / 2;
+  static constexpr std::size_t kHalfLanes = 16 / sizeof(T);
+  static_assert(N % kHalfLanes == 0);
+  static constexpr std::size_t kHalves = N / kHalfLanes;
   using Half [[gnu::vector_size(16)]] = T;
   using MaskType = Split<LaneInt<T>, N>;
   Half h[kHalves];
   Split() = default;  // lanes undefined, as a scalar's; Split{} is all zero
   constexpr Split(T x) {  // every lane x, so that scalars mix with packs
-    for (Half& half : h) half = Half{x, x};
+    [&]<std::size_t... J>(std::index_sequence<J...>) {
+      for (Half& half : h) half = Half{((void)J, x)...};
+    }(std::make_index_sequence<kHalfLanes>{});
   }
   template <typename... A>
     requires(sizeof...(A) == N)
   constexpr Split(A... a) {
     const T lanes[N] = {T(a)...};
-    for (std::size_t k = 0; k < kHalves; ++k) h[k] = Half{lanes[2 * k], lanes[2 * k + 1]};
+    [&]<std::size_t... J>(std::index_sequence<J...>) {
+      for (std::size_t k = 0; k < kHalves; ++k) h[k] = Half{lanes[kHalfLanes * k + J]...};
+    }(std::make_index_sequence<kHalfLanes>{});
   }
-  T operator[](std::size_t i) const { return h[i / 2][i % 2]; }
+  T operator[](std::size_t i) const { return h[i / kHalfLanes][i % kHalfLanes]; }
   // (GCC's vector types alias their lane type)
   T& operator[](std::size_t i) { return reinterpret_cast<T*>(h)[i]; }
   template <typename R, typename F>
@@ -168,6 +173,16 @@ template <std::size_t N>
   requires(N >= 4)
 struct VectorOf<std::int64_t, N> {
   using type = Split<std::int64_t, N>;
+};
+template <std::size_t N>
+  requires(N >= 8)
+struct VectorOf<float, N> {
+  using type = Split<float, N>;
+};
+template <std::size_t N>
+  requires(N >= 8)
+struct VectorOf<std::int32_t, N> {
+  using type = Split<std::int32_t, N>;
 };
 template <typename V>
 inline constexpr bool kSplit = false;
@@ -262,6 +277,18 @@ using MaskOf = decltype(std::declval<V>() < std::declval<V>());
 template <typename To, typename From>
 To convert(const From& from) {
 #ifdef RTP_SIMD_VECTORS
+#ifdef RTP_SIMD_SPLIT
+  // four floats to four doubles and back, a half at a time (cvtps2pd rounds nothing; cvtpd2ps
+  // rounds to nearest, as a scalar conversion does)
+  if constexpr (std::is_same_v<From, Pack<float, 4>> && std::is_same_v<To, Split<double, 4>>) {
+    To to;
+    to.h[0] = _mm_cvtps_pd(from);
+    to.h[1] = _mm_cvtps_pd(_mm_movehl_ps(from, from));
+    return to;
+  }
+  if constexpr (std::is_same_v<From, Split<double, 4>> && std::is_same_v<To, Pack<float, 4>>)
+    return _mm_movelh_ps(_mm_cvtpd_ps(from.h[0]), _mm_cvtpd_ps(from.h[1]));
+#endif
   if constexpr (kSplit<To> || kSplit<From>) {
     To to;
     for (std::size_t i = 0; i < kLanesOf<To>; ++i) to[i] = LaneOf<To>(from[i]);
@@ -380,7 +407,7 @@ template <bool Least, typename V>
   if constexpr (std::is_same_v<V, Double4> && Least) return __builtin_ia32_minpd256(a, b);
   if constexpr (std::is_same_v<V, Double4> && !Least) return __builtin_ia32_maxpd256(a, b);
 #endif
-#ifdef RTP_SIMD_SPLIT_DOUBLES
+#ifdef RTP_SIMD_SPLIT
   // (minpd and maxpd compute a < b ? a : b and a > b ? a : b, as the select does)
   if constexpr (kSplit<V> && std::is_same_v<LaneOf<V>, double>) {
     V r;
@@ -470,7 +497,9 @@ template <std::size_t... I, typename V>
   constexpr std::size_t N = kLanesOf<V>;
   static_assert(sizeof...(I) == N);
 #ifdef RTP_SIMD_VECTORS
-  if constexpr (kSplit<V>) {
+  if constexpr (kSplit<V> && sizeof(LaneOf<V>) != 8) {
+    return V{(I < N ? x[I % N] : y[I % N])...};
+  } else if constexpr (kSplit<V>) {
     // each half of the result from the two halves that hold its lanes (shufpd)
     using Half = typename V::Half;
     constexpr std::size_t lanes[N] = {I...};
@@ -527,11 +556,17 @@ template <typename M>
 #if defined(RTP_SIMD_VECTORS) && defined(__SSE__)
   if constexpr (width == 4 && N == 4) return unsigned(_mm_movemask_ps(bits_as<Pack<float, 4>>(m)));
 #endif
-#ifdef RTP_SIMD_SPLIT_DOUBLES
-  if constexpr (kSplit<M>) {
+#ifdef RTP_SIMD_SPLIT
+  if constexpr (kSplit<M> && width == 8) {
     unsigned bits = 0;
     for (std::size_t k = 0; k < M::kHalves; ++k)
       bits |= unsigned(_mm_movemask_pd(reinterpret_cast<__m128d>(m.h[k]))) << (2 * k);
+    return bits;
+  }
+  if constexpr (kSplit<M> && width == 4) {
+    unsigned bits = 0;
+    for (std::size_t k = 0; k < M::kHalves; ++k)
+      bits |= unsigned(_mm_movemask_ps(reinterpret_cast<__m128>(m.h[k]))) << (4 * k);
     return bits;
   }
 #endif
@@ -664,6 +699,18 @@ template <typename V>
     return;
   }
 #endif
+#ifdef RTP_SIMD_SPLIT
+  if constexpr (kSplit<V>) {
+    // a half's four records at a time, as four lanes are (above)
+    using Q = Pack<float, 4>;
+    for (std::size_t k = 0; k < V::kHalves; ++k) {
+      Q half_rows[8];
+      gather_records<Q>(base, offset.h[k], half_rows);
+      for (int r = 0; r < 8; ++r) rows[r].h[k] = half_rows[r];
+    }
+    return;
+  }
+#endif
   for (int k = 0; k < 8; ++k) rows[k] = gather<V>(base + k, offset);
 }
 
@@ -749,6 +796,17 @@ template <typename V, std::size_t R>
         _mm_storeu_ps(base + at[i] + 4, p[i]);
       else
         _mm_storel_pi(reinterpret_cast<__m64*>(base + at[i] + 4), p[i]);
+    }
+    return;
+  }
+#endif
+#ifdef RTP_SIMD_SPLIT
+  if constexpr (kSplit<V>) {
+    using Q = Pack<float, 4>;
+    for (std::size_t k = 0; k < V::kHalves; ++k) {
+      Q half_rows[R];
+      for (std::size_t r = 0; r < R; ++r) half_rows[r] = rows[r].h[k];
+      scatter_records<Q>(base, offset.h[k], half_rows, where.h[k]);
     }
     return;
   }
