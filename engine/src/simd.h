@@ -164,25 +164,11 @@ struct Split {
     return each<MaskType>(a, b, std::not_equal_to<>());
   }
 };
-template <std::size_t N>
-  requires(N >= 4)
-struct VectorOf<double, N> {
-  using type = Split<double, N>;
-};
-template <std::size_t N>
-  requires(N >= 4)
-struct VectorOf<std::int64_t, N> {
-  using type = Split<std::int64_t, N>;
-};
-template <std::size_t N>
-  requires(N >= 8)
-struct VectorOf<float, N> {
-  using type = Split<float, N>;
-};
-template <std::size_t N>
-  requires(N >= 8)
-struct VectorOf<std::int32_t, N> {
-  using type = Split<std::int32_t, N>;
+// (every pack wider than an SSE2 register)
+template <typename T, std::size_t N>
+  requires(N * sizeof(T) > 16)
+struct VectorOf<T, N> {
+  using type = Split<T, N>;
 };
 template <typename V>
 inline constexpr bool kSplit = false;
