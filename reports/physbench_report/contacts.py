@@ -150,14 +150,38 @@ def drift_cost_views(results: pd.DataFrame) -> list[dict]:
     return sections
 
 
+# a stack's verdicts from the worst to the best (docs/metrics.md, "Verdicts")
+STACK_VERDICT_RANK = {"collapsed": 0, "sinks": 1, "drifts": 2, "settles": 3, "stands": 4}
+
+
+def no_worse(mine: pd.Series, theirs: pd.Series) -> bool:
+    """Whether one stack row is at least as accurate as another on every measure both have: a
+    verdict no lower, and drift, the top's height change (either way) and the final penetration
+    no larger. A measure missing from either row is not compared; an unknown verdict never is."""
+    rank = STACK_VERDICT_RANK.get(mine.get("contact_verdict")), STACK_VERDICT_RANK.get(theirs.get("contact_verdict"))
+    if rank[0] is None or rank[1] is None or rank[0] < rank[1]:
+        return False
+    for column, size in (("stack_drift_max", float), ("top_height_change", abs), ("penetration_final", float)):
+        a, b = mine.get(column), theirs.get(column)
+        if a is None or b is None or pd.isna(a) or pd.isna(b):
+            continue
+        if size(a) > size(b):
+            return False
+    return True
+
+
 def best_configurations(results: pd.DataFrame, paired=None) -> list[dict]:
     """Per stack scenario, each engine read at its best knobs (issue 38's rule: no claim rests on an
     unequal setting): every row of the engine counts — each variant at its own settings and at
     every swept substep or iteration count. Per engine: its defaults' verdict and ms per step; the
     cheapest configuration whose verdict is `stands`, its ms and drift, and how many times rtp's
     cheapest standing configuration is faster (below 1: slower); and the least drift it reaches
-    within the ms of rtp's default. Engines with no standing configuration say so. One thread
-    each: rtp's two-thread variants are left out, as every peer runs on one. With `paired`
+    within the ms of rtp's default. Engines with no standing configuration say so. And, where no
+    configuration stands, the fair reading still holds: against every configuration of a peer,
+    rtp's cheapest configuration no less accurate (`no_worse`), the peer's time over rtp's; the
+    least of those ratios is the peer's best showing (`matched`; `matched_baseline` against rtp at
+    the baseline instruction set), and a peer configuration rtp matches with none is named. One
+    thread each: rtp's two-thread variants are left out, as every peer runs on one. With `paired`
     (rounds.PairedRatios) the ratio is read round by round, with its 95 % interval."""
     defaults = CONTACT_VIEWS["each engine's defaults"]
     sections = []
@@ -192,6 +216,45 @@ def best_configurations(results: pd.DataFrame, paired=None) -> list[dict]:
                 return format_ratio(interval)
             return fmt(best["ms"] / against["ms"])
 
+        def ratio_of(slower, faster_row):
+            """slower's ms over faster_row's: the paired median and interval where both were timed
+            in rounds, else one run's ratio (the interval's ends equal to it)"""
+            interval = paired.ratio(name, float(slower["dt"]), slower["label"], faster_row["label"]) \
+                if paired and slower["label"] != faster_row["label"] else None
+            if interval is not None:
+                return interval
+            value = slower["ms"] / faster_row["ms"]
+            return dict(median=value, lo=value, hi=value)
+
+        def matched(who: str, against: str, default) -> str:
+            """every ok configuration of `who` against `against`'s cheapest no less accurate one
+            (the cheapest as the two are timed in the same rounds, not by one run's time): the
+            least ratio (the peer's best showing), the ratio at the peer's defaults, and the
+            configurations none matches"""
+            theirs = ok[(ok["who"] == who) & ok["stack_drift_max"].notna()]
+            mine = ok[(ok["who"] == against) & ok["stack_drift_max"].notna()]
+            least, at_default, unmatched = None, None, []
+            for index, q in theirs.iterrows():
+                ratios = [(ratio_of(q, r), q["label"], r["label"]) for _, r in mine.iterrows() if no_worse(r, q)]
+                if not ratios:
+                    unmatched.append(q["label"])
+                    continue
+                r = max(ratios, key=lambda x: x[0]["median"])
+                if least is None or r[0]["median"] < least[0]["median"]:
+                    least = r
+                if default is not None and index == default.name:
+                    at_default = r
+
+            def said(r):
+                text = format_ratio(r[0]) if r[0]["lo"] != r[0]["hi"] else fmt(r[0]["median"])
+                return f"{text}: {r[1]} against {r[2]}"
+            parts = [said(least)] if least is not None else []
+            if at_default is not None and at_default is not least:
+                parts.append("at its defaults " + said(at_default))
+            if unmatched:
+                parts.append("none as accurate as " + ", ".join(unmatched))
+            return "; ".join(parts)
+
         swept = rows.apply(lambda r: pd.notna(r.get("iterations")) or pd.notna(r.get("substeps")), axis=1)
         rtp_default = rows[(rows["engine"] == "rtp") & (rows["variant"] == defaults["rtp"]) & ~swept]
         rtp_ms = rtp_default["ms"].iloc[0] if not rtp_default.empty else float("nan")
@@ -219,7 +282,10 @@ def best_configurations(results: pd.DataFrame, paired=None) -> list[dict]:
                 best_drift=fmt(best["stack_drift_max"]) if best is not None else "",
                 ratio=faster(best, rtp_best),
                 ratio_baseline=faster(best, rtp_base_best) if rtp_base_best is not None else "",
+                matched="" if who.startswith("rtp") else matched(who, "rtp", default),
+                matched_baseline=(matched(who, rtp_base_whos[0], default)
+                                  if rtp_base_whos and not who.startswith("rtp") else ""),
                 within=(f"{fmt(least['stack_drift_max'])} m ({least['label']})" if least is not None else "")))
         sections.append(dict(scenario=name, rows=table, rtp_ms=fmt(rtp_ms),
-                             baseline=rtp_base_best["who"] if rtp_base_best is not None else None))
+                             baseline=rtp_base_whos[0] if rtp_base_whos else None))
     return sections

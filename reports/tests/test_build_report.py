@@ -413,6 +413,49 @@ def test_best_configurations_read_every_knob_and_name_the_cheapest_that_stands()
     assert by_engine["jolt"]["best"] == "none stands" and by_engine["jolt"]["ratio"] == ""
 
 
+def test_no_worse_accuracy_reads_every_peer_configuration_against_rtps_cheapest_as_accurate():
+    # no configuration stands, so "cheapest that stands" says nothing; the fair reading still does.
+    # Box3D's default (2 ms, sinks, 0.28 m) is matched by rtp's 2-substep row (1 ms, sinks, less
+    # drift, less top change, less final penetration) but not by its 1-substep row, which is
+    # faster but penetrates deeper; Box3D's 8-substep row (4 ms, sinks) is matched by rtp's
+    # default (2 ms, settles) and better by its 2-substep row (1 ms); Box3D's collapsing 1-substep
+    # row (0.75 ms) by rtp's sinking 1-substep row (0.5 ms), its best showing
+    row = knob_row
+    rows = pd.DataFrame([
+        row("rtp", "soft-step", 2.0, 6e-3, "settles"),
+        row("rtp", "soft-step", 1.0, 0.09, "sinks", substeps=2),
+        row("rtp", "soft-step", 0.5, 0.20, "sinks", substeps=1),
+        row("box3d", "default", 2.0, 0.28, "sinks"),
+        row("box3d", "default", 4.0, 0.30, "sinks", substeps=8),
+        row("box3d", "default", 0.75, 0.60, "collapsed", substeps=1),
+        row("box3d", "default", 9.0, 1e-3, "stands", substeps=16),
+    ])
+    top = {"rtp/soft-step": -0.04, "rtp/soft-step substeps=2": -0.65, "rtp/soft-step substeps=1": -0.9,
+           "box3d/default": -0.72, "box3d/default substeps=8": -0.67, "box3d/default substeps=1": -3.1,
+           "box3d/default substeps=16": -1e-3}
+    sunk = {"rtp/soft-step": 0.002, "rtp/soft-step substeps=2": 0.015, "rtp/soft-step substeps=1": 0.05,
+            "box3d/default": 0.02, "box3d/default substeps=8": 0.035, "box3d/default substeps=1": 0.11,
+            "box3d/default substeps=16": 1e-3}
+    rows["top_height_change"] = rows["label"].map(top)
+    rows["penetration_final"] = rows["label"].map(sunk)
+    (section,) = contacts.best_configurations(rows)
+    box3d = {r["engine"]: r for r in section["rows"]}["box3d"]
+    # the least ratio: the 1-substep row (0.75 ms) against rtp's (0.5 ms); at its defaults 2 ms
+    # against rtp's 2-substep 1 ms; and its standing row is one rtp does not match
+    assert box3d["matched"] == ("1.5: box3d/default substeps=1 against rtp/soft-step substeps=1; "
+                                "at its defaults 2: box3d/default against rtp/soft-step substeps=2; "
+                                "none as accurate as box3d/default substeps=16")
+    # each measure decides alone: a settled row with more drift than a sinking one is not as accurate
+    settles = pd.Series(dict(contact_verdict="settles", stack_drift_max=0.3, top_height_change=-0.01,
+                             penetration_final=0.001))
+    sinks = pd.Series(dict(contact_verdict="sinks", stack_drift_max=0.28, top_height_change=-0.7,
+                           penetration_final=0.02))
+    assert not contacts.no_worse(settles, sinks) and not contacts.no_worse(sinks, settles)
+    level = settles.copy()
+    level["stack_drift_max"] = 0.28
+    assert contacts.no_worse(level, sinks) and not contacts.no_worse(sinks, level)
+
+
 def test_rtp_at_the_baseline_instruction_set_is_read_apart_from_its_native_build():
     # rtp's native build stands at 1 ms, its baseline build (soft-step-x86-64) at 3 ms, Bullet at 2:
     # rtp's own cheapest stays the native one (the baseline row, faster or slower, is never
