@@ -36,6 +36,8 @@ std::map<std::string, std::function<void(rtp::ContactSettings&, double)>> settin
       {"max_relax", [](rtp::ContactSettings& s, double v) { s.max_relax_iterations = int(v); }},
       {"recovery_relax",
        [](rtp::ContactSettings& s, double v) { s.recovery_relax_iterations = int(v); }},
+      {"recovery_position",
+       [](rtp::ContactSettings& s, double v) { s.recovery_position_iterations = int(v); }},
       {"relax_tolerance", [](rtp::ContactSettings& s, double v) { s.relax_tolerance = v; }},
       {"hertz", [](rtp::ContactSettings& s, double v) { s.contact_hertz = v; }},
       {"zeta", [](rtp::ContactSettings& s, double v) { s.damping_ratio = v; }},

@@ -59,6 +59,7 @@ std::optional<rtp::ContactSettings> contact_settings_for(const std::string& vari
     settings.relax_iterations = 1;
     settings.max_relax_iterations = 1;  // Box2D's one pass, never more
     settings.recovery_relax_iterations = 1;
+    settings.recovery_position_iterations = 0;  // Box2D pushes out by velocity alone
     settings.max_push_speed = 3.0;
   } else if (base == "sequential-impulse") {
     settings.solver = rtp::ContactSolver::SequentialImpulse;
@@ -279,6 +280,12 @@ EngineInfo rtp_engine_info() {
                            std::to_string(c.recovery_relax_iterations),
                            "per substep of a step whose deepest overlap is more than the push-out "
                            "removes in it (boxes spawned into each other)"});
+        table.push_back({"position passes recovering",
+                         std::to_string(c.recovery_position_iterations),
+                         c.recovery_position_iterations > 0
+                             ? "a step recovering from an overlap first moves the poses apart "
+                               "where they overlap deeper than the push-out removes in the step"
+                             : "none: overlaps are pushed out by velocity alone, as Box2D v3's"});
         table.push_back({"push-out speed", number(c.max_push_speed) + " m/s",
                          "the fastest a contact pushes penetrating bodies apart"});
         table.push_back({"contact stiffness",

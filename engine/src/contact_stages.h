@@ -59,6 +59,7 @@ class ContactStages {
                              const Vec3& gravity) = 0;
   virtual void load_bodies(std::span<const BodyState> states,
                            std::span<const BodyMass> masses) = 0;
+  virtual void project_overlaps(std::span<BodyState> states, double depth, int passes) = 0;
   virtual void prepare(const Vec3& gravity, double h) = 0;
   virtual void warm_start(bool first_substep = true) = 0;
   virtual void end_substep() = 0;

@@ -152,6 +152,11 @@ class ContactPipeline final : public ContactStages {
   // returns whether every point's normal velocity changed by under `tolerance` (m/s) in the pass
   // (a relax pass's, bias false; true for a biased pass or without a tolerance: nothing is
   // tracked then)
+  // a step recovering from an overlap: `passes` Gauss–Seidel passes over the contacts' points,
+  // in order, each moving the two bodies' poses apart along the normal by a share of the point's
+  // overlap beyond `depth` (the push-out's reach in the step), no velocity changed; each
+  // point's separation follows its bodies' moves, so the solve pushes out only the rest
+  void project_overlaps(std::span<BodyState> states, double depth, int passes) override;
   bool solve(double h, bool bias, bool backwards = false, double tolerance = 0.0) override;
   void solve_seed(double dt) override;
   // the positions of the first `count` bodies by their velocities over h, their orientations by

@@ -56,6 +56,7 @@ World::World(Vec3 gravity, Integrator integrator, ContactSettings contacts)
       active_threads_(std::max(1, contacts.threads)) {
   if (contacts.substeps < 1 || contacts.velocity_iterations < 0 || contacts.relax_iterations < 0 ||
       contacts.max_relax_iterations < 0 || contacts.recovery_relax_iterations < 0 ||
+      contacts.recovery_position_iterations < 0 ||
       contacts.restitution_iterations < 0 ||
       contacts.local_iterations < 1 || contacts.threads < 1)
     throw std::invalid_argument("rtp: contact substeps must be >= 1 and iterations >= 0");
@@ -447,6 +448,16 @@ void World::step_with_contacts(double dt) {
   timed(profile_.bounds, [&] { contacts.update_bounds(states_, dt); });
   timed(profile_.broad_phase, [&] { contacts.find_pairs(); });
   timed(profile_.narrow_phase, [&] { contacts.collide_pairs(states_, dt, gravity_); });
+  // a step whose deepest overlap is more than the soft step's push-out can remove in it is
+  // recovering from an overlap (boxes spawned into each other): the poses are moved apart first,
+  // down to the push-out's reach, and the substeps' relax passes are a fixed number (below)
+  const bool soft = settings.solver == ContactSolver::SoftStep;
+  const bool recovering = soft && contacts.deepest_penetration() > settings.max_push_speed * dt;
+  if (recovering && settings.recovery_position_iterations > 0)
+    timed(profile_.prepare, [&] {
+      contacts.project_overlaps(states_, settings.max_push_speed * dt,
+                                settings.recovery_position_iterations);
+    });
   timed(profile_.prepare, [&] {
     contacts.prepare(gravity_, settings.solver == ContactSolver::SoftStep ? dt / settings.substeps
                                                                           : dt);
@@ -454,12 +465,9 @@ void World::step_with_contacts(double dt) {
   switch (settings.solver) {
     case ContactSolver::SoftStep: {
       const double h = dt / settings.substeps;
-      // a step whose deepest overlap is more than the push-out can remove in it is recovering
-      // from an overlap (boxes spawned into each other): the biased solve adds push velocity every
-      // substep, so relax passes cannot settle it: it runs a fixed number of them, enough to take
-      // most of the push-out's speed back (docs/solver.md, "The ring": "Not while recovering")
-      const bool recovering =
-          contacts.deepest_penetration() > settings.max_push_speed * dt;
+      // recovering, the biased solve adds push velocity every substep, so relax passes cannot
+      // settle it: it runs a fixed number of them, enough to take most of the push-out's speed
+      // back (docs/solver.md, "The ring": "Not while recovering")
       for (int substep = 0; substep < settings.substeps; ++substep) {
         // the kick and the warm start; after the first substep, without springs, in one pass
         // over the bodies (ContactPipeline::next_substep: gravity is the only force then)

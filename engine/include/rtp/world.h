@@ -126,6 +126,12 @@ struct ContactSettings {
                                       // recovering from an overlap deeper than the push-out
                                       // removes in it (boxes spawned into each other): two left
                                       // a 5 cm overlap's push-out in the boxes, thrown 0.3 m up
+  int recovery_position_iterations = 12; // soft step: in a step recovering from an overlap,
+                                         // passes over the contacts that move the bodies apart,
+                                         // poses only, where they overlap deeper than the
+                                         // push-out removes in the step (0: none). Pushed out
+                                         // by velocity alone at max_push_speed, a 64-box heap
+                                         // started 0.4 m deep turned 0.12 m deeper on the way
   int restitution_iterations = 32;  // passes of the restitution solve at most, while the last
                                     // one still changed a point's normal velocity by more than
                                     // restitution_tolerance (a step without a bounce runs none)
