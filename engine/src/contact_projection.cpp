@@ -38,9 +38,21 @@ void ContactPipeline::project_overlaps(std::span<BodyState> states, double depth
     const Vec3 on_b = shift[c.body_b] + turn[c.body_b].cross(p.anchor_b.cast<double>());
     return double(p.base_separation) + n.dot(on_b - on_a);
   };
-  // in the contacts' order, on the calling thread: the same poses at any thread count
+  // in the contacts' order, on the calling thread: the same poses at any thread count. A contact
+  // neither of whose bodies has moved keeps its separations, so after the first pass only the
+  // contacts of moved bodies are visited (a large world with one deep overlap pays for that one)
+  std::vector<std::uint8_t> moved(states.size(), 0);
+  std::vector<std::uint32_t> visit(contacts_.size());
+  for (std::size_t i = 0; i < visit.size(); ++i) visit[i] = std::uint32_t(i);
   for (int pass = 0; pass < passes; ++pass) {
-    for (const ContactConstraint& c : contacts_) {
+    if (pass > 0)
+      visit.erase(std::remove_if(visit.begin(), visit.end(),
+                                 [&](std::uint32_t i) {
+                                   return !moved[contacts_[i].body_a] && !moved[contacts_[i].body_b];
+                                 }),
+                  visit.end());
+    for (const std::uint32_t i : visit) {
+      const ContactConstraint& c = contacts_[i];
       const SolverMass& a = masses_[c.body_a];
       const SolverMass& b = masses_[c.body_b];
       const Vec3 n = c.normal.cast<double>();
@@ -60,15 +72,20 @@ void ContactPipeline::project_overlaps(std::span<BodyState> states, double depth
         turn[c.body_a] -= move * spin_a;
         shift[c.body_b] += b.inverse_mass * move * n;
         turn[c.body_b] += move * spin_b;
+        // (a static body has no inverse mass nor inertia: it never moves)
+        if (a.inverse_mass > 0.0 || !spin_a.isZero()) moved[c.body_a] = 1;
+        if (b.inverse_mass > 0.0 || !spin_b.isZero()) moved[c.body_b] = 1;
       }
     }
   }
   // every point's separation as its bodies moved (the solve pushes out the rest), then the
   // poses; the deepest overlap stays the narrow phase's (the step's start, as the world reports)
   for (ContactConstraint& c : contacts_)
-    for (std::uint8_t j = 0; j < c.count; ++j) c.points[j].base_separation = float(separation(c, c.points[j]));
+    if (moved[c.body_a] || moved[c.body_b])
+      for (std::uint8_t j = 0; j < c.count; ++j)
+        c.points[j].base_separation = float(separation(c, c.points[j]));
   for (std::size_t i = 0; i < states.size(); ++i) {
-    if (masses_[i].inverse_mass == 0.0) continue;
+    if (!moved[i] || masses_[i].inverse_mass == 0.0) continue;
     states[i].position += shift[i];
     const double angle = turn[i].norm();
     if (angle > 0.0)
