@@ -169,6 +169,23 @@ TEST(ThreadGovernor, OneLuckyProbeOfTheTeamCostsAFewSteps) {
   EXPECT_LE(on_team, 4);
 }
 
+// one slow team step on an idle machine (the worker's core taken away for a moment, as these VMs
+// do) costs that step, not a run on one thread: blended at its full 20 ms, it lifted the team's
+// estimate past one thread's and kept the step on one thread until the team's next probe, up to
+// kProbeEvery steps (ThreadScaling's two-thread world ran 12–22 % of its steps on one thread in
+// a noisy spell); two slow steps in a row still turn it (the busy-machine tests above)
+TEST(ThreadGovernor, OneSlowTeamStepOnAnIdleMachineCostsThatStepOnly) {
+  rtp::ThreadGovernor g(2, true);
+  steps_on_one_thread(g, 200, 4.8e-3, 9.3e-3);  // idle: the team
+  int threads = g.next();
+  while (threads != 2) {  // (past a probe of one thread, if one falls here)
+    g.record(threads, 9.3e-3);
+    threads = g.next();
+  }
+  g.record(threads, 20e-3);  // the one slow step
+  EXPECT_LE(steps_on_one_thread(g, rtp::ThreadGovernor::kProbeEvery, 4.8e-3, 9.3e-3), 1);
+}
+
 TEST(ThreadGovernor, FixedOrOneThreadNeverChanges) {
   rtp::ThreadGovernor fixed(2, false), single(1, true);
   for (int i = 0; i < 100; ++i) {

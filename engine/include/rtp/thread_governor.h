@@ -19,6 +19,10 @@ class ThreadGovernor {
   static constexpr int kMostProbeEvery = 512;  // while the team holds, probes grow this rare
   static constexpr int kFirstProbe = 4;   // the first step on one thread (after warm-up steps)
   static constexpr double kWeight = 0.5;  // of a new time in its team's estimate
+  // a step blended into a fresh estimate counts as at most this times it: one slow step (the
+  // worker's core taken away for a moment) does not outweigh the steps before it, and two in a
+  // row still turn the team (a busy machine's team is left within two steps)
+  static constexpr double kMostOfEstimate = 2.0;
 
   // `most`: the threads asked for; `adaptive` false keeps them on every step
   ThreadGovernor(int most, bool adaptive) : most_(most < 1 ? 1 : most), adaptive_(adaptive) {}
@@ -45,14 +49,16 @@ class ThreadGovernor {
   // ago (at a probe, or at the first step after a turn) is replaced, not blended: it is a probe's
   // interval old or more, and blended with it a busy spell's figure held the team off for four
   // probes (2 s at 60 Hz) after the machine was idle again. The step after a probe, back on the
-  // preferred team, joins that team's running mean
+  // preferred team, joins that team's running mean, at most kMostOfEstimate times it
   void record(int team, double seconds) {
     if (most_ == 1 || !adaptive_ || !(seconds >= 0.0)) return;
     double& estimate = team == 1 ? one_seconds_ : team_seconds_;
     long& measured = team == 1 ? one_measured_ : team_measured_;
     estimate = estimate < 0.0 || step_ - measured > 2
                    ? seconds
-                   : (1.0 - kWeight) * estimate + kWeight * seconds;
+                   : (1.0 - kWeight) * estimate +
+                         kWeight * (seconds < kMostOfEstimate * estimate ? seconds
+                                                                          : kMostOfEstimate * estimate);
     measured = step_;
   }
 
