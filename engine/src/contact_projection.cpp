@@ -29,7 +29,10 @@ constexpr double kMostAPass = 0.2;
 void ContactPipeline::project_overlaps(std::span<BodyState> states, double depth, int passes) {
   if (passes <= 0 || contacts_.empty()) return;
   // each body's move so far: a translation and a small rotation (its vector, rad), world
-  std::vector<Vec3> shift(states.size(), Vec3::Zero()), turn(states.size(), Vec3::Zero());
+  std::vector<Vec3>& shift = projection_shift_;
+  std::vector<Vec3>& turn = projection_turn_;
+  shift.assign(states.size(), Vec3::Zero());
+  turn.assign(states.size(), Vec3::Zero());
   // a point's separation after its bodies' moves, to first order in the rotations (its anchors
   // are from each centre of mass, world, at the step's start)
   auto separation = [&](const ContactConstraint& c, const ContactPointConstraint& p) {
@@ -41,8 +44,10 @@ void ContactPipeline::project_overlaps(std::span<BodyState> states, double depth
   // in the contacts' order, on the calling thread: the same poses at any thread count. A contact
   // neither of whose bodies has moved keeps its separations, so after the first pass only the
   // contacts of moved bodies are visited (a large world with one deep overlap pays for that one)
-  std::vector<std::uint8_t> moved(states.size(), 0);
-  std::vector<std::uint32_t> visit(contacts_.size());
+  std::vector<std::uint8_t>& moved = projection_moved_;
+  std::vector<std::uint32_t>& visit = projection_visit_;
+  moved.assign(states.size(), 0);
+  visit.resize(contacts_.size());
   for (std::size_t i = 0; i < visit.size(); ++i) visit[i] = std::uint32_t(i);
   for (int pass = 0; pass < passes; ++pass) {
     if (pass > 0)

@@ -337,6 +337,11 @@ class ContactPipeline final : public ContactStages {
   std::vector<std::array<float, 8>> mass_records_;
   std::unique_ptr<ContactLanes> lanes_;
   std::vector<bool> seed_converged_;  // seed: per contact, its impulses stopped changing
+  // project_overlaps' scratch, per body (each body's move so far; whether it moved) and the
+  // contacts a pass visits: kept, so a recovering step allocates nothing once they have grown
+  std::vector<Vec3> projection_shift_, projection_turn_;
+  std::vector<std::uint8_t> projection_moved_;
+  std::vector<std::uint32_t> projection_visit_;
   double deepest_ = 0.0;
   std::size_t matched_ = 0;
   std::size_t point_count_ = 0;  // the points of contacts_, counted as they are built
