@@ -176,9 +176,9 @@ def best_configurations(results: pd.DataFrame, paired=None) -> list[dict]:
     every swept substep or iteration count. Per engine: its defaults' verdict and ms per step; the
     cheapest configuration whose verdict is `stands`, its ms and drift, and how many times rtp's
     cheapest standing configuration is faster (below 1: slower); and the least drift it reaches
-    within the ms of rtp's default. Engines with no standing configuration say so. And, where no
-    configuration stands, the fair reading still holds: against every configuration of a peer,
-    rtp's cheapest configuration no less accurate (`no_worse`), the peer's time over rtp's; the
+    within the ms of rtp's default. Engines with no standing configuration say so. And the fair
+    reading that holds where nothing stands too: against every configuration of a peer, rtp's
+    cheapest configuration no less accurate (`no_worse`), the peer's time over rtp's; the
     least of those ratios is the peer's best showing (`matched`; `matched_baseline` against rtp at
     the baseline instruction set), and a peer configuration rtp matches with none is named. One
     thread each: rtp's two-thread variants are left out, as every peer runs on one. With `paired`
@@ -207,15 +207,6 @@ def best_configurations(results: pd.DataFrame, paired=None) -> list[dict]:
             mine = stands[stands["who"] == who]
             return None if mine.empty else mine.loc[mine["ms"].idxmin()]
 
-        def faster(best, against):
-            """best's ms over against's, paired by round where both were timed in rounds"""
-            if best is None or against is None:
-                return ""
-            interval = paired.ratio(name, float(best["dt"]), best["label"], against["label"]) if paired else None
-            if interval is not None and best["label"] != against["label"]:
-                return format_ratio(interval)
-            return fmt(best["ms"] / against["ms"])
-
         def ratio_of(slower, faster_row):
             """slower's ms over faster_row's: the paired median and interval where both were timed
             in rounds, else one run's ratio (the interval's ends equal to it)"""
@@ -225,6 +216,13 @@ def best_configurations(results: pd.DataFrame, paired=None) -> list[dict]:
                 return interval
             value = slower["ms"] / faster_row["ms"]
             return dict(median=value, lo=value, hi=value)
+
+        def shown(r) -> str:
+            return format_ratio(r) if r["lo"] != r["hi"] else fmt(r["median"])
+
+        def faster(best, against):
+            """best's ms over against's, paired by round where both were timed in rounds"""
+            return "" if best is None or against is None else shown(ratio_of(best, against))
 
         def matched(who: str, against: str, default) -> str:
             """every ok configuration of `who` against `against`'s cheapest no less accurate one
@@ -246,8 +244,7 @@ def best_configurations(results: pd.DataFrame, paired=None) -> list[dict]:
                     at_default = r
 
             def said(r):
-                text = format_ratio(r[0]) if r[0]["lo"] != r[0]["hi"] else fmt(r[0]["median"])
-                return f"{text}: {r[1]} against {r[2]}"
+                return f"{shown(r[0])}: {r[1]} against {r[2]}"
             parts = [said(least)] if least is not None else []
             if at_default is not None and at_default is not least:
                 parts.append("at its defaults " + said(at_default))
