@@ -69,7 +69,8 @@ void ContactPipeline::project_overlaps(std::span<BodyState> states, double depth
         const Vec3 arm_b = p.anchor_b.cast<double>().cross(n);
         const Vec3 spin_a = a.inverse_inertia * arm_a, spin_b = b.inverse_inertia * arm_b;
         // the separation's change per unit of the move along the normal (the point's inverse
-        // effective mass, 1/kg)
+        // effective mass, 1/kg: effective_mass()'s sum, written out since the move needs the
+        // arms' spins too)
         const double k = a.inverse_mass + b.inverse_mass + arm_a.dot(spin_a) + arm_b.dot(spin_b);
         if (!(k > 0.0)) continue;
         const double move = std::min(kShare * -beyond, kMostAPass) / k;  // kg m

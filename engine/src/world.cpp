@@ -453,14 +453,14 @@ void World::step_with_contacts(double dt) {
   // down to the push-out's reach, and the substeps' relax passes are a fixed number (below)
   const bool soft = settings.solver == ContactSolver::SoftStep;
   const bool recovering = soft && contacts.deepest_penetration() > settings.max_push_speed * dt;
+  // (timed with prepare: the step's profile has no stage of its own for the position passes)
   if (recovering && settings.recovery_position_iterations > 0)
     timed(profile_.prepare, [&] {
       contacts.project_overlaps(states_, settings.max_push_speed * dt,
                                 settings.recovery_position_iterations);
     });
   timed(profile_.prepare, [&] {
-    contacts.prepare(gravity_, settings.solver == ContactSolver::SoftStep ? dt / settings.substeps
-                                                                          : dt);
+    contacts.prepare(gravity_, soft ? dt / settings.substeps : dt);
   });
   switch (settings.solver) {
     case ContactSolver::SoftStep: {
