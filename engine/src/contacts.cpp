@@ -394,7 +394,7 @@ void ContactPipeline::collide_pairs(std::span<const BodyState> states, double dt
       if (manifold.count == 0) {
         outcome_[k] = kFoundApart;
         if (cache_apart)
-          cache_pool_[candidate_slot_[k]] = cache_pair(a, b, pair_growth_[k], nullptr);
+          cache_pair(a, b, pair_growth_[k], nullptr, cache_pool_[candidate_slot_[k]]);
         continue;
       }
       outcome_[k] = kTouching;
@@ -405,7 +405,7 @@ void ContactPipeline::collide_pairs(std::span<const BodyState> states, double dt
       for (std::uint8_t j = 0; j < manifold.count && movable; ++j)
         movable = manifold.points[j].feature.type != ContactType::EdgeEdge;
       if (movable) {
-        cache_pool_[candidate_slot_[k]] = cache_pair(a, b, pair_growth_[k], &manifold);
+        cache_pair(a, b, pair_growth_[k], &manifold, cache_pool_[candidate_slot_[k]]);
         outcome_[k] = kTouchingCached;
       }
     }

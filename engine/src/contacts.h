@@ -301,8 +301,9 @@ class ContactPipeline final : public ContactStages {
   // kRotationFloats floats: what motion_in_lanes reads
   static constexpr std::size_t kRotationFloats = 16;
   std::vector<std::array<float, kRotationFloats>> rotations_;
-  // the pair's pose now; with the manifold in the bodies' frames if one is given
-  CachedPair cache_pair(BodyId a, BodyId b, double growth, const Manifold* manifold) const;
+  // the pair's pose now into out; with the manifold in the bodies' frames if one is given
+  void cache_pair(BodyId a, BodyId b, double growth, const Manifold* manifold,
+                  CachedPair& out) const;
   // a cached manifold at the bodies' poses now, its depths for the pair's growth now
   void move_manifold(const CachedPair& cached, BodyId a, BodyId b, double growth,
                      Manifold& out) const;

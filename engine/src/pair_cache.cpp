@@ -11,30 +11,35 @@
 namespace rtp {
 inline namespace RTP_CONTACT_ISA_NAMESPACE {
 
-ContactPipeline::CachedPair ContactPipeline::cache_pair(BodyId a, BodyId b, double growth,
-                                                        const Manifold* manifold) const {
-  const Pose& pa = poses_[a];
-  const Pose& pb = poses_[b];
-  CachedPair out;
-  out.offset_in_a = (pa.rotation.transpose() * (pb.position - pa.position)).cast<float>();
-  out.offset_in_b = (pb.rotation.transpose() * (pa.position - pb.position)).cast<float>();
-  out.relative_rotation = (pa.rotation.transpose() * pb.rotation).cast<float>();
+void ContactPipeline::cache_pair(BodyId a, BodyId b, double growth, const Manifold* manifold,
+                                 CachedPair& out) const {
+  // in single precision from the rotations motion_in_lanes reads, each vector from a body's
+  // centre taken in double first: the entry holds floats (written in place: it is 208 bytes)
+  using RowMajor3f = Eigen::Matrix<float, 3, 3, Eigen::RowMajor>;
+  const Eigen::Map<const RowMajor3f> ra(rotations_[a].data()), rb(rotations_[b].data());
+  const Vec3& xa = poses_[a].position;
+  const Vec3& xb = poses_[b].position;
+  const Eigen::Vector3f d = (xb - xa).cast<float>();
+  out.offset_in_a = ra.transpose() * d;
+  out.offset_in_b = -(rb.transpose() * d);
+  out.relative_rotation = ra.transpose() * rb;
   out.growth = float(growth);
-  if (manifold == nullptr) return out;
+  out.count = 0;
+  out.normal_on_b = false;
+  if (manifold == nullptr) return;
   // a face's normal turns with the body whose face it is; a point is the midpoint of the two
   // surface points it joins, which are half its depth either side along the normal
   out.count = manifold->count;
   out.normal_on_b = manifold->points[0].feature.flipped != 0;
-  const Pose& holder = out.normal_on_b ? pb : pa;
-  out.normal = (holder.rotation.transpose() * manifold->normal).cast<float>();
+  const Eigen::Vector3f normal = manifold->normal.cast<float>();
+  out.normal = (out.normal_on_b ? rb : ra).transpose() * normal;
   for (std::uint8_t j = 0; j < manifold->count; ++j) {
     const ContactPoint& p = manifold->points[j];
-    const Vec3 half = 0.5 * p.depth * manifold->normal;
-    out.points[j].on_a = (pa.rotation.transpose() * (p.point + half - pa.position)).cast<float>();
-    out.points[j].on_b = (pb.rotation.transpose() * (p.point - half - pb.position)).cast<float>();
+    const Eigen::Vector3f half = float(0.5 * p.depth) * normal;
+    out.points[j].on_a = ra.transpose() * ((p.point - xa).cast<float>() + half);
+    out.points[j].on_b = rb.transpose() * ((p.point - xb).cast<float>() - half);
     out.points[j].feature = p.feature;
   }
-  return out;
 }
 
 void ContactPipeline::motion_in_lanes(std::size_t first, std::size_t last,
