@@ -101,8 +101,13 @@ void Pyramid(benchmark::State& state) {
 // with them) in the same moments of the machine (whose speed drifts by up to 2x within
 // minutes). Reports each world's ms a step over the run and the speedup as the ratio of the two
 // totals; the runs are bit-identical (a difference in the final poses fails the benchmark).
+// Each world steps `run` steps a turn. A turn of one step has each world start every step in
+// caches the other has just filled, which a world stepped on its own never does; a turn of
+// several pays that on its first step only, and that step's time is reported apart
+// (first_ms_*, rest_ms_*)
 void ThreadScaling(benchmark::State& state) {
   const int base = int(state.range(0));
+  const int run = int(state.range(1));
   const physbench::Scene scene = scene_of(base);
   std::array<std::unique_ptr<rtp::World>, 2> worlds;
   for (int k = 0; k < 2; ++k) {
@@ -110,15 +115,20 @@ void ThreadScaling(benchmark::State& state) {
         scene, rtp::Integrator::SemiImplicitEuler, settings_for(k + 1)));
     for (int i = 0; i < kSettleSteps; ++i) worlds[std::size_t(k)]->step(scene.dt);
   }
-  std::array<double, 2> total{};
-  std::size_t steps = 0, on_team = 0;  // the steps the two-thread world ran on its team
+  std::array<double, 2> total{}, first{};  // each world's time, and its turns' first steps'
+  std::size_t steps = 0, turns = 0;
+  std::size_t on_team = 0;  // the steps the two-thread world ran on its team
   for (auto _ : state) {
     for (int k = 0; k < 2; ++k) {
-      worlds[std::size_t(k)]->step(scene.dt);
-      total[std::size_t(k)] += worlds[std::size_t(k)]->profile().total;
+      for (int r = 0; r < run; ++r) {
+        worlds[std::size_t(k)]->step(scene.dt);
+        total[std::size_t(k)] += worlds[std::size_t(k)]->profile().total;
+        if (r == 0) first[std::size_t(k)] += worlds[std::size_t(k)]->profile().total;
+        if (k == 1) on_team += worlds[1]->profile().threads > 1 ? 1 : 0;
+      }
     }
-    on_team += worlds[1]->profile().threads > 1 ? 1 : 0;
-    ++steps;
+    steps += std::size_t(run);
+    ++turns;
   }
   for (rtp::BodyId body = 0; body < worlds[0]->body_count(); ++body) {
     const rtp::BodyState& one = worlds[0]->state(body);
@@ -131,6 +141,12 @@ void ThreadScaling(benchmark::State& state) {
   state.counters["ms_per_step_1t"] = 1e3 * total[0] / double(steps);
   state.counters["ms_per_step_2t"] = 1e3 * total[1] / double(steps);
   state.counters["speedup_2t"] = total[0] / total[1];
+  if (run > 1) {
+    state.counters["first_ms_1t"] = 1e3 * first[0] / double(turns);
+    state.counters["first_ms_2t"] = 1e3 * first[1] / double(turns);
+    state.counters["rest_ms_1t"] = 1e3 * (total[0] - first[0]) / double(steps - turns);
+    state.counters["rest_ms_2t"] = 1e3 * (total[1] - first[1]) / double(steps - turns);
+  }
   // the governor runs a step on one thread to probe it, or while one thread measures faster
   state.counters["team_share_2t"] = double(on_team) / double(steps);
 }
@@ -173,19 +189,21 @@ int main(int argc, char** argv) {
         ->Unit(benchmark::kMillisecond)
         ->UseRealTime()
         ->MinTime(2.0);
-  benchmark::RegisterBenchmark("ManyPyramidsThreadScaling", ThreadScaling)
-      ->Arg(kManyPyramids)
-      ->ArgName("scene")
-      ->Unit(benchmark::kMillisecond)
-      ->UseRealTime()
-      ->Iterations(200);
-  for (int base : {50, 100})
-    benchmark::RegisterBenchmark("ThreadScaling", ThreadScaling)
-        ->Arg(base)
-        ->ArgName("base")
+  for (int run : {1, 10})
+    benchmark::RegisterBenchmark("ManyPyramidsThreadScaling", ThreadScaling)
+        ->Args({kManyPyramids, run})
+        ->ArgNames({"scene", "run"})
         ->Unit(benchmark::kMillisecond)
         ->UseRealTime()
-        ->Iterations(base >= 100 ? 300 : 600);
+        ->Iterations(200 / run);
+  for (int base : {50, 100})
+    for (int run : {1, 10})
+      benchmark::RegisterBenchmark("ThreadScaling", ThreadScaling)
+          ->Args({base, run})
+          ->ArgNames({"base", "run"})
+          ->Unit(benchmark::kMillisecond)
+          ->UseRealTime()
+          ->Iterations((base >= 100 ? 300 : 600) / run);
   triad(1);
   benchmark::Initialize(&argc, argv);
   if (benchmark::ReportUnrecognizedArguments(argc, argv)) return 1;

@@ -192,7 +192,7 @@ def contacts_benchmark(folder: Path) -> dict | None:
         if name.startswith("ThreadScaling/"):
             scaling = thread_scaling_row(folder, name, run)
             if scaling is not None:
-                paired[scaling["base"]] = scaling
+                paired[(scaling["base"], scaling["run"])] = scaling
             continue
         if not name.startswith("Pyramid/"):
             continue
@@ -229,23 +229,29 @@ def contacts_benchmark(folder: Path) -> dict | None:
                       end=statistics.median(triad[(threads, 1)]) if (threads, 1) in triad else None)
                  for threads in sorted({threads for threads, _ in triad})]
     return dict(rows=rows, stages=stages, chart=figure_html(fig) if rows else "", solver=context.get("solver", ""),
-                scene=context.get("scene", ""), paired=[paired[base] for base in sorted(paired)],
+                scene=context.get("scene", ""), paired=[paired[key] for key in sorted(paired)],
                 bandwidth=bandwidth)
 
 
 def thread_scaling_row(folder: Path, name: str, run: dict) -> dict | None:
-    """One ThreadScaling run of contacts_bench (one thread against two, the same steps in turn):
-    its base, each world's ms per step and the speedup; None for an aggregate other than the
-    median, a failed run named as such."""
+    """One ThreadScaling run of contacts_bench (one thread against two, the same steps in turn,
+    `run` steps a turn: 1 where the name has no run, as before it had one): its base and run,
+    each world's ms per step and the speedup, and for turns of several steps each world's first
+    step of a turn apart from the rest; None for an aggregate other than the median, a failed run
+    named as such."""
     if run.get("run_type") == "aggregate" and run.get("aggregate_name") != "median":
         return None
     fields = dict(part.split(":", 1) for part in name.split("/")[1:] if ":" in part)
     if run.get("error_occurred"):
-        return dict(base=int(fields.get("base", 0)), error=run.get("error_message", "failed"))
+        return dict(base=int(fields.get("base", 0)), run=int(fields.get("run", 1)),
+                    error=run.get("error_message", "failed"))
     try:
-        return dict(base=int(fields["base"]), ms_1t=float(run["ms_per_step_1t"]),
+        turn = int(fields.get("run", 1))
+        first = (float(run["first_ms_1t"]), float(run["first_ms_2t"])) if turn > 1 else None
+        rest = (float(run["rest_ms_1t"]), float(run["rest_ms_2t"])) if turn > 1 else None
+        return dict(base=int(fields["base"]), run=turn, ms_1t=float(run["ms_per_step_1t"]),
                     ms_2t=float(run["ms_per_step_2t"]), speedup=float(run["speedup_2t"]),
-                    steps=int(run["iterations"]), error=None)
+                    steps=int(run["iterations"]) * turn, first=first, rest=rest, error=None)
     except (KeyError, ValueError) as exc:
         raise ReportError(f"{folder / 'benchmarks' / 'contacts.json'}: benchmark {name!r} lacks "
                           f"or garbles {exc}") from exc

@@ -562,12 +562,22 @@ def test_thread_scaling_runs_are_the_paired_speedups(tmp_path):
                "ms_per_step_1t": 11.0, "ms_per_step_2t": 6.5, "speedup_2t": 11.0 / 6.5}
     failed = {"name": "ThreadScaling/base:50/iterations:600/real_time", "run_type": "iteration",
               "iterations": 0, "error_occurred": True, "error_message": "two threads did not give one thread's poses"}
-    (tmp_path / "benchmarks" / "contacts.json").write_text(contacts_json([pyramid_run(10, 1, 2.0), scaling, failed]))
+    # in turns of ten steps: 30 iterations are 300 steps, its first steps of a turn read apart
+    turns = {"name": "ThreadScaling/base:100/run:10/iterations:30/real_time", "run_type": "iteration",
+             "iterations": 30, "real_time": 180.0, "time_unit": "ms",
+             "ms_per_step_1t": 10.8, "ms_per_step_2t": 6.0, "speedup_2t": 1.8,
+             "first_ms_1t": 12.0, "first_ms_2t": 7.0, "rest_ms_1t": 10.7, "rest_ms_2t": 5.9}
+    (tmp_path / "benchmarks" / "contacts.json").write_text(
+        contacts_json([pyramid_run(10, 1, 2.0), turns, scaling, failed]))
     bench = benchmarks.contacts_benchmark(tmp_path)
-    assert [p["base"] for p in bench["paired"]] == [50, 100]
+    assert [(p["base"], p["run"]) for p in bench["paired"]] == [(50, 1), (100, 1), (100, 10)]
     assert bench["paired"][0]["error"] == "two threads did not give one thread's poses"
     assert bench["paired"][1]["speedup"] == pytest.approx(11.0 / 6.5)
     assert bench["paired"][1]["steps"] == 300
+    assert bench["paired"][1]["first"] is None
+    assert bench["paired"][2]["steps"] == 300
+    assert bench["paired"][2]["speedup"] == pytest.approx(1.8)
+    assert bench["paired"][2]["first"] == (12.0, 7.0) and bench["paired"][2]["rest"] == (10.7, 5.9)
     # the separate runs' rows are still read beside them
     assert [(r["base"], r["threads"]) for r in bench["rows"]] == [(10, 1)]
 
