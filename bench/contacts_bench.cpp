@@ -8,7 +8,9 @@
 //   build/bench/bench/contacts_bench --benchmark_filter=ThreadScaling   (one thread against two)
 // The triad (triad.h) runs first and last, on one thread and two: the machine's memory bandwidth
 // beside the times, so that a slow spell shows in the run itself (Triad/threads:N/at:0 and at:1;
-// with --benchmark_enable_random_interleaving they run among the others instead).
+// with --benchmark_enable_random_interleaving they run among the others instead); and with it the
+// machine's two-thread ceiling (ceiling.h, Ceiling/at:0 and at:1), what ThreadScaling's speedup
+// is read against.
 #include <benchmark/benchmark.h>
 
 #include <algorithm>
@@ -20,6 +22,7 @@
 
 #include "physbench/rtp_world.h"
 #include "physbench/scenarios.h"
+#include "ceiling.h"
 #include "triad.h"
 
 namespace {
@@ -163,7 +166,8 @@ int main(int argc, char** argv) {
                     std::to_string(int(c.contact_hertz)) + " Hz; sleeping off; dt 1/60");
   benchmark::AddCustomContext("scene", "pyramid-N of the contact scenarios, settled " +
                                            std::to_string(kSettleSteps) + " steps before timing");
-  // the machine's bandwidth before the steps and after them (at:0, at:1)
+  // the machine's bandwidth before the steps and after them (at:0, at:1), and its two-thread
+  // ceiling (ceiling.h) after the bandwidth
   auto triad = [](int at) {
     for (int threads : {1, 2})
       benchmark::RegisterBenchmark("Triad", Triad)
@@ -171,6 +175,12 @@ int main(int argc, char** argv) {
           ->ArgNames({"threads", "at"})
           ->Unit(benchmark::kMillisecond)
           ->UseRealTime();
+    benchmark::RegisterBenchmark("Ceiling", Ceiling)
+        ->Arg(at)
+        ->ArgName("at")
+        ->Unit(benchmark::kMillisecond)
+        ->UseRealTime()
+        ->Iterations(10);
   };
   triad(0);
   for (int base : {10, 20, 50, 100})

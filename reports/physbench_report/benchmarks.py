@@ -173,8 +173,9 @@ def contacts_benchmark(folder: Path) -> dict | None:
     if document is None:
         return None
     cases: dict[tuple, dict] = {}
-    paired: dict[int, dict] = {}
+    paired: dict[tuple, dict] = {}  # (base, steps a turn) -> its ThreadScaling row
     triad: dict[tuple, list] = {}  # (threads, at) -> bytes/s of each run
+    ceiling: dict[int, list] = {}  # at -> the two-thread ceiling's speedup of each run
     for run in document.get("benchmarks", []):
         name = run.get("run_name", run.get("name", ""))
         if name.startswith("Triad/"):
@@ -185,6 +186,17 @@ def contacts_benchmark(folder: Path) -> dict | None:
             try:
                 key = (int(fields["threads"]), int(fields["at"]))
                 triad.setdefault(key, []).append(float(run["bytes_per_second"]) / 1e9)
+            except (KeyError, ValueError) as exc:
+                raise ReportError(f"{folder / 'benchmarks' / 'contacts.json'}: benchmark {name!r} lacks "
+                                  f"or garbles {exc}") from exc
+            continue
+        if name.startswith("Ceiling/"):
+            # the machine's two-thread ceiling (bench/ceiling.h) at the run's start and end
+            if run.get("run_type") == "aggregate" or run.get("error_occurred"):
+                continue
+            fields = dict(part.split(":", 1) for part in name.split("/")[1:] if ":" in part)
+            try:
+                ceiling.setdefault(int(fields["at"]), []).append(float(run["speedup_2t"]))
             except (KeyError, ValueError) as exc:
                 raise ReportError(f"{folder / 'benchmarks' / 'contacts.json'}: benchmark {name!r} lacks "
                                   f"or garbles {exc}") from exc
@@ -230,7 +242,9 @@ def contacts_benchmark(folder: Path) -> dict | None:
                  for threads in sorted({threads for threads, _ in triad})]
     return dict(rows=rows, stages=stages, chart=figure_html(fig) if rows else "", solver=context.get("solver", ""),
                 scene=context.get("scene", ""), paired=[paired[key] for key in sorted(paired)],
-                bandwidth=bandwidth)
+                bandwidth=bandwidth,
+                ceiling=[statistics.median(ceiling[at]) if at in ceiling else None for at in (0, 1)]
+                if ceiling else None)
 
 
 def thread_scaling_row(folder: Path, name: str, run: dict) -> dict | None:
