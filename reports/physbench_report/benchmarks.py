@@ -265,7 +265,9 @@ def thread_scaling_row(folder: Path, name: str, run: dict) -> dict | None:
         rest = (float(run["rest_ms_1t"]), float(run["rest_ms_2t"])) if turn > 1 else None
         return dict(base=int(fields["base"]), run=turn, ms_1t=float(run["ms_per_step_1t"]),
                     ms_2t=float(run["ms_per_step_2t"]), speedup=float(run["speedup_2t"]),
-                    steps=int(run["iterations"]) * turn, first=first, rest=rest, error=None)
+                    # (a median's own "iterations" counts the repetitions: the name holds the run's)
+                    steps=int(fields.get("iterations", run["iterations"])) * turn, first=first, rest=rest,
+                    error=None)
     except (KeyError, ValueError) as exc:
         raise ReportError(f"{folder / 'benchmarks' / 'contacts.json'}: benchmark {name!r} lacks "
                           f"or garbles {exc}") from exc

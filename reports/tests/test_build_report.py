@@ -582,6 +582,19 @@ def test_thread_scaling_runs_are_the_paired_speedups(tmp_path):
     assert bench["paired"][2]["steps"] == 300
     assert bench["paired"][2]["speedup"] == pytest.approx(1.8)
     assert bench["paired"][2]["first"] == (12.0, 7.0) and bench["paired"][2]["rest"] == (10.7, 5.9)
+
+
+def test_a_thread_scaling_median_counts_the_steps_of_one_repetition(tmp_path):
+    # with --benchmark_repetitions the median's "iterations" is the number of repetitions
+    (tmp_path / "benchmarks").mkdir()
+    median = {"name": "ThreadScaling/base:100/run:10/iterations:30/real_time_median",
+              "run_name": "ThreadScaling/base:100/run:10/iterations:30/real_time", "run_type": "aggregate",
+              "aggregate_name": "median", "iterations": 3, "real_time": 180.0, "time_unit": "ms",
+              "ms_per_step_1t": 8.3, "ms_per_step_2t": 5.0, "speedup_2t": 1.66,
+              "first_ms_1t": 9.1, "first_ms_2t": 5.7, "rest_ms_1t": 8.2, "rest_ms_2t": 4.9}
+    (tmp_path / "benchmarks" / "contacts.json").write_text(contacts_json([pyramid_run(10, 1, 2.0), median]))
+    bench = benchmarks.contacts_benchmark(tmp_path)
+    assert bench["paired"][0]["steps"] == 300
     # the separate runs' rows are still read beside them
     assert [(r["base"], r["threads"]) for r in bench["rows"]] == [(10, 1)]
 
