@@ -1,9 +1,10 @@
 // rtp unit tests: integrator order, invariants, impulses and spring torque, each against
-// a closed form.
+// a closed form; and what a contact step's profile times.
 #include <gtest/gtest.h>
 
 #include <cmath>
 
+#include "contact_worlds.h"
 #include "rtp/world.h"
 
 namespace {
@@ -240,6 +241,32 @@ TEST(Bodies, StaticBodyNeverMoves) {
   world.add_body(def);
   for (int i = 0; i < 100; ++i) world.step(1.0 / 60.0);
   EXPECT_EQ(world.state(0).position, Vec3(1, 2, 3));
+}
+
+// A contact step's stages are disjoint parts of it, timed back to back on the step's clock, and
+// every part is in one (writing the results out is `store`): their sum cannot pass the step's
+// own total, and `store` is timed, on each solver's path through the step.
+TEST(StepProfile, AContactStepsStagesAreDisjointAndItsResultsAreTimed) {
+  using rtp::ContactSolver;
+  namespace worlds = rtp::contact_worlds;
+  for (const ContactSolver solver :
+       {ContactSolver::SoftStep, ContactSolver::SequentialImpulse, ContactSolver::Seed}) {
+    rtp::ContactSettings settings;
+    settings.solver = solver;
+    World world(worlds::kGravity, Integrator::SemiImplicitEuler, settings);
+    worlds::add_ground(world, 0.6);
+    for (int k = 0; k < 10; ++k) worlds::add_box(world, {0.0, 0.5 + k, 0.0}, 1.0, 0.6);
+    double store = 0.0;
+    for (int i = 0; i < 30; ++i) {
+      world.step(worlds::kDt);
+      const rtp::StepProfile& p = world.profile();
+      double stages = 0.0;
+      for (const double seconds : p.stage_seconds()) stages += seconds;
+      EXPECT_LE(stages, p.total) << "a part of the step was timed twice (step " << i << ")";
+      store += p.store;
+    }
+    EXPECT_GT(store, 0.0) << "the results written out are in no stage";
+  }
 }
 
 TEST(Bodies, RejectsNegativeMass) {

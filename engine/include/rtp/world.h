@@ -203,6 +203,8 @@ struct StepProfile {
   double relax = 0.0;         // velocity iterations without bias
   double restitution = 0.0;
   double continuous = 0.0;  // fast bodies swept against the static shapes
+  double store = 0.0;  // the step's results written out: the impulses kept for the next step's
+                       // warm start, the poses from the solver's lanes, the momenta
   double total = 0.0;
   std::size_t contact_pairs = 0;   // touching manifolds this step
   std::size_t contact_points = 0;
@@ -214,12 +216,12 @@ struct StepProfile {
   int threads = 1;                 // the team the step ran on (ThreadGovernor)
 
   // the stages above by name, in the step's order (whoever reports them reads this one list)
-  static constexpr std::array<const char*, 11> kStageNames = {
+  static constexpr std::array<const char*, 12> kStageNames = {
       "integrate", "bounds", "broad_phase", "narrow_phase", "prepare", "warm_start",
-      "solve", "integrate_positions", "relax", "restitution", "continuous"};
-  std::array<double, 11> stage_seconds() const {
+      "solve", "integrate_positions", "relax", "restitution", "continuous", "store"};
+  std::array<double, 12> stage_seconds() const {
     return {integrate, bounds, broad_phase, narrow_phase, prepare, warm_start,
-            solve, integrate_positions, relax, restitution, continuous};
+            solve, integrate_positions, relax, restitution, continuous, store};
   }
 };
 
