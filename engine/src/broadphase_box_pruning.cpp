@@ -1,6 +1,7 @@
-// Box pruning (Terdiman, "Box pruning", 2002): the boxes in slabs across y, each slab in x order,
-// swept with a vector of boxes tested at a time (rtp/broadphase.h).
+// Box pruning (Terdiman, "Box pruning", 2002): the boxes in slabs across y or z, each slab in x
+// order, swept with a vector of boxes tested at a time (rtp/broadphase.h).
 #include <algorithm>
+#include <array>
 #include <bit>
 #include <boost/sort/spreadsort/float_sort.hpp>
 #include <cmath>
@@ -100,36 +101,46 @@ class BoxPruning final : public ProxyStore {
     bool covers(std::size_t slab) const { return home <= slab && slab <= last; }
   };
 
-  // Buckets: slabs across y, each box in every slab its y interval touches, so a sweep on x
-  // meets only the boxes near it in y as well. Slabs are three times the mean box height (a box
-  // then sits in about 1.33 of them: taller slabs give each sweep more boxes, shorter ones put
-  // each box in more slabs; docs/broadphase.md has the measurements) and at most kMaxSlabs. A pair
-  // is reported only in the slab of the larger of its two min y — one slab, which both boxes are in
-  // — so never twice. The slab of a y value is monotonic in y and clamped to the slabs, so that
-  // holds for boxes outside the range the slabs were laid out for, too: a kept layout is never
-  // wrong, only slower.
+  // Buckets: slabs across y or z (the slab axis), each box in every slab its interval along that
+  // axis touches, so a sweep on x meets only the boxes near it along the axis as well. Slabs are
+  // three times the mean box extent along the axis (a box then sits in about 1.33 of them:
+  // thicker slabs give each sweep more boxes, thinner ones put each box in more slabs;
+  // docs/broadphase.md has the measurements) and at most kMaxSlabs. The axis is the one of y and
+  // z that gives more slabs: y for a stack or a pyramid, z for a world wide in x and z and low in
+  // y (196 pyramids of ten rows on a 154 m square: three slabs across y, each sweep on x meeting
+  // the fourteen pyramids that share its x; fifty across z). A pair is reported only in the slab
+  // of the larger of its two mins along the axis — one slab, which both boxes are in — so never
+  // twice. The slab of a coordinate is monotonic in it and clamped to the slabs, so that holds
+  // for boxes outside the range the slabs were laid out for, too: a kept layout is never wrong,
+  // only slower.
   struct Layout {
-    float low_y = 0.0f, high_y = 0.0f;  // the least and the largest min y
+    int axis = 1;                     // 1: y, 2: z
+    float low = 0.0f, high = 0.0f;    // the least and the largest min along the axis
     std::size_t slabs = 1;
     float slab_height = 1.0f;
-    float per_slab_height = 1.0f;  // its reciprocal: a multiply is monotonic in y as well
+    float per_slab_height = 1.0f;  // its reciprocal: a multiply is monotonic as well
   };
-  // the layout for a set of boxes, gathered a box at a time
+  static constexpr float kInfinity = std::numeric_limits<float>::infinity();
+  // the layouts for a set of boxes along y and along z, gathered a box at a time (entry 0, x,
+  // unused)
   struct LayoutOfBoxes {
-    float low_y = std::numeric_limits<float>::infinity(), high_y = -low_y;
-    double total_height = 0.0;
+    std::array<float, 3> low{kInfinity, kInfinity, kInfinity};
+    std::array<float, 3> high{-kInfinity, -kInfinity, -kInfinity};
+    std::array<double, 3> total_height{};
     std::size_t n = 0;
     void add(const Aabb& b) {
-      low_y = std::min(low_y, b.min[1]);
-      high_y = std::max(high_y, b.min[1]);
-      total_height += b.max[1] - b.min[1];
+      for (int k = 1; k < 3; ++k) {
+        low[k] = std::min(low[k], b.min[k]);
+        high[k] = std::max(high[k], b.min[k]);
+        total_height[k] += b.max[k] - b.min[k];
+      }
       ++n;
     }
-    Layout layout() const {
-      if (n == 0) return Layout{};
-      Layout layout{low_y, high_y, 1, 1.0f, 1.0f};
-      const double mean_height = total_height / double(n);
-      const double span = double(high_y) - double(low_y);
+    Layout layout(int axis) const {
+      if (n == 0) return Layout{axis};
+      Layout layout{axis, low[axis], high[axis], 1, 1.0f, 1.0f};
+      const double mean_height = total_height[axis] / double(n);
+      const double span = double(high[axis]) - double(low[axis]);
       if (mean_height > 0.0)
         layout.slabs =
             std::clamp<std::size_t>(std::size_t(span / (3.0 * mean_height)), 1, kMaxSlabs);
@@ -139,16 +150,23 @@ class BoxPruning final : public ProxyStore {
       }
       return layout;
     }
+    // the axis of more slabs, y where they tie
+    Layout best() const {
+      const Layout y = layout(1), z = layout(2);
+      return z.slabs > y.slabs ? z : y;
+    }
   };
-  // clamped as a float, so no y (far outside the layout, or not a number) converts out of range
-  std::size_t slab_of(float y) const {
+  // clamped as a float, so no coordinate (far outside the layout, or not a number) converts out
+  // of range
+  std::size_t slab_of(float at) const {
     if (layout_.slabs == 1) return 0;
     const float last = float(layout_.slabs - 1);
-    const float slab = (y - layout_.low_y) * layout_.per_slab_height;
+    const float slab = (at - layout_.low) * layout_.per_slab_height;
     return std::size_t(std::min(last, std::max(0.0f, slab)));
   }
   SlabRange range_of(const Aabb& b) const {
-    return {std::uint16_t(slab_of(b.min[1])), std::uint16_t(slab_of(b.max[1]))};
+    return {std::uint16_t(slab_of(b.min[layout_.axis])),
+            std::uint16_t(slab_of(b.max[layout_.axis]))};
   }
 
   // From scratch: every live box ordered on x by spreadsort (Boost's radix hybrid, which sorts
@@ -161,7 +179,7 @@ class BoxPruning final : public ProxyStore {
         layout.add(boxes_[id]);
         keyed_.push_back({boxes_[id].min[0], id});
       }
-    layout_ = layout.layout();
+    layout_ = layout.best();
     sort_keyed(keyed_);
     members_.resize(layout_.slabs);
     for (auto& m : members_) m.clear();
@@ -201,11 +219,14 @@ class BoxPruning final : public ProxyStore {
       ranges_[id] = r;
       if (++changed > most_changed) return false;  // not coherent: the caller rebuilds
     }
-    // the boxes spread or moved by a slab or more, or the slab count would change by a quarter
-    const Layout now = boxes_now.layout();
-    return !(std::abs(now.low_y - layout_.low_y) > layout_.slab_height ||
-             std::abs(now.high_y - layout_.high_y) > layout_.slab_height ||
-             4 * std::max(now.slabs, layout_.slabs) > 5 * std::min(now.slabs, layout_.slabs));
+    // the boxes spread or moved by a slab or more, or the slab count would change by a quarter,
+    // or the other axis would now give a quarter more slabs than this one
+    const Layout now = boxes_now.layout(layout_.axis);
+    const Layout other = boxes_now.layout(3 - layout_.axis);
+    return !(std::abs(now.low - layout_.low) > layout_.slab_height ||
+             std::abs(now.high - layout_.high) > layout_.slab_height ||
+             4 * std::max(now.slabs, layout_.slabs) > 5 * std::min(now.slabs, layout_.slabs) ||
+             4 * other.slabs > 5 * now.slabs);
   }
   // slab s's members that stay, with their new min x, in last step's order (kept in place by
   // advancing a count), sorted, and the arrivals merged in (`scratch`: the calling thread's)
@@ -347,7 +368,8 @@ class BoxPruning final : public ProxyStore {
   std::vector<SlabRange> ranges_;             // each box's slabs (by handle)
   std::vector<std::vector<Keyed>> arrivals_;  // boxes entering each slab this update
   std::vector<Keyed> keyed_;                  // scratch: every box with its keys (a rebuild)
-  // the slabs' members as columns, each slab in x order; home = the slab of the box's min y
+  // the slabs' members as columns, each slab in x order; home = the slab of the box's min along
+  // the slab axis
   // each slab's first entry, and one past the last slab's padding
   std::vector<std::size_t> first_;
   std::vector<std::size_t> slab_entries_;  // each slab's first entry at most, as update() shares

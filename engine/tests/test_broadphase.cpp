@@ -157,6 +157,41 @@ TEST_P(BroadPhaseVariant, BoxesDriftingOutOfAKeptLayoutMatchBruteForce) {
   });
 }
 
+// a world wide in x and z and low in y (box pruning lays its slabs across z there: many-pyramids'
+// layout), every box drifting a little each frame; then drawn up into a tall column over some
+// frames, so that a kept layout across z meets boxes spread in y and is laid out again (across
+// y), and spread back out: the pair set stays exact through all of it
+TEST_P(BroadPhaseVariant, AWorldWideInZAndLowInYMatchesBruteForceAsItChangesShape) {
+  std::mt19937 random(11);
+  std::uniform_real_distribution<float> across(0.0f, 40.0f), deep(0.0f, 150.0f), up(0.0f, 3.0f),
+      size(0.5f, 1.0f), step(-0.05f, 0.05f);
+  auto phase = rtp::make_broad_phase(GetParam());
+  std::vector<rtp::Aabb> boxes(1500);
+  for (rtp::Aabb& b : boxes) {
+    b.min = {across(random), up(random), deep(random)};
+    b.max = {b.min[0] + size(random), b.min[1] + size(random), b.min[2] + size(random)};
+    phase->add(b);
+  }
+  check_frames(*phase, boxes, 50, [&](std::size_t id, int frame, rtp::Aabb b) {
+    // frames 10 to 29: each box's z drawn towards 0 (to a third) and its y out to up to 150 m;
+    // frames 30 on: its y back down (to an eighth) and its z out again (to 2.7 times)
+    float dy = 0.0f, dz = 0.0f;
+    if (frame >= 10 && frame < 30) {
+      dz = -0.05f * b.min[2];
+      dy = 0.05f * 150.0f * float(id) / float(boxes.size());
+    } else if (frame >= 30) {
+      dz = 0.05f * b.min[2];
+      dy = -0.1f * b.min[1];
+    }
+    for (int k = 0; k < 3; ++k) {
+      const float d = step(random) + (k == 1 ? dy : k == 2 ? dz : 0.0f);
+      b.min[k] += d;
+      b.max[k] += d;
+    }
+    return b;
+  });
+}
+
 // a tall world of 5,000 boxes (dozens of box pruning's slabs, enough entries for its sweep to go
 // to threads): on two threads the same pairs in the same order as on one, and those exact
 TEST_P(BroadPhaseVariant, TwoThreadsFindThePairsOneFinds) {
