@@ -199,21 +199,19 @@ int main(int argc, char** argv) {
         ->Unit(benchmark::kMillisecond)
         ->UseRealTime()
         ->MinTime(2.0);
-  for (int run : {1, 10})
-    benchmark::RegisterBenchmark("ManyPyramidsThreadScaling", ThreadScaling)
-        ->Args({kManyPyramids, run})
-        ->ArgNames({"scene", "run"})
-        ->Unit(benchmark::kMillisecond)
-        ->UseRealTime()
-        ->Iterations(200 / run);
-  for (int base : {50, 100})
+  // one thread against two, in turns of one step and of ten, over the same steps either way
+  auto thread_scaling = [](const char* name, int scene, const char* scene_name, int steps) {
     for (int run : {1, 10})
-      benchmark::RegisterBenchmark("ThreadScaling", ThreadScaling)
-          ->Args({base, run})
-          ->ArgNames({"base", "run"})
+      benchmark::RegisterBenchmark(name, ThreadScaling)
+          ->Args({scene, run})
+          ->ArgNames({scene_name, "run"})
           ->Unit(benchmark::kMillisecond)
           ->UseRealTime()
-          ->Iterations((base >= 100 ? 300 : 600) / run);
+          ->Iterations(steps / run);
+  };
+  thread_scaling("ManyPyramidsThreadScaling", kManyPyramids, "scene", 200);
+  for (int base : {50, 100})
+    thread_scaling("ThreadScaling", base, "base", base >= 100 ? 300 : 600);
   triad(1);
   benchmark::Initialize(&argc, argv);
   if (benchmark::ReportUnrecognizedArguments(argc, argv)) return 1;
