@@ -371,59 +371,66 @@ TEST(Contacts, BlockOnASlopeHoldsOrSlidesByCoulomb) {
 }
 
 // A box pair found touching keeps its manifold, moved with the bodies, while neither has moved
-// more than ContactSettings::manifold_reuse_distance in the other's frame since it was computed.
-// A box thrown along a static slab slides 0.7 m and stops, and three boxes rest on it, once with
-// the manifolds reused and once computed every step: a slide must compute every step (a manifold
-// moved with the box would keep points the box has left, and tip it), and at rest the reused
-// manifolds must hold every box where the computed ones do
+// more than ContactSettings::manifold_reuse_distance in the other's frame since it was computed;
+// a box on a plane while the box has moved no more than that in the plane's frame. A box thrown
+// along a static slab (or the ground plane) slides 0.7 m and stops, and three boxes rest on it,
+// once with the manifolds reused and once computed every step: a slide must compute every step (a
+// manifold moved with the box would keep points the box has left, and tip it), and at rest the
+// reused manifolds must hold every box where the computed ones do
 TEST(Contacts, MovedManifoldsHoldWhatComputedOnesHoldAndASlideComputesAfresh) {
-  struct Run {
-    std::vector<Vec3> positions;
-    std::size_t moved_while_sliding = 0, most_moved_while_sliding = 0;
-    std::size_t moved_at_rest = 0, pairs_at_rest = 0;
-    double deepest = 0.0;
-  };
-  auto run = [](double reuse) {
-    ContactSettings settings;
-    settings.manifold_reuse_distance = reuse;
-    World world(kGravity, Integrator::SemiImplicitEuler, settings);
-    add_box(world, {0.0, -0.5, 0.0}, 0.0, 0.3, 0.0, Quat::Identity(), Vec3(10.0, 0.5, 10.0));
-    const BodyId thrown = add_box(world, {-3.0, 0.5, 0.0}, 1.0, 0.3);
-    // a column of two, a little turned, and a box with a turned one across it
-    add_box(world, {3.0, 0.5, 0.0}, 1.0, 0.3);
-    add_box(world, {3.1, 1.5, 0.0}, 1.0, 0.3, 0.0, Quat(Eigen::AngleAxisd(0.3, Vec3::UnitY())));
-    add_box(world, {0.0, 0.5, 3.0}, 2.0, 0.3, 0.0, Quat::Identity(), Vec3(1.0, 0.5, 0.5));
-    world.apply_impulse(thrown, {2.0, 0.0, 0.0}, world.state(thrown).position);
-    Run out;
-    for (int i = 0; i < 240; ++i) {
-      world.step(kDt);
-      // sliding: 2 m/s less 2.9 m/s² for 0.68 s (and 0.1 s of landing for the others)
-      if (i >= 6 && i < 36 && world.velocity(thrown).norm() > 0.5) {
-        out.moved_while_sliding += world.profile().reused_manifolds;
-        out.most_moved_while_sliding =
-            std::max(out.most_moved_while_sliding, world.profile().reused_manifolds);
+  for (const bool plane : {false, true}) {
+    SCOPED_TRACE(plane ? "on the ground plane" : "on a static slab");
+    struct Run {
+      std::vector<Vec3> positions;
+      std::size_t moved_while_sliding = 0, most_moved_while_sliding = 0;
+      std::size_t moved_at_rest = 0, pairs_at_rest = 0;
+      double deepest = 0.0;
+    };
+    auto run = [plane](double reuse) {
+      ContactSettings settings;
+      settings.manifold_reuse_distance = reuse;
+      World world(kGravity, Integrator::SemiImplicitEuler, settings);
+      if (plane)
+        add_ground(world, 0.3);
+      else
+        add_box(world, {0.0, -0.5, 0.0}, 0.0, 0.3, 0.0, Quat::Identity(), Vec3(10.0, 0.5, 10.0));
+      const BodyId thrown = add_box(world, {-3.0, 0.5, 0.0}, 1.0, 0.3);
+      // a column of two, a little turned, and a box with a turned one across it
+      add_box(world, {3.0, 0.5, 0.0}, 1.0, 0.3);
+      add_box(world, {3.1, 1.5, 0.0}, 1.0, 0.3, 0.0, Quat(Eigen::AngleAxisd(0.3, Vec3::UnitY())));
+      add_box(world, {0.0, 0.5, 3.0}, 2.0, 0.3, 0.0, Quat::Identity(), Vec3(1.0, 0.5, 0.5));
+      world.apply_impulse(thrown, {2.0, 0.0, 0.0}, world.state(thrown).position);
+      Run out;
+      for (int i = 0; i < 240; ++i) {
+        world.step(kDt);
+        // sliding: 2 m/s less 2.9 m/s² for 0.68 s (and 0.1 s of landing for the others)
+        if (i >= 6 && i < 36 && world.velocity(thrown).norm() > 0.5) {
+          out.moved_while_sliding += world.profile().reused_manifolds;
+          out.most_moved_while_sliding =
+              std::max(out.most_moved_while_sliding, world.profile().reused_manifolds);
+        }
+        out.deepest = std::max(out.deepest, world.deepest_penetration());
       }
-      out.deepest = std::max(out.deepest, world.deepest_penetration());
-    }
-    out.moved_at_rest = world.profile().reused_manifolds;
-    out.pairs_at_rest = world.profile().contact_pairs;
-    for (BodyId b = 0; b < world.body_count(); ++b)
-      out.positions.push_back(world.state(b).position);
-    return out;
-  };
-  const Run computed = run(0.0), reused = run(1e-4);
-  EXPECT_EQ(computed.moved_at_rest, 0u);
-  EXPECT_EQ(reused.pairs_at_rest, 4u);
-  EXPECT_EQ(reused.moved_at_rest, reused.pairs_at_rest) << "at rest every manifold is moved";
-  // four pairs: the thrown box's, the column's two and the wide box's; the slide's is computed
-  // every step, the others are moved once they rest
-  EXPECT_LE(reused.most_moved_while_sliding, 3u);
-  EXPECT_GT(reused.moved_while_sliding, 0u);
-  const double slid = computed.positions[1].x() + 3.0;
-  EXPECT_NEAR(slid, 2.0 * 2.0 / (2.0 * 0.3 * 9.81), 0.05);  // v² / 2μg
-  for (std::size_t b = 0; b < computed.positions.size(); ++b)
-    EXPECT_LT((reused.positions[b] - computed.positions[b]).norm(), 1e-4) << "body " << b;
-  EXPECT_NEAR(reused.deepest, computed.deepest, 1e-4);
+      out.moved_at_rest = world.profile().reused_manifolds;
+      out.pairs_at_rest = world.profile().contact_pairs;
+      for (BodyId b = 0; b < world.body_count(); ++b)
+        out.positions.push_back(world.state(b).position);
+      return out;
+    };
+    const Run computed = run(0.0), reused = run(1e-4);
+    EXPECT_EQ(computed.moved_at_rest, 0u);
+    EXPECT_EQ(reused.pairs_at_rest, 4u);
+    EXPECT_EQ(reused.moved_at_rest, reused.pairs_at_rest) << "at rest every manifold is moved";
+    // four pairs: the thrown box's, the column's two and the wide box's; the slide's is computed
+    // every step, the others are moved once they rest
+    EXPECT_LE(reused.most_moved_while_sliding, 3u);
+    EXPECT_GT(reused.moved_while_sliding, 0u);
+    const double slid = computed.positions[1].x() + 3.0;
+    EXPECT_NEAR(slid, 2.0 * 2.0 / (2.0 * 0.3 * 9.81), 0.05);  // v² / 2μg
+    for (std::size_t b = 0; b < computed.positions.size(); ++b)
+      EXPECT_LT((reused.positions[b] - computed.positions[b]).norm(), 1e-4) << "body " << b;
+    EXPECT_NEAR(reused.deepest, computed.deepest, 1e-4);
+  }
 }
 
 // heavy on light, 10:1: the stack holds
