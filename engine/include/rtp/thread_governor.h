@@ -11,6 +11,8 @@
 // colour's contacts share no dynamic body), so only the time depends on it.
 #pragma once
 
+#include <algorithm>
+
 namespace rtp {
 
 class ThreadGovernor {
@@ -57,8 +59,7 @@ class ThreadGovernor {
     estimate = estimate < 0.0 || step_ - measured > 2
                    ? seconds
                    : (1.0 - kWeight) * estimate +
-                         kWeight * (seconds < kMostOfEstimate * estimate ? seconds
-                                                                          : kMostOfEstimate * estimate);
+                         kWeight * std::min(seconds, kMostOfEstimate * estimate);
     measured = step_;
   }
 
