@@ -372,15 +372,9 @@ void ContactPipeline::collide_pairs(std::span<const BodyState> states, double dt
           ++reused;
           continue;
         }
-        // (a box on a plane: the box's motion in the plane's frame alone; the plane is flat
-        // everywhere and static, and its own motion in the box's frame, about an origin that
-        // may lie tens of metres off, says nothing of the contact)
-        const bool on_plane_a = shapes_[a].kind == BodyShape::Plane;
-        const bool on_plane_b = shapes_[b].kind == BodyShape::Plane;
-        const double travel = on_plane_a   ? motion[1]
-                              : on_plane_b ? motion[0]
-                                           : std::max(motion[0], motion[1]);
-        if (cached.count != 0 && travel + grown <= settings_.manifold_reuse_distance) {
+        // (a box on a plane: both the box's motion in the plane's frame, motion_in_lanes)
+        if (cached.count != 0 &&
+            std::max(motion[0], motion[1]) + grown <= settings_.manifold_reuse_distance) {
           move_manifold(cached, a, b, pair_growth_[k], manifolds_[k]);
           outcome_[k] = kMoved;
           ++moved;
@@ -408,11 +402,11 @@ void ContactPipeline::collide_pairs(std::span<const BodyState> states, double dt
       // a box pair's face contact (its normal a face's, its points on that face and the other
       // box's surface), or a box on a plane (its points the box's corners); edge contacts and
       // the other shapes are computed every step
-      const BodyShape kind_a = shapes_[a].kind, kind_b = shapes_[b].kind;
-      bool movable = cache_touching &&
-                     ((kind_a == BodyShape::Box && kind_b == BodyShape::Box) ||
-                      (kind_a == BodyShape::Box && kind_b == BodyShape::Plane) ||
-                      (kind_a == BodyShape::Plane && kind_b == BodyShape::Box));
+      auto box_or_plane = [&](BodyId i) {
+        return shapes_[i].kind == BodyShape::Box || shapes_[i].kind == BodyShape::Plane;
+      };
+      // (two planes never collide: planes are static)
+      bool movable = cache_touching && box_or_plane(a) && box_or_plane(b);
       for (std::uint8_t j = 0; j < manifold.count && movable; ++j)
         movable = manifold.points[j].feature.type != ContactType::EdgeEdge;
       if (movable) {

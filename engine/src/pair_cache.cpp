@@ -46,8 +46,10 @@ void ContactPipeline::motion_in_lanes(std::size_t first, std::size_t last,
                                       std::array<std::array<float, 2>, kMotionLanes>& out) const {
   // How far b's shape has moved in a's frame since the entry was made: by the offset's change,
   // and by the rotation's change at b's farthest surface point (‖ΔR‖₂ ≤ ‖ΔR‖_F); and a's in b's
-  // frame likewise (a plane has no bound of its own: its side is the other's). In single
-  // precision, a pair a lane: the rotations and the entries' poses read as records and
+  // frame likewise. A plane has no bound of its own, and its motion in the other's frame, about
+  // an origin that may lie tens of metres off, says nothing of the contact (it is flat everywhere
+  // and static): its side is the other's, the other shape's motion in the plane's frame. In
+  // single precision, a pair a lane: the rotations and the entries' poses read as records and
   // transposed, the offset between the centres taken in double first (m; each pair's a, b)
   using L = simd::Pack<float, kMotionLanes>;
   using Index = simd::MaskOf<L>;
@@ -57,6 +59,7 @@ void ContactPipeline::motion_in_lanes(std::size_t first, std::size_t last,
                 offsetof(CachedPair, relative_rotation) == 6 * sizeof(float));
   alignas(64) float offset[3][kMotionLanes] = {}, reach_a[kMotionLanes] = {},
                     reach_b[kMotionLanes] = {};
+  std::array<bool, kMotionLanes> plane_a{}, plane_b{};
   Index at_a{}, at_b{}, at_entry{};
   bool any = false;
   for (std::size_t i = 0; i < kMotionLanes; ++i) {
@@ -70,6 +73,8 @@ void ContactPipeline::motion_in_lanes(std::size_t first, std::size_t last,
     for (int j = 0; j < 3; ++j) offset[j][i] = float(d[j]);
     reach_a[i] = float(shapes_[a].reach);
     reach_b[i] = float(shapes_[b].reach);
+    plane_a[i] = shapes_[a].kind == BodyShape::Plane;
+    plane_b[i] = shapes_[b].kind == BodyShape::Plane;
     at_a[i] = std::int32_t(a * kRotationFloats);
     at_b[i] = std::int32_t(b * kRotationFloats);
     at_entry[i] = std::int32_t(candidate_slot_[k]) * kEntryFloats;
@@ -108,7 +113,8 @@ void ContactPipeline::motion_in_lanes(std::size_t first, std::size_t last,
   alignas(64) float moved_a[kMotionLanes], moved_b[kMotionLanes];
   simd::store(moved_a, simd::sqrt(moved_a_squared) + turned * simd::load<L>(reach_a));
   simd::store(moved_b, simd::sqrt(moved_b_squared) + turned * simd::load<L>(reach_b));
-  for (std::size_t i = 0; i < kMotionLanes; ++i) out[i] = {moved_a[i], moved_b[i]};
+  for (std::size_t i = 0; i < kMotionLanes; ++i)
+    out[i] = {plane_a[i] ? moved_b[i] : moved_a[i], plane_b[i] ? moved_a[i] : moved_b[i]};
 }
 
 void ContactPipeline::move_manifold(const CachedPair& cached, BodyId a, BodyId b, double growth,
