@@ -97,7 +97,7 @@ int main(int argc, char** argv) {
   const int steps = int(std::lround(seconds / scene.dt));
   const int per_line = std::max(1, int(std::lround(every / scene.dt)));
   double drift = 0.0, seconds_stepping = 0.0, deepest = 0.0, energy_added_max = 0.0;
-  std::size_t relax_passes = 0, touching = 0, moved = 0;
+  std::size_t relax_passes = 0, touching = 0, moved = 0, held = 0;
   std::size_t line_relax_passes = 0;  // since the last progress line
   std::size_t line_team_steps = 0;  // steps on more than one thread since then (the governor)
   std::array<double, rtp::StepProfile::kStageNames.size()> stage_seconds{};
@@ -111,6 +111,7 @@ int main(int argc, char** argv) {
     for (std::size_t i = 0; i < stages.size(); ++i) stage_seconds[i] += stages[i];
     touching += world.profile().contact_pairs;
     moved += world.profile().reused_manifolds;
+    held += world.profile().contacts_held ? 1 : 0;
     deepest = std::max(deepest, world.deepest_penetration());
     energy_added_max = std::max(energy_added_max, world.mechanical_energy() - energy);
     for (int i = 0; i < n; ++i) {
@@ -154,5 +155,7 @@ int main(int argc, char** argv) {
   if (moved > 0)
     std::printf("  manifolds moved, not computed: %.1f %% of the touching pairs\n",
                 100.0 * double(moved) / double(touching));
+  if (held > 0)
+    std::printf("  steps that held their contacts: %zu of %zu\n", held, std::size_t(steps));
   return 0;
 }

@@ -39,8 +39,8 @@ std::string base_variant(const std::string& variant) {
 
 // The contact variants: rtp's default soft step, Box2D v3's own soft-step settings (4 substeps,
 // 30 Hz, damping ratio 10, one relax pass, 3 m/s push-out), sequential impulses, and the seed's
-// lab 5; "soft-step-fresh" is the default with the pair cache and the manifolds' reuse off (every
-// candidate through the narrow phase every step); "-2t" runs the narrow phase and each colour of
+// lab 5; "soft-step-fresh" is the default with the pair cache, the manifolds' reuse and held
+// contacts off (every candidate through the narrow phase, every contact built, every step); "-2t" runs the narrow phase and each colour of
 // the solve on two threads
 std::optional<rtp::ContactSettings> contact_settings_for(const std::string& variant) {
   const std::string base = base_variant(variant);
@@ -51,6 +51,7 @@ std::optional<rtp::ContactSettings> contact_settings_for(const std::string& vari
     settings.solver = rtp::ContactSolver::SoftStep;
     settings.pair_cache_distance = 0.0;
     settings.manifold_reuse_distance = 0.0;
+    settings.contact_hold_distance = 0.0;
   } else if (base == "soft-step-4") {
     settings.solver = rtp::ContactSolver::SoftStep;
     settings.substeps = 4;
@@ -258,6 +259,13 @@ EngineInfo rtp_engine_info() {
            c.manifold_reuse_distance > 0.0 ? number(c.manifold_reuse_distance) + " m" : "off",
            "a box pair's face contact is moved with the boxes, its depths measured again, not "
            "computed, while neither box has moved this far in the other's frame since"},
+          {"contacts held",
+           c.contact_hold_distance > 0.0 && c.manifold_reuse_distance > 0.0
+               ? number(c.contact_hold_distance) + " m"
+               : "off",
+           "a step whose pairs are last step's keeps the solver's contacts as packed, each "
+           "point's separation carried on, while no touching pair has moved this far in its "
+           "bodies' frames since"},
       };
       if (c.solver != rtp::ContactSolver::Seed)
         table.push_back({"solver precision", "single, " + std::to_string(rtp::contact_block_lanes()) +

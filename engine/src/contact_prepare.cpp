@@ -106,9 +106,51 @@ void ContactPipeline::load_bodies(std::span<const BodyState> states,
   });
 }
 
+bool ContactPipeline::hold_contacts(double dt) {
+  // each point's separation at the step's start is where last step's solve left it, computed
+  // from the bodies' final poses (a relax pass follows the positions' last integration): the
+  // base the passes add this step's motion to, less the frame offset prepare_lanes() takes off
+  std::vector<ContactBlock>& blocks = lanes_->blocks;
+  std::vector<ContactBlockRest>& rest = lanes_->rest;
+  const std::size_t block_count = blocks.size();
+  const Lane zero = splat(0.0f);
+  std::vector<float>& deepest_of = hold_deepest_;
+  deepest_of.assign(std::size_t(std::max(1, threads_)), 0.0f);
+  parallel_region(threads_, block_count >= 64, [&] {
+    const auto [first, last] = share_of(block_count, team_size(), team_index());
+    Lane deepest = zero;
+    for (std::size_t bi = first; bi < last; ++bi) {
+      ContactBlock& c = blocks[bi];
+      const FrameOffset offset(c);
+      for (int j = 0; j < 4; ++j) {
+        const Lane s = c.points[j].separation;
+        rest[bi].points[j].base_separation = s - offset.d[2];
+        // (a point that is not there has no mass)
+        deepest = simd::max(deepest, simd::select(c.points[j].normal_mass > zero, zero - s, zero));
+      }
+    }
+    float most = 0.0f;
+    for (std::size_t i = 0; i < W; ++i) most = std::max(most, deepest[i]);
+    deepest_of[std::size_t(team_index())] = most;
+  });
+  const double deepest = *std::max_element(deepest_of.begin(), deepest_of.end());
+  // a step recovering from an overlap moves the poses by the contacts first: it builds them
+  if (settings_.solver == ContactSolver::SoftStep && deepest > settings_.max_push_speed * dt)
+    return false;
+  deepest_ = deepest;
+  matched_ = point_count_;
+  return true;
+}
+
 void ContactPipeline::prepare(const Vec3& gravity, double h) {
-  colour_contacts();
   separations_stale_ = true;
+  gravity_ = gravity;
+  restitution_step_ = h;
+  if (held_) {  // the blocks as last step left them (hold_contacts())
+    bounces_ = false;
+    return;
+  }
+  colour_contacts();
   if (settings_.solver == ContactSolver::Seed) return;  // the seed reads the contacts themselves
   const std::uint32_t at_rest = std::uint32_t(bodies_.size() - 1);
   const std::vector<std::uint32_t>& block_start = lanes_->colour_start;
@@ -246,8 +288,9 @@ void ContactPipeline::prepare(const Vec3& gravity, double h) {
     }
   });
   bounces_ = bounces.load(std::memory_order_relaxed);
-  gravity_ = gravity;
-  restitution_step_ = h;
+  blocks_follow_contacts_ = true;
+  any_restitution_ = std::any_of(lanes_->flags.begin(), lanes_->flags.end(),
+                                 [](std::uint8_t f) { return (f & kBouncingBlock) != 0; });
 }
 
 bool ContactPipeline::prepare_lanes(ContactBlock& c, ContactBlockRest& r,

@@ -5,6 +5,7 @@
 #include "contacts.h"
 
 #include <algorithm>
+#include <atomic>
 #include <cmath>
 #include <cstddef>
 #include <limits>
@@ -311,7 +312,31 @@ void ContactPipeline::collide_pairs(std::span<const BodyState> states, double dt
   const bool cache_apart = settings_.pair_cache_distance > 0.0;
   const bool cache_touching = settings_.manifold_reuse_distance > 0.0;
   const bool cache = cache_apart || cache_touching;
-  enum : std::uint8_t { kTouching, kTouchingCached, kMoved, kFoundApart, kStillApart };
+  // (kHeld: a touching pair of a step that holds its contacts, hold_contacts())
+  enum : std::uint8_t { kTouching, kTouchingCached, kMoved, kHeld, kFoundApart, kStillApart };
+  // held contacts (contacts.h): the candidates last step's (each candidate's outcome_ is then
+  // still last step's as it is read), the blocks packed or held last step, each point's
+  // separation in them computed from the bodies' final poses, no restitution to bounce with
+  const bool hold = settings_.contact_hold_distance > 0.0 && cache_touching &&
+                    settings_.warm_start && lanes_ && blocks_follow_contacts_ &&
+                    !separations_stale_ && !any_restitution_ && !contacts_.empty();
+  held_ = hold && outcome_.size() == n && candidates_ == held_candidates_;
+  if (hold) held_candidates_ = candidates_;
+  else held_candidates_.clear();
+  if (held_) {
+    // no touching pair moved past the hold distance since its contact was packed
+    const std::size_t m = contacts_.size();
+    std::atomic<bool> far{false};
+    parallel_for(threads_, (m + kMotionLanes - 1) / kMotionLanes, m >= 1024, [&](std::size_t g) {
+      std::array<std::array<float, 2>, kMotionLanes> motion;
+      const std::size_t first = g * kMotionLanes, last = std::min(m, first + kMotionLanes);
+      held_motion_in_lanes(first, last, motion);
+      for (std::size_t i = 0; i < last - first; ++i)
+        if (std::max(motion[i][0], motion[i][1]) > settings_.contact_hold_distance)
+          far.store(true, std::memory_order_relaxed);
+    });
+    held_ = !far.load(std::memory_order_relaxed) && hold_contacts(dt);
+  }
   outcome_.resize(n);
   if (cache) {
     candidate_slot_.resize(n);
@@ -334,9 +359,26 @@ void ContactPipeline::collide_pairs(std::span<const BodyState> states, double dt
     for (; j < cache_slots_.size(); ++j) free_slots_.push_back(cache_slots_[j].slot);
   }
   std::size_t reused = 0, moved = 0;
+  std::atomic<bool> new_touching{false};  // holding: a pair apart last step touches
+  // the candidates tested, in pair order: every one, or where the step holds the pairs apart
+  // last step (the touching ones are held)
+  auto visit_all = [&] {
+    visit_.resize(n);
+    for (std::size_t k = 0; k < n; ++k) visit_[k] = std::uint32_t(k);
+  };
+  if (held_) {
+    visit_.clear();
+    for (std::size_t k = 0; k < n; ++k) {
+      if (outcome_[k] <= kHeld)
+        outcome_[k] = kHeld;
+      else
+        visit_.push_back(std::uint32_t(k));
+    }
+  } else {
+    visit_all();
+  }
   // the entries of the next group's pairs (kMotionLanes at a time, motion_in_lanes)
   constexpr std::size_t kCacheAhead = kMotionLanes;
-  const std::size_t groups = (n + kMotionLanes - 1) / kMotionLanes;
   // in halves of the pair order, as the contacts are built below and the colours' shares solved:
   // each thread then reads back the manifolds it wrote. Handed out 64 pairs at a time, the two
   // threads wrote each other's cache lines (a pair's outcome is a byte) and read half the
@@ -344,25 +386,27 @@ void ContactPipeline::collide_pairs(std::span<const BodyState> states, double dt
   // 1.15 on one, 0.55 in halves
   // (the counts are the calling thread's: the loop's reduction, or the function's own)
   auto collide_group = [&](std::size_t group, std::size_t& reused, std::size_t& moved) {
+    const std::size_t visits = visit_.size();
     const std::size_t group_first = group * kMotionLanes;
-    const std::size_t group_last = std::min(n, group_first + kMotionLanes);
+    const std::size_t group_last = std::min(visits, group_first + kMotionLanes);
     std::array<std::array<float, 2>, kMotionLanes> motion_of;
-    if (cache) motion_in_lanes(group_first, group_last, motion_of);
-    for (std::size_t k = group_first; k < group_last; ++k) {
+    if (cache) motion_in_lanes(&visit_[group_first], group_last - group_first, motion_of);
+    for (std::size_t at = group_first; at < group_last; ++at) {
+      const std::size_t k = visit_[at];
       const BodyId a = BodyId(candidates_[k] >> 32), b = BodyId(candidates_[k] & 0xffffffffu);
       pair_growth_[k] = pair_growth(shapes_[a], shapes_[b]);
-      if (cache && k + kCacheAhead < n) {
+      if (cache && at + kCacheAhead < visits) {
         // the entries are in no order the hardware prefetcher follows
         const auto* ahead =
-            reinterpret_cast<const char*>(&cache_pool_[candidate_slot_[k + kCacheAhead]]);
+            reinterpret_cast<const char*>(&cache_pool_[candidate_slot_[visit_[at + kCacheAhead]]]);
         for (std::size_t line = 0; line < sizeof(CachedPair); line += 64)
           __builtin_prefetch(ahead + line);
       }
       if (cache && has_entry_[k]) {
         // A pair grown since (a body sped up) spends the growth from the same distance
         const CachedPair& cached = cache_pool_[candidate_slot_[k]];
-        const std::array<double, 2> motion = {motion_of[k - group_first][0],
-                                               motion_of[k - group_first][1]};
+        const std::array<double, 2> motion = {motion_of[at - group_first][0],
+                                               motion_of[at - group_first][1]};
         const double grown = std::max(pair_growth_[k] - double(cached.growth), 0.0);
         if (cached.count == 0 &&
             std::min(motion[0], motion[1]) + grown <= settings_.pair_cache_distance) {
@@ -378,6 +422,7 @@ void ContactPipeline::collide_pairs(std::span<const BodyState> states, double dt
           move_manifold(cached, a, b, pair_growth_[k], manifolds_[k]);
           outcome_[k] = kMoved;
           ++moved;
+          if (held_) new_touching.store(true, std::memory_order_relaxed);
           continue;
         }
       }
@@ -399,6 +444,7 @@ void ContactPipeline::collide_pairs(std::span<const BodyState> states, double dt
         continue;
       }
       outcome_[k] = kTouching;
+      if (held_) new_touching.store(true, std::memory_order_relaxed);
       // a box pair's face contact (its normal a face's, its points on that face and the other
       // box's surface), or a box on a plane (its points the box's corners); edge contacts and
       // the other shapes are computed every step
@@ -415,11 +461,23 @@ void ContactPipeline::collide_pairs(std::span<const BodyState> states, double dt
       }
     }
   };
-  if (threads_ > 1 && n >= 1024) {
+  auto collide_all = [&] {
+    reused = moved = 0;
+    const std::size_t groups = (visit_.size() + kMotionLanes - 1) / kMotionLanes;
+    if (threads_ > 1 && n >= 1024) {
 #pragma omp parallel for num_threads(threads_) schedule(static) reduction(+ : reused, moved)
-    for (std::size_t group = 0; group < groups; ++group) collide_group(group, reused, moved);
-  } else {
-    for (std::size_t group = 0; group < groups; ++group) collide_group(group, reused, moved);
+      for (std::size_t group = 0; group < groups; ++group) collide_group(group, reused, moved);
+    } else {
+      for (std::size_t group = 0; group < groups; ++group) collide_group(group, reused, moved);
+    }
+  };
+  collide_all();
+  // a pair apart last step touches now: the step builds its contacts after all (every pair
+  // again: a test of an apart pair gives the same outcome twice)
+  if (held_ && new_touching.load(std::memory_order_relaxed)) {
+    held_ = false;
+    visit_all();
+    collide_all();
   }
   reused_ = reused;
   moved_ = moved;
@@ -438,10 +496,10 @@ void ContactPipeline::collide_pairs(std::span<const BodyState> states, double dt
   for (std::size_t k = 0; k < n; ++k) {
     const std::uint8_t outcome = outcome_[k];
     touching[touching_count] = std::uint32_t(k);
-    touching_count += outcome <= kMoved;
+    touching_count += outcome <= kHeld;
     if (!cache) continue;
     if (outcome == kTouchingCached || outcome == kMoved || outcome == kStillApart ||
-        (outcome == kFoundApart && cache_apart))
+        (outcome == kHeld && has_entry_[k]) || (outcome == kFoundApart && cache_apart))
       kept[kept_count++] = {candidates_[k], candidate_slot_[k]};
     else
       free_slots_.push_back(candidate_slot_[k]);
@@ -449,6 +507,10 @@ void ContactPipeline::collide_pairs(std::span<const BodyState> states, double dt
   touching_.resize(touching_count);
   next_cache_slots_.resize(kept_count);
   std::swap(cache_slots_, next_cache_slots_);
+  // holding, the contacts and the blocks stay as they are (hold_contacts() took the deepest
+  // overlap and carried the separations on)
+  if (held_) return;
+  blocks_follow_contacts_ = false;
 
   // every contact built and matched with last step's on the threads (each writes its own; last
   // step's is found by key in its sorted list): the same contacts on any number of threads
@@ -459,6 +521,7 @@ void ContactPipeline::collide_pairs(std::span<const BodyState> states, double dt
   contacts_.resize(m);
   contact_keys_.resize(m);
   contact_class_.resize(m);
+  if (hold) packed_poses_.resize(m);
   double deepest = 0.0;
   std::size_t matched = 0, points = 0;
   // in chunks, each of which finds its first contact's place among last step's keys by a search
@@ -480,6 +543,7 @@ void ContactPipeline::collide_pairs(std::span<const BodyState> states, double dt
       // every field written once (assigning ContactConstraint{} first built a zeroed one on
       // the stack and copied it in: about a quarter of this loop's samples by perf)
       ContactConstraint& c = contacts_[i];
+      if (hold) record_pose(a, b, packed_poses_[i]);
       c.body_a = a;
       c.body_b = b;
       c.friction_impulse = {0.0f, 0.0f};

@@ -182,6 +182,7 @@ class ContactPipeline final : public ContactStages {
   std::size_t matched_points() const override { return matched_; }
   std::size_t reused_pairs() const override { return reused_; }
   std::size_t reused_manifolds() const override { return moved_; }
+  bool contacts_held() const override { return held_; }
 
  private:
   struct BodyShapeData;
@@ -291,12 +292,40 @@ class ContactPipeline final : public ContactStages {
   };
   static_assert(sizeof(CachedPair) == 208);
   // how far each body's shape has moved in the other's frame since its entry's pose (m), for
-  // the candidates [first, last) with an entry, kMotionLanes at a time (a lane each, as
-  // out[k − first]; a lane without an entry holds a number that means nothing, and none is
-  // written where no candidate of the group has one)
+  // the candidates ks[0, count) with an entry, up to kMotionLanes (a lane each, as out[i]; a
+  // lane without an entry holds a number that means nothing, and none is written where no
+  // candidate of the group has one)
   static constexpr std::size_t kMotionLanes = simd::kNativeFloats;
-  void motion_in_lanes(std::size_t first, std::size_t last,
+  void motion_in_lanes(const std::uint32_t* ks, std::size_t count,
                        std::array<std::array<float, 2>, kMotionLanes>& out) const;
+  // the same for the contacts [first, last), since their blocks were packed (packed_poses_)
+  void held_motion_in_lanes(std::size_t first, std::size_t last,
+                            std::array<std::array<float, 2>, kMotionLanes>& out) const;
+  // the test both read: lane i's pair keys[i] against the pose recorded at entries + at[i]
+  // (floats; CachedPair's first fifteen), where valid[i]
+  void motion_since(const float* entries, const std::array<std::uint64_t, kMotionLanes>& keys,
+                    const std::array<std::int32_t, kMotionLanes>& at,
+                    const std::array<bool, kMotionLanes>& valid,
+                    std::array<std::array<float, 2>, kMotionLanes>& out) const;
+  // a pair's pose as an entry records it (Raᵀ(xb − xa), Rbᵀ(xa − xb), Raᵀ Rb), padded
+  static constexpr std::size_t kPackedPoseFloats = 16;
+  using PackedPose = std::array<float, kPackedPoseFloats>;
+  void record_pose(BodyId a, BodyId b, PackedPose& out) const;
+  // Contacts held (docs/solver.md, "Held contacts"): a step whose candidate pairs are last
+  // step's, none of whose touching pairs has moved more than ContactSettings::
+  // contact_hold_distance in its bodies' frames since its contact was packed into the blocks,
+  // keeps the blocks as they are: each point's separation goes on from where last step's solve
+  // left it, and no manifold is moved, no contact built, matched, coloured or packed.
+  // Each contact's pose when its block was packed (by contact, as contacts_)
+  std::vector<PackedPose> packed_poses_;
+  std::vector<std::uint64_t> held_candidates_;  // last step's candidates, where it may hold
+  bool held_ = false;                  // this step holds
+  bool blocks_follow_contacts_ = false;  // the blocks hold contacts_, packed or held last step
+  bool any_restitution_ = false;       // some lane's restitution is above zero (prepare())
+  // whether this step holds: the blocks' separations carried on and their deepest overlap
+  // taken where it does (false: nothing the full step reads has changed)
+  bool hold_contacts(double dt);
+  std::vector<float> hold_deepest_;  // its scratch: each thread's deepest overlap (m)
   // each body's rotation in single precision, row by row (nine floats, then zeros), a record of
   // kRotationFloats floats: what motion_in_lanes reads
   static constexpr std::size_t kRotationFloats = 16;
@@ -320,6 +349,7 @@ class ContactPipeline final : public ContactStages {
   std::vector<std::uint32_t> candidate_slot_;  // per candidate: its slot this step
   std::vector<std::uint8_t> has_entry_;        // per candidate: 1 if its slot holds last step's
   std::vector<std::uint8_t> outcome_;  // per candidate: touching, found apart, still apart...
+  std::vector<std::uint32_t> visit_;   // the candidates the narrow phase tests this step
   std::vector<std::uint32_t> touching_;     // the candidates whose manifold has points
   std::size_t reused_ = 0, moved_ = 0;
   std::vector<Pose> poses_;  // per body, this step

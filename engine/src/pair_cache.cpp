@@ -42,8 +42,54 @@ void ContactPipeline::cache_pair(BodyId a, BodyId b, double growth, const Manifo
   }
 }
 
-void ContactPipeline::motion_in_lanes(std::size_t first, std::size_t last,
+void ContactPipeline::record_pose(BodyId a, BodyId b, PackedPose& out) const {
+  // as cache_pair() records an entry's pose, in its layout
+  using RowMajor3f = Eigen::Matrix<float, 3, 3, Eigen::RowMajor>;
+  const Eigen::Map<const RowMajor3f> ra(rotations_[a].data()), rb(rotations_[b].data());
+  const Eigen::Vector3f d = (poses_[b].position - poses_[a].position).cast<float>();
+  Eigen::Map<Eigen::Vector3f>(out.data()) = ra.transpose() * d;
+  Eigen::Map<Eigen::Vector3f>(out.data() + 3) = -(rb.transpose() * d);
+  Eigen::Map<Eigen::Matrix3f>(out.data() + 6) = ra.transpose() * rb;
+  out[15] = 0.0f;
+}
+
+void ContactPipeline::motion_in_lanes(const std::uint32_t* ks, std::size_t count,
                                       std::array<std::array<float, 2>, kMotionLanes>& out) const {
+  std::array<std::uint64_t, kMotionLanes> keys{};
+  std::array<std::int32_t, kMotionLanes> at{};
+  std::array<bool, kMotionLanes> valid{};
+  constexpr int kEntryFloats = int(sizeof(CachedPair) / sizeof(float));
+  for (std::size_t i = 0; i < count; ++i) {
+    const std::size_t k = ks[i];
+    if (!has_entry_[k]) continue;
+    valid[i] = true;
+    keys[i] = candidates_[k];
+    at[i] = std::int32_t(candidate_slot_[k]) * kEntryFloats;
+  }
+  motion_since(reinterpret_cast<const float*>(cache_pool_.data()), keys, at, valid, out);
+}
+
+void ContactPipeline::held_motion_in_lanes(
+    std::size_t first, std::size_t last,
+    std::array<std::array<float, 2>, kMotionLanes>& out) const {
+  std::array<std::uint64_t, kMotionLanes> keys{};
+  std::array<std::int32_t, kMotionLanes> at{};
+  std::array<bool, kMotionLanes> valid{};
+  for (std::size_t i = 0; i < kMotionLanes; ++i) {
+    const std::size_t c = first + i;
+    if (c >= last) continue;
+    valid[i] = true;
+    keys[i] = contact_keys_[c];
+    at[i] = std::int32_t(c * kPackedPoseFloats);
+  }
+  motion_since(packed_poses_.front().data(), keys, at, valid, out);
+}
+
+void ContactPipeline::motion_since(const float* entries,
+                                   const std::array<std::uint64_t, kMotionLanes>& keys,
+                                   const std::array<std::int32_t, kMotionLanes>& at,
+                                   const std::array<bool, kMotionLanes>& valid,
+                                   std::array<std::array<float, 2>, kMotionLanes>& out) const {
   // How far b's shape has moved in a's frame since the entry was made: by the offset's change,
   // and by the rotation's change at b's farthest surface point (‖ΔR‖₂ ≤ ‖ΔR‖_F); and a's in b's
   // frame likewise. A plane has no bound of its own, and its motion in the other's frame, about
@@ -51,9 +97,9 @@ void ContactPipeline::motion_in_lanes(std::size_t first, std::size_t last,
   // and static): its side is the other's, the other shape's motion in the plane's frame. In
   // single precision, a pair a lane: the rotations and the entries' poses read as records and
   // transposed, the offset between the centres taken in double first (m; each pair's a, b)
+  // (the pose recorded at entries + at[i], lane i's pair keys[i], where valid[i])
   using L = simd::Pack<float, kMotionLanes>;
   using Index = simd::MaskOf<L>;
-  constexpr int kEntryFloats = int(sizeof(CachedPair) / sizeof(float));
   static_assert(sizeof(CachedPair) % sizeof(float) == 0 &&
                 offsetof(CachedPair, offset_in_b) == 3 * sizeof(float) &&
                 offsetof(CachedPair, relative_rotation) == 6 * sizeof(float));
@@ -63,12 +109,11 @@ void ContactPipeline::motion_in_lanes(std::size_t first, std::size_t last,
   Index at_a{}, at_b{}, at_entry{};
   bool any = false;
   for (std::size_t i = 0; i < kMotionLanes; ++i) {
-    const std::size_t k = first + i;
-    // a lane without an entry reads body 0 and slot 0 (there is one: some lane has an entry)
+    // a lane without an entry reads body 0 and entry 0 (there is one: some lane has an entry)
     at_a[i] = at_b[i] = at_entry[i] = 0;
-    if (k >= last || !has_entry_[k]) continue;
+    if (!valid[i]) continue;
     any = true;
-    const BodyId a = BodyId(candidates_[k] >> 32), b = BodyId(candidates_[k] & 0xffffffffu);
+    const BodyId a = BodyId(keys[i] >> 32), b = BodyId(keys[i] & 0xffffffffu);
     const Vec3 d = poses_[b].position - poses_[a].position;
     for (int j = 0; j < 3; ++j) offset[j][i] = float(d[j]);
     reach_a[i] = float(shapes_[a].reach);
@@ -77,11 +122,10 @@ void ContactPipeline::motion_in_lanes(std::size_t first, std::size_t last,
     plane_b[i] = shapes_[b].kind == BodyShape::Plane;
     at_a[i] = std::int32_t(a * kRotationFloats);
     at_b[i] = std::int32_t(b * kRotationFloats);
-    at_entry[i] = std::int32_t(candidate_slot_[k]) * kEntryFloats;
+    at_entry[i] = at[i];
   }
   if (!any) return;
   const float* rotations = rotations_.front().data();
-  const float* entries = reinterpret_cast<const float*>(cache_pool_.data());
   L a_low[8], a_high[8], b_low[8], b_high[8], e_low[8], e_high[8];
   simd::gather_records(rotations, at_a, a_low);
   simd::gather_records(rotations + 8, at_a, a_high);

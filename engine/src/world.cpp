@@ -64,7 +64,8 @@ World::World(Vec3 gravity, Integrator integrator, ContactSettings contacts)
       !(contacts.contact_hertz >= 0.0) || !(contacts.damping_ratio >= 0.0) ||
       !(contacts.max_push_speed > 0.0) || !(contacts.relax_tolerance >= 0.0) ||
       !std::isfinite(contacts.relax_tolerance) || !(contacts.restitution_tolerance >= 0.0) ||
-      !std::isfinite(contacts.restitution_tolerance))
+      !std::isfinite(contacts.restitution_tolerance) ||
+      !(contacts.contact_hold_distance >= 0.0) || !std::isfinite(contacts.contact_hold_distance))
     throw std::invalid_argument("rtp: contact distances, stiffness and speeds must be >= 0");
   contact_isa_ = &contact_isa(contacts.instruction_set);
 }
@@ -537,6 +538,7 @@ void World::step_with_contacts(double dt) {
   profile_.matched_points = contacts.matched_points();
   profile_.reused_pairs = contacts.reused_pairs();
   profile_.reused_manifolds = contacts.reused_manifolds();
+  profile_.contacts_held = contacts.contacts_held();
   profile_.total = seconds_since(start);
   profile_.threads = active_threads_;
   governor_.record(active_threads_, profile_.total);

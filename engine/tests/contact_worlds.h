@@ -1,7 +1,9 @@
 // Small contact worlds for the engine's contact tests (test_contacts.cpp,
-// test_overlap_recovery.cpp): a ground plane and boxes of a given mass, at the tests' step and
+// test_overlap_recovery.cpp, test_held_contacts.cpp): a ground plane and boxes of a given mass, at the tests' step and
 // gravity.
 #pragma once
+
+#include <vector>
 
 #include "rtp/world.h"
 
@@ -37,6 +39,19 @@ inline BodyId add_box(World& world, const Vec3& position, double mass, double fr
   box.friction = friction;
   box.restitution = restitution;
   return world.add_body(box);
+}
+
+// every body's pose and momenta, number by number (to compare two runs' bits)
+inline std::vector<double> state_numbers(const World& world) {
+  std::vector<double> state;
+  for (BodyId b = 0; b < world.body_count(); ++b) {
+    const BodyState& s = world.state(b);
+    state.insert(state.end(), s.position.data(), s.position.data() + 3);
+    state.insert(state.end(), s.orientation.coeffs().data(), s.orientation.coeffs().data() + 4);
+    state.insert(state.end(), s.linear_momentum.data(), s.linear_momentum.data() + 3);
+    state.insert(state.end(), s.angular_momentum.data(), s.angular_momentum.data() + 3);
+  }
+  return state;
 }
 
 }  // namespace rtp::contact_worlds

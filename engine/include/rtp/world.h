@@ -167,6 +167,11 @@ struct ContactSettings {
                                          // measured again, while neither box has moved more
                                          // than this in the other's frame since it was
                                          // computed (0: every touching pair tested each step)
+  double contact_hold_distance = 5e-5;  // m: a step whose pairs are last step's keeps the
+                                        // solver's contacts as packed, each point's separation
+                                        // carried on from the solve's, while no touching pair
+                                        // has moved more than this in its bodies' frames since
+                                        // its contact was packed (0: off; needs the reuse on)
   int threads = 1;  // the narrow phase and each colour of the solve (identical results at any
                     // count: a colour's contacts share no dynamic body)
   // with threads > 1, each step runs on the team or on one thread, whichever the recent steps
@@ -211,6 +216,9 @@ struct StepProfile {
   std::size_t matched_points = 0;  // points that carried last step's impulses
   std::size_t reused_pairs = 0;    // candidate pairs the pair cache found still apart
   std::size_t reused_manifolds = 0;  // touching pairs whose manifold was moved, not computed
+  // the step held its contacts: the solver's blocks were last step's, no manifold moved and no
+  // contact built (ContactSettings::contact_hold_distance)
+  bool contacts_held = false;
   std::size_t swept_stops = 0;     // fast bodies the continuous stage stopped short
   std::size_t relax_passes = 0;    // relax solves this step, over its substeps
   int threads = 1;                 // the team the step ran on (ThreadGovernor)
