@@ -100,6 +100,7 @@ int main(int argc, char** argv) {
   std::size_t relax_passes = 0, touching = 0, moved = 0, held = 0;
   std::size_t line_relax_passes = 0;  // since the last progress line
   std::size_t line_team_steps = 0;  // steps on more than one thread since then (the governor)
+  std::size_t line_held = 0, line_touching = 0;  // contacts held, and all, since then
   std::array<double, rtp::StepProfile::kStageNames.size()> stage_seconds{};
   for (int k = 0; k < steps; ++k) {
     world.step(scene.dt);
@@ -107,11 +108,13 @@ int main(int argc, char** argv) {
     relax_passes += world.profile().relax_passes;
     line_relax_passes += world.profile().relax_passes;
     line_team_steps += world.profile().threads > 1;
+    line_held += world.profile().held_contacts;
+    line_touching += world.profile().contact_pairs;
     const auto stages = world.profile().stage_seconds();
     for (std::size_t i = 0; i < stages.size(); ++i) stage_seconds[i] += stages[i];
     touching += world.profile().contact_pairs;
     moved += world.profile().reused_manifolds;
-    held += world.profile().contacts_held ? 1 : 0;
+    held += world.profile().held_contacts;
     deepest = std::max(deepest, world.deepest_penetration());
     energy_added_max = std::max(energy_added_max, world.mechanical_energy() - energy);
     for (int i = 0; i < n; ++i) {
@@ -122,12 +125,14 @@ int main(int argc, char** argv) {
     if ((k + 1) % per_line == 0) {
       std::fprintf(stderr,
                    "t = %.2f s  drift %.4f m  top x %+.4f m, height %+.4f m  deepest %.4f m  "
-                   "%.1f relax passes a step  %.0f %% of steps on the team\n",
+                   "%.1f relax passes a step  %.0f %% of steps on the team  %.0f %% of contacts held\n",
                    (k + 1) * scene.dt, drift, world.state(top).position.x() - start[top].x(),
                    world.state(top).position.y() - start[top].y(), world.deepest_penetration(),
-                   double(line_relax_passes) / per_line, 100.0 * double(line_team_steps) / per_line);
+                   double(line_relax_passes) / per_line, 100.0 * double(line_team_steps) / per_line,
+                   line_touching > 0 ? 100.0 * double(line_held) / double(line_touching) : 0.0);
       line_relax_passes = 0;
       line_team_steps = 0;
+      line_held = line_touching = 0;
     }
   }
   std::uint64_t fingerprint = 0xcbf29ce484222325u;  // FNV-1a, 64 bits
@@ -156,6 +161,7 @@ int main(int argc, char** argv) {
     std::printf("  manifolds moved, not computed: %.1f %% of the touching pairs\n",
                 100.0 * double(moved) / double(touching));
   if (held > 0)
-    std::printf("  steps that held their contacts: %zu of %zu\n", held, std::size_t(steps));
+    std::printf("  contacts held in last step's blocks: %.1f %% of the touching pairs\n",
+                100.0 * double(held) / double(touching));
   return 0;
 }

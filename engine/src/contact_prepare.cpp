@@ -106,10 +106,11 @@ void ContactPipeline::load_bodies(std::span<const BodyState> states,
   });
 }
 
-bool ContactPipeline::hold_contacts(double dt) {
+double ContactPipeline::hold_contacts() {
   // each point's separation at the step's start is where last step's solve left it, computed
   // from the bodies' final poses (a relax pass follows the positions' last integration): the
-  // base the passes add this step's motion to, less the frame offset prepare_lanes() takes off
+  // base the passes add this step's motion to, less the frame offset prepare_lanes() takes off;
+  // in every block but those packed again (block_refresh_)
   std::vector<ContactBlock>& blocks = lanes_->blocks;
   std::vector<ContactBlockRest>& rest = lanes_->rest;
   const std::size_t block_count = blocks.size();
@@ -120,6 +121,7 @@ bool ContactPipeline::hold_contacts(double dt) {
     const auto [first, last] = share_of(block_count, team_size(), team_index());
     Lane deepest = zero;
     for (std::size_t bi = first; bi < last; ++bi) {
+      if (block_refresh_[bi]) continue;
       ContactBlock& c = blocks[bi];
       const FrameOffset offset(c);
       for (int j = 0; j < 4; ++j) {
@@ -133,30 +135,23 @@ bool ContactPipeline::hold_contacts(double dt) {
     for (std::size_t i = 0; i < W; ++i) most = std::max(most, deepest[i]);
     deepest_of[std::size_t(team_index())] = most;
   });
-  const double deepest = *std::max_element(deepest_of.begin(), deepest_of.end());
-  // a step recovering from an overlap moves the poses by the contacts first: it builds them
-  if (settings_.solver == ContactSolver::SoftStep && deepest > settings_.max_push_speed * dt)
-    return false;
-  deepest_ = deepest;
-  matched_ = point_count_;
-  return true;
+  return *std::max_element(deepest_of.begin(), deepest_of.end());
 }
 
 void ContactPipeline::prepare(const Vec3& gravity, double h) {
   separations_stale_ = true;
   gravity_ = gravity;
   restitution_step_ = h;
-  if (held_) {  // the blocks as last step left them (hold_contacts())
+  if (held_ && held_count_ == contacts_.size()) {  // every block as last step left it
     bounces_ = false;
     return;
   }
-  colour_contacts();
+  if (!held_) colour_contacts();  // (holding, the blocks keep their contacts and order)
   if (settings_.solver == ContactSolver::Seed) return;  // the seed reads the contacts themselves
-  const std::uint32_t at_rest = std::uint32_t(bodies_.size() - 1);
   const std::vector<std::uint32_t>& block_start = lanes_->colour_start;
   std::vector<ContactBlock>& blocks = lanes_->blocks;
   const std::size_t block_count = blocks.size();
-  const Lane zero_lane = splat(0.0f);
+  block_of_contact_.resize(contacts_.size());
   std::atomic<bool> bounces{false};
   // a block's contacts, [first, last) in colour_order_: which colour it is of, and where in it
   // (W contacts a block, one in the overflow colour)
@@ -171,106 +166,28 @@ void ContactPipeline::prepare(const Vec3& gravity, double h) {
                      std::min<std::size_t>(first + per_block, colour_start_[colour + 1])};
   };
   auto prepare_block = [&](std::size_t bi) {
-    ContactBlock& block = blocks[bi];
-    ContactBlockRest& rest = lanes_->rest[bi];
-    // every lane of the block and its rest is written below (not cleared first: 3 KB a block,
-    // a base-100 step's 5.7 MB written twice); these two are not, until the solve
-    for (int j = 0; j < 4; ++j) {
-      block.points[j].separation = zero_lane;
-      rest.points[j].max_normal_impulse = zero_lane;
-    }
-    const auto [first, last] = contacts_of(bi);
-    for (std::size_t i = 0; i < W; ++i) {
-      block.body_a[i] = block.body_b[i] = at_rest;
-      rest.contact[i] = kNoContact;
-    }
-    std::array<LaneMask, 4> exists{};  // the lanes where each point is
-    std::array<LaneMask, 4> cold{};    // and where it is cold (ContactConstraint::cold)
-    Lane acceleration{};
-    // the next block's contacts asked for now (a colour's contacts lie far apart in contacts_, a
-    // 5,050-box pyramid's 3.4 MB), so that their lines arrive while this one is packed
-    if (bi + 1 < block_count) {
-      const auto [next_first, next_last] = contacts_of(bi + 1);
-      for (std::size_t k = next_first; k < next_last; ++k)
-        simd::prefetch(&contacts_[colour_order_[k]], sizeof(ContactConstraint));
-    }
-    // the lanes' contacts and bodies; an empty lane reads contact 0 and the body at rest, and its
-    // contact's numbers are cleared below
-    LaneIndex contact_offsets, mass_a_offsets, mass_b_offsets;
-    LaneMask filled = zero_lane != zero_lane;
-    for (std::size_t i = 0; i < W; ++i) {
-      std::uint32_t index = 0;
-      if (first + i < last) {
-        index = colour_order_[first + i];
-        const ContactConstraint& c = contacts_[index];
-        rest.contact[i] = index;
-        block.body_a[i] = c.body_a;
-        block.body_b[i] = c.body_b;
-        filled[i] = -1;
-        for (std::uint8_t j = 0; j < c.count; ++j) {
-          exists[j][i] = -1;
-          cold[j][i] = (c.cold >> j & 1u) ? -1 : 0;
-        }
+    std::array<std::uint32_t, W> record_of;
+    if (held_) {
+      // a step that holds packs again only the blocks with a lane moved past the hold distance,
+      // each lane its contact as before (hold_contacts() carried the others on)
+      if (!block_refresh_[bi]) return;
+      record_of = lanes_->rest[bi].contact;
+    } else {
+      const auto [first, last] = contacts_of(bi);
+      for (std::size_t i = 0; i < W; ++i) {
+        record_of[i] = first + i < last ? colour_order_[first + i] : kNoContact;
+        lanes_->rest[bi].contact[i] = record_of[i];
+        if (record_of[i] != kNoContact) block_of_contact_[record_of[i]] = std::uint32_t(bi);
       }
-      contact_offsets[i] = std::int32_t(index * kContactFloats);
-      mass_a_offsets[i] = std::int32_t(block.body_a[i] * 8);
-      mass_b_offsets[i] = std::int32_t(block.body_b[i] * 8);
+      // the next block's contacts asked for now (a colour's contacts lie far apart in contacts_,
+      // a 5,050-box pyramid's 3.4 MB), so that their lines arrive while this one is packed
+      if (bi + 1 < block_count) {
+        const auto [next_first, next_last] = contacts_of(bi + 1);
+        for (std::size_t k = next_first; k < next_last; ++k)
+          simd::prefetch(&contacts_[colour_order_[k]], sizeof(ContactConstraint));
+      }
     }
-    // each contact's numbers by records transposed to lanes (ContactConstraint's floats: the
-    // normal, the tangents, friction, restitution and the friction impulses, then each point's
-    // anchors, base separation and normal impulse; a point past the contact's count is zero)
-    const float* contact_floats = reinterpret_cast<const float*>(contacts_.data());
-    Lane rows[8];
-    auto clear = [&](Lane x) { return simd::select(filled, x, zero_lane); };
-    simd::gather_records(contact_floats + kNormalFloat, contact_offsets, rows);
-    // (the contact's tangents are not kept: the passes compute them from the normal)
-    for (int k = 0; k < 3; ++k) block.normal[k] = clear(rows[k]);
-    block.tangent_scale = tangent_scale(load3(block.normal));
-    simd::gather_records(contact_floats + kNormalFloat + 8, contact_offsets, rows);
-    block.friction = clear(rows[1]), rest.restitution = clear(rows[2]);
-    block.friction_impulse[0] = clear(rows[3]), block.friction_impulse[1] = clear(rows[4]);
-    block.twist_impulse = clear(rows[5]);
-    // (the anchors as the contacts hold them, world vectors from each centre: prepare_lanes()
-    // keeps them in the manifold's frame)
-    PointAnchors anchors;
-    for (int j = 0; j < 4; ++j) {
-      ContactBlock::Point& p = block.points[j];
-      simd::gather_records(contact_floats + kPointFloat + j * kPointFloats, contact_offsets, rows);
-      for (int k = 0; k < 6; ++k) anchors[j][k] = clear(rows[k]);
-      rest.points[j].base_separation = clear(rows[6]);
-      p.normal_impulse = clear(rows[7]);
-    }
-    // each body's masses (mass_records_: the body at rest's are zero; the passes read the
-    // inverse mass and the inertia's xx from the body's record, the rest of the inertia from the
-    // block's rest: c·1 where both are isotropic)
-    const float* mass_floats = mass_records_.front().data();
-    auto isotropic = [&](const Lane(&m)[8]) {
-      return (m[2] == m[1]) & (m[3] == m[1]) & (m[4] == zero_lane) & (m[5] == zero_lane) &
-             (m[6] == zero_lane);
-    };
-    simd::gather_records(mass_floats, mass_a_offsets, rows);
-    const Lane inverse_mass_a = rows[0];
-    for (int k = 0; k < 5; ++k) rest.inverse_inertia_a[k] = rows[2 + k];
-    LaneMask round = isotropic(rows);
-    simd::gather_records(mass_floats, mass_b_offsets, rows);
-    const Lane inverse_mass_b = rows[0];
-    for (int k = 0; k < 5; ++k) rest.inverse_inertia_b[k] = rows[2 + k];
-    round &= isotropic(rows);
-    const bool isotropic_block = simd::all_of(round);
-    for (std::size_t i = 0; first + i < last; ++i) {
-      // the gravity along n that free flight closes a gap with (relative, b's less a's)
-      const Vec3 normal(double(block.normal[0][i]), double(block.normal[1][i]),
-                        double(block.normal[2][i]));
-      const Vec3 gravity_a = inverse_mass_a[i] > 0.0f ? gravity : Vec3::Zero();
-      const Vec3 gravity_b = inverse_mass_b[i] > 0.0f ? gravity : Vec3::Zero();
-      acceleration[i] = float(normal.dot(gravity_b - gravity_a));
-    }
-    if (prepare_lanes(block, rest, anchors, exists, cold, acceleration, h))
-      bounces.store(true, std::memory_order_relaxed);
-    const bool bouncing_block = simd::any_of(rest.restitution > zero_lane);
-    lanes_->flags[bi] = std::uint8_t((isotropic_block ? kIsotropicBlock : 0) |
-                                     (simd::any_of(rest.fresh) ? kFreshBlock : 0) |
-                                     (bouncing_block ? kBouncingBlock : 0));
+    if (pack_block(bi, record_of, gravity, h)) bounces.store(true, std::memory_order_relaxed);
   };
   // each thread the blocks it solves: of each colour its share (for_each_block; a colour too
   // small to share is split here too, and solved on one thread there), so that the contacts it
@@ -291,6 +208,103 @@ void ContactPipeline::prepare(const Vec3& gravity, double h) {
   blocks_follow_contacts_ = true;
   any_restitution_ = std::any_of(lanes_->flags.begin(), lanes_->flags.end(),
                                  [](std::uint8_t f) { return (f & kBouncingBlock) != 0; });
+}
+
+bool ContactPipeline::pack_block(std::size_t bi, const std::array<std::uint32_t, W>& record_of,
+                                 const Vec3& gravity, double h) {
+  // block bi's lanes from the contacts: lane i from contacts_[record_of[i]], empty where that is
+  // kNoContact (an empty lane reads the body at rest past the last)
+  const std::uint32_t at_rest = std::uint32_t(bodies_.size() - 1);
+  const Lane zero_lane = splat(0.0f);
+  ContactBlock& block = lanes_->blocks[bi];
+  ContactBlockRest& rest = lanes_->rest[bi];
+  // every lane of the block and its rest is written below (not cleared first: 3 KB a block,
+  // a base-100 step's 5.7 MB written twice); these two are not, until the solve
+  for (int j = 0; j < 4; ++j) {
+    block.points[j].separation = zero_lane;
+    rest.points[j].max_normal_impulse = zero_lane;
+  }
+  for (std::size_t i = 0; i < W; ++i) block.body_a[i] = block.body_b[i] = at_rest;
+  std::array<LaneMask, 4> exists{};  // the lanes where each point is
+  std::array<LaneMask, 4> cold{};    // and where it is cold (ContactConstraint::cold)
+  Lane acceleration{};
+  // the lanes' contacts and bodies; an empty lane reads contact 0 and the body at rest, and its
+  // contact's numbers are cleared below
+  LaneIndex contact_offsets, mass_a_offsets, mass_b_offsets;
+  LaneMask filled = zero_lane != zero_lane;
+  for (std::size_t i = 0; i < W; ++i) {
+    std::uint32_t index = 0;
+    if (record_of[i] != kNoContact) {
+      index = record_of[i];
+      const ContactConstraint& c = contacts_[index];
+      block.body_a[i] = c.body_a;
+      block.body_b[i] = c.body_b;
+      filled[i] = -1;
+      for (std::uint8_t j = 0; j < c.count; ++j) {
+        exists[j][i] = -1;
+        cold[j][i] = (c.cold >> j & 1u) ? -1 : 0;
+      }
+    }
+    contact_offsets[i] = std::int32_t(index * kContactFloats);
+    mass_a_offsets[i] = std::int32_t(block.body_a[i] * 8);
+    mass_b_offsets[i] = std::int32_t(block.body_b[i] * 8);
+  }
+  // each contact's numbers by records transposed to lanes (ContactConstraint's floats: the
+  // normal, the tangents, friction, restitution and the friction impulses, then each point's
+  // anchors, base separation and normal impulse; a point past the contact's count is zero)
+  const float* contact_floats = reinterpret_cast<const float*>(contacts_.data());
+  Lane rows[8];
+  auto clear = [&](Lane x) { return simd::select(filled, x, zero_lane); };
+  simd::gather_records(contact_floats + kNormalFloat, contact_offsets, rows);
+  // (the contact's tangents are not kept: the passes compute them from the normal)
+  for (int k = 0; k < 3; ++k) block.normal[k] = clear(rows[k]);
+  block.tangent_scale = tangent_scale(load3(block.normal));
+  simd::gather_records(contact_floats + kNormalFloat + 8, contact_offsets, rows);
+  block.friction = clear(rows[1]), rest.restitution = clear(rows[2]);
+  block.friction_impulse[0] = clear(rows[3]), block.friction_impulse[1] = clear(rows[4]);
+  block.twist_impulse = clear(rows[5]);
+  // (the anchors as the contacts hold them, world vectors from each centre: prepare_lanes()
+  // keeps them in the manifold's frame)
+  PointAnchors anchors;
+  for (int j = 0; j < 4; ++j) {
+    ContactBlock::Point& p = block.points[j];
+    simd::gather_records(contact_floats + kPointFloat + j * kPointFloats, contact_offsets, rows);
+    for (int k = 0; k < 6; ++k) anchors[j][k] = clear(rows[k]);
+    rest.points[j].base_separation = clear(rows[6]);
+    p.normal_impulse = clear(rows[7]);
+  }
+  // each body's masses (mass_records_: the body at rest's are zero; the passes read the
+  // inverse mass and the inertia's xx from the body's record, the rest of the inertia from the
+  // block's rest: c·1 where both are isotropic)
+  const float* mass_floats = mass_records_.front().data();
+  auto isotropic = [&](const Lane(&m)[8]) {
+    return (m[2] == m[1]) & (m[3] == m[1]) & (m[4] == zero_lane) & (m[5] == zero_lane) &
+           (m[6] == zero_lane);
+  };
+  simd::gather_records(mass_floats, mass_a_offsets, rows);
+  const Lane inverse_mass_a = rows[0];
+  for (int k = 0; k < 5; ++k) rest.inverse_inertia_a[k] = rows[2 + k];
+  LaneMask round = isotropic(rows);
+  simd::gather_records(mass_floats, mass_b_offsets, rows);
+  const Lane inverse_mass_b = rows[0];
+  for (int k = 0; k < 5; ++k) rest.inverse_inertia_b[k] = rows[2 + k];
+  round &= isotropic(rows);
+  const bool isotropic_block = simd::all_of(round);
+  for (std::size_t i = 0; i < W; ++i) {
+    if (record_of[i] == kNoContact) continue;
+    // the gravity along n that free flight closes a gap with (relative, b's less a's)
+    const Vec3 normal(double(block.normal[0][i]), double(block.normal[1][i]),
+                      double(block.normal[2][i]));
+    const Vec3 gravity_a = inverse_mass_a[i] > 0.0f ? gravity : Vec3::Zero();
+    const Vec3 gravity_b = inverse_mass_b[i] > 0.0f ? gravity : Vec3::Zero();
+    acceleration[i] = float(normal.dot(gravity_b - gravity_a));
+  }
+  const bool bounces = prepare_lanes(block, rest, anchors, exists, cold, acceleration, h);
+  const bool bouncing_block = simd::any_of(rest.restitution > zero_lane);
+  lanes_->flags[bi] = std::uint8_t((isotropic_block ? kIsotropicBlock : 0) |
+                                   (simd::any_of(rest.fresh) ? kFreshBlock : 0) |
+                                   (bouncing_block ? kBouncingBlock : 0));
+  return bounces;
 }
 
 bool ContactPipeline::prepare_lanes(ContactBlock& c, ContactBlockRest& r,

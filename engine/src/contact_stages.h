@@ -79,8 +79,8 @@ class ContactStages {
   virtual std::size_t matched_points() const = 0;
   virtual std::size_t reused_pairs() const = 0;
   virtual std::size_t reused_manifolds() const = 0;
-  // this step kept last step's solver blocks, no contact built (ContactPipeline, held contacts)
-  virtual bool contacts_held() const = 0;
+  // the contacts this step held in last step's solver blocks, none built (ContactPipeline)
+  virtual std::size_t held_contacts() const = 0;
 };
 
 // the sizes and alignments of the types the world and a copy of the pipeline pass each other, as

@@ -315,27 +315,39 @@ void ContactPipeline::collide_pairs(std::span<const BodyState> states, double dt
   // (kHeld: a touching pair of a step that holds its contacts, hold_contacts())
   enum : std::uint8_t { kTouching, kTouchingCached, kMoved, kHeld, kFoundApart, kStillApart };
   // held contacts (contacts.h): the candidates last step's (each candidate's outcome_ is then
-  // still last step's as it is read), the blocks packed or held last step, each point's
-  // separation in them computed from the bodies' final poses, no restitution to bounce with
+  // still last step's as it is read, and touching_ last step's touching ones), the blocks
+  // packed or held last step, each point's separation in them computed from the bodies' final
+  // poses, no restitution to bounce with
+  const bool soft = settings_.solver == ContactSolver::SoftStep;
   const bool hold = settings_.contact_hold_distance > 0.0 && cache_touching &&
                     settings_.warm_start && lanes_ && blocks_follow_contacts_ &&
                     !separations_stale_ && !any_restitution_ && !contacts_.empty();
   held_ = hold && outcome_.size() == n && candidates_ == held_candidates_;
   if (hold) held_candidates_ = candidates_;
   else held_candidates_.clear();
+  const std::size_t m_held = held_ ? contacts_.size() : 0;
   if (held_) {
-    // no touching pair moved past the hold distance since its contact was packed
-    const std::size_t m = contacts_.size();
-    std::atomic<bool> far{false};
-    parallel_for(threads_, (m + kMotionLanes - 1) / kMotionLanes, m >= 1024, [&](std::size_t g) {
-      std::array<std::array<float, 2>, kMotionLanes> motion;
-      const std::size_t first = g * kMotionLanes, last = std::min(m, first + kMotionLanes);
-      held_motion_in_lanes(first, last, motion);
-      for (std::size_t i = 0; i < last - first; ++i)
-        if (std::max(motion[i][0], motion[i][1]) > settings_.contact_hold_distance)
-          far.store(true, std::memory_order_relaxed);
-    });
-    held_ = !far.load(std::memory_order_relaxed) && hold_contacts(dt);
+    // which touching pairs moved past the hold distance since their contacts were packed; each
+    // block with such a lane is packed again, every lane of it
+    contact_refresh_.assign(m_held, 0);
+    parallel_for(threads_, (m_held + kMotionLanes - 1) / kMotionLanes, m_held >= 1024,
+                 [&](std::size_t g) {
+                   std::array<std::array<float, 2>, kMotionLanes> motion;
+                   const std::size_t first = g * kMotionLanes;
+                   const std::size_t last = std::min(m_held, first + kMotionLanes);
+                   held_motion_in_lanes(first, last, motion);
+                   for (std::size_t i = 0; i < last - first; ++i)
+                     contact_refresh_[first + i] = std::max(motion[i][0], motion[i][1]) >
+                                                   settings_.contact_hold_distance;
+                 });
+    block_refresh_.assign(lanes_->blocks.size(), 0);
+    for (std::size_t i = 0; i < m_held; ++i)
+      if (contact_refresh_[i]) block_refresh_[block_of_contact_[i]] = 1;
+    held_count_ = 0;
+    for (std::size_t i = 0; i < m_held; ++i) {
+      contact_refresh_[i] = block_refresh_[block_of_contact_[i]];
+      held_count_ += contact_refresh_[i] == 0;
+    }
   }
   outcome_.resize(n);
   if (cache) {
@@ -359,24 +371,29 @@ void ContactPipeline::collide_pairs(std::span<const BodyState> states, double dt
     for (; j < cache_slots_.size(); ++j) free_slots_.push_back(cache_slots_[j].slot);
   }
   std::size_t reused = 0, moved = 0;
-  std::atomic<bool> new_touching{false};  // holding: a pair apart last step touches
-  // the candidates tested, in pair order: every one, or where the step holds the pairs apart
-  // last step (the touching ones are held)
+  // the candidates tested, in pair order: every one, or where the step holds those apart last
+  // step and the touching ones whose blocks are packed again (the others are held), each with
+  // whether it touched last step
   auto visit_all = [&] {
     visit_.resize(n);
     for (std::size_t k = 0; k < n; ++k) visit_[k] = std::uint32_t(k);
   };
   if (held_) {
     visit_.clear();
+    visit_touched_.clear();
+    std::size_t contact = 0;  // last step's touching candidates are its contacts, in order
     for (std::size_t k = 0; k < n; ++k) {
-      if (outcome_[k] <= kHeld)
+      const bool touched = outcome_[k] <= kHeld;
+      if (touched && !contact_refresh_[contact++]) {
         outcome_[k] = kHeld;
-      else
-        visit_.push_back(std::uint32_t(k));
+        continue;
+      }
+      visit_.push_back(std::uint32_t(k));
+      visit_touched_.push_back(touched);
     }
-  } else {
-    visit_all();
+    held_ = contact == m_held;
   }
+  if (!held_) visit_all();
   // the entries of the next group's pairs (kMotionLanes at a time, motion_in_lanes)
   constexpr std::size_t kCacheAhead = kMotionLanes;
   // in halves of the pair order, as the contacts are built below and the colours' shares solved:
@@ -422,7 +439,6 @@ void ContactPipeline::collide_pairs(std::span<const BodyState> states, double dt
           move_manifold(cached, a, b, pair_growth_[k], manifolds_[k]);
           outcome_[k] = kMoved;
           ++moved;
-          if (held_) new_touching.store(true, std::memory_order_relaxed);
           continue;
         }
       }
@@ -444,7 +460,6 @@ void ContactPipeline::collide_pairs(std::span<const BodyState> states, double dt
         continue;
       }
       outcome_[k] = kTouching;
-      if (held_) new_touching.store(true, std::memory_order_relaxed);
       // a box pair's face contact (its normal a face's, its points on that face and the other
       // box's surface), or a box on a plane (its points the box's corners); edge contacts and
       // the other shapes are computed every step
@@ -472,12 +487,31 @@ void ContactPipeline::collide_pairs(std::span<const BodyState> states, double dt
     }
   };
   collide_all();
-  // a pair apart last step touches now: the step builds its contacts after all (every pair
-  // again: a test of an apart pair gives the same outcome twice)
-  if (held_ && new_touching.load(std::memory_order_relaxed)) {
-    held_ = false;
-    visit_all();
-    collide_all();
+  double held_deepest = 0.0;
+  if (held_) {
+    // a pair apart last step touches, or one touching is apart: the blocks' contacts change, and
+    // the step builds them after all (every pair again: a pair's test gives the same outcome
+    // twice); or a contact is deep enough to recover from, which moves the poses by them all
+    bool changed = false;
+    for (std::size_t at = 0; at < visit_.size() && !changed; ++at)
+      changed = (outcome_[visit_[at]] <= kHeld) != (visit_touched_[at] != 0);
+    if (!changed) {
+      held_deepest = hold_contacts();
+      for (std::size_t i = 0; i < m_held; ++i) {
+        if (!contact_refresh_[i]) continue;
+        const std::size_t k = touching_[i];
+        ContactConstraint scratch;
+        held_deepest =
+            std::max(held_deepest, build_contact(manifolds_[k], BodyId(candidates_[k] >> 32),
+                                                 BodyId(candidates_[k] & 0xffffffffu), states,
+                                                 scratch));
+      }
+    }
+    if (changed || (soft && held_deepest > settings_.max_push_speed * dt)) {
+      held_ = false;
+      visit_all();
+      collide_all();
+    }
   }
   reused_ = reused;
   moved_ = moved;
@@ -507,9 +541,30 @@ void ContactPipeline::collide_pairs(std::span<const BodyState> states, double dt
   touching_.resize(touching_count);
   next_cache_slots_.resize(kept_count);
   std::swap(cache_slots_, next_cache_slots_);
-  // holding, the contacts and the blocks stay as they are (hold_contacts() took the deepest
-  // overlap and carried the separations on)
-  if (held_) return;
+  // holding, the contacts stay, each of a block packed again built again over its record of
+  // last step, which it is matched with (hold_contacts() carried the others' separations on)
+  if (held_) {
+    std::size_t points = point_count_, matched = point_count_;
+    for (std::size_t i = 0; i < m_held; ++i) {
+      if (!contact_refresh_[i]) continue;
+      const std::size_t k = touching_[i];
+      const BodyId a = BodyId(candidates_[k] >> 32), b = BodyId(candidates_[k] & 0xffffffffu);
+      ContactConstraint& c = contacts_[i];
+      const ContactConstraint last = c;
+      build_contact(manifolds_[k], a, b, states, c);
+      record_pose(a, b, packed_poses_[i]);
+      const std::size_t carried = carry_impulses(last, impulses_[i], c);
+      c.cold = cold_points(c, dt, gravity);
+      points += c.count;
+      points -= last.count;
+      matched += carried;
+      matched -= last.count;
+    }
+    deepest_ = held_deepest;
+    point_count_ = points;
+    matched_ = matched;
+    return;
+  }
   blocks_follow_contacts_ = false;
 
   // every contact built and matched with last step's on the threads (each writes its own; last
@@ -540,69 +595,11 @@ void ContactPipeline::collide_pairs(std::span<const BodyState> states, double dt
       const std::size_t k = touching_[i];
       const Manifold& manifold = manifolds_[k];
       const BodyId a = BodyId(candidates_[k] >> 32), b = BodyId(candidates_[k] & 0xffffffffu);
-      // every field written once (assigning ContactConstraint{} first built a zeroed one on
-      // the stack and copied it in: about a quarter of this loop's samples by perf)
       ContactConstraint& c = contacts_[i];
       if (hold) record_pose(a, b, packed_poses_[i]);
-      c.body_a = a;
-      c.body_b = b;
-      c.friction_impulse = {0.0f, 0.0f};
-      c.twist_impulse = 0.0f;
-      c.cold = 0;
-      // the points past the count are read in lanes (masked by multiplying): zeros, not NaN
-      for (std::uint8_t j = manifold.count; j < 4; ++j) c.points[j] = ContactPointConstraint{};
+      deepest = std::max(deepest, build_contact(manifold, a, b, states, c));
       contact_keys_[i] = c.key();
-      c.normal = manifold.normal.cast<float>();
-      Vec3 tangent[2];
-      tangent_basis(manifold.normal, tangent);
-      c.tangent[0] = tangent[0].cast<float>();
-      c.tangent[1] = tangent[1].cast<float>();
-      // the pair's coefficients (docs/scene-format.md): √(μa μb), max(ea, eb)
-      c.friction = float(std::sqrt(shapes_[a].friction * shapes_[b].friction));
-      c.restitution = float(std::max(shapes_[a].restitution, shapes_[b].restitution));
-      c.count = manifold.count;
       points += c.count;
-      // a grown surface lies its growth beyond the true one along the normal (a's towards b, b's
-      // towards a), so the midpoint of the true surfaces is the manifold's point moved by half
-      // the difference: a sphere that rolls fast on a plane (the whole motion bound on the
-      // plane's side) would otherwise take friction up to 4 cm inside itself and roll slow
-      const auto [growth_a, growth_b] = surface_growth(shapes_[a], shapes_[b]);
-      const Vec3 shift = 0.5 * (growth_b - growth_a) * manifold.normal;
-      // a box against a plane: each point a corner of the box, which grows by its half extents,
-      // so that its grown corner lies half the speculative distance beyond the true one along
-      // each of the box's axes, not along n: the true corner, its true height and the point
-      // below it (a door leaning 0.2 rad on its edge, pivoting 1 cm beyond it and held 2 mm up,
-      // fell 3 % slow)
-      const BodyId box = shapes_[a].kind == BodyShape::Box ? a : b;
-      const BodyId plane = box == a ? b : a;
-      const bool box_on_plane =
-          shapes_[box].kind == BodyShape::Box && shapes_[plane].kind == BodyShape::Plane;
-      for (std::uint8_t j = 0; j < manifold.count; ++j) {
-        ContactPointConstraint& p = c.points[j];
-        // the point between the true surfaces: the manifold's lies between the grown ones;
-        // its depth is of the grown shapes, less the growth: the real separation (< 0:
-        // penetrating)
-        Vec3 point = manifold.points[j].point + shift;
-        double separation = growth_a + growth_b - manifold.points[j].depth;
-        if (box_on_plane) {
-          const double fixed = 0.5 * settings_.speculative_distance;
-          const BodyShapeData& on = shapes_[plane];
-          const Quat& turn = states[box].orientation;
-          const Vec3 local = turn.conjugate() * (manifold.points[j].point - states[box].position);
-          const Vec3 half = shapes_[box].shape.half_extents.array() - fixed;
-          const Vec3 corner =
-              states[box].position +
-              turn * Vec3(local.array().sign() * half.array());
-          separation = on.plane_normal.dot(corner) - (on.plane_offset - fixed);
-          point = corner - 0.5 * separation * on.plane_normal;
-        }
-        p.anchor_a = (point - states[a].position).cast<float>();
-        p.anchor_b = (point - states[b].position).cast<float>();
-        p.base_separation = float(separation);
-        p.normal_impulse = 0.0f;
-        p.feature = manifold.points[j].feature;
-        deepest = std::max(deepest, -separation);
-      }
       // the same pair last step: carry each point's impulses by feature id (warm starting);
       // then which points start cold
       while (old < previous_keys_.size() && previous_keys_[old] < c.key()) ++old;
@@ -628,6 +625,74 @@ void ContactPipeline::collide_pairs(std::span<const BodyState> states, double dt
   deepest_ = deepest;
   matched_ = matched;
   point_count_ = points;
+}
+
+double ContactPipeline::build_contact(const Manifold& manifold, BodyId a, BodyId b,
+                                      std::span<const BodyState> states,
+                                      ContactConstraint& c) const {
+  // a touching pair's contact from its manifold, its impulses zero and no point cold yet (the
+  // match with last step's and cold_points() follow); returns its deepest overlap (m)
+  double deepest = 0.0;
+  // every field written once (assigning ContactConstraint{} first built a zeroed one on
+  // the stack and copied it in: about a quarter of this loop's samples by perf)
+  c.body_a = a;
+  c.body_b = b;
+  c.friction_impulse = {0.0f, 0.0f};
+  c.twist_impulse = 0.0f;
+  c.cold = 0;
+  // the points past the count are read in lanes (masked by multiplying): zeros, not NaN
+  for (std::uint8_t j = manifold.count; j < 4; ++j) c.points[j] = ContactPointConstraint{};
+  c.normal = manifold.normal.cast<float>();
+  Vec3 tangent[2];
+  tangent_basis(manifold.normal, tangent);
+  c.tangent[0] = tangent[0].cast<float>();
+  c.tangent[1] = tangent[1].cast<float>();
+  // the pair's coefficients (docs/scene-format.md): √(μa μb), max(ea, eb)
+  c.friction = float(std::sqrt(shapes_[a].friction * shapes_[b].friction));
+  c.restitution = float(std::max(shapes_[a].restitution, shapes_[b].restitution));
+  c.count = manifold.count;
+  // a grown surface lies its growth beyond the true one along the normal (a's towards b, b's
+  // towards a), so the midpoint of the true surfaces is the manifold's point moved by half
+  // the difference: a sphere that rolls fast on a plane (the whole motion bound on the
+  // plane's side) would otherwise take friction up to 4 cm inside itself and roll slow
+  const auto [growth_a, growth_b] = surface_growth(shapes_[a], shapes_[b]);
+  const Vec3 shift = 0.5 * (growth_b - growth_a) * manifold.normal;
+  // a box against a plane: each point a corner of the box, which grows by its half extents,
+  // so that its grown corner lies half the speculative distance beyond the true one along
+  // each of the box's axes, not along n: the true corner, its true height and the point
+  // below it (a door leaning 0.2 rad on its edge, pivoting 1 cm beyond it and held 2 mm up,
+  // fell 3 % slow)
+  const BodyId box = shapes_[a].kind == BodyShape::Box ? a : b;
+  const BodyId plane = box == a ? b : a;
+  const bool box_on_plane =
+      shapes_[box].kind == BodyShape::Box && shapes_[plane].kind == BodyShape::Plane;
+  for (std::uint8_t j = 0; j < manifold.count; ++j) {
+    ContactPointConstraint& p = c.points[j];
+    // the point between the true surfaces: the manifold's lies between the grown ones;
+    // its depth is of the grown shapes, less the growth: the real separation (< 0:
+    // penetrating)
+    Vec3 point = manifold.points[j].point + shift;
+    double separation = growth_a + growth_b - manifold.points[j].depth;
+    if (box_on_plane) {
+      const double fixed = 0.5 * settings_.speculative_distance;
+      const BodyShapeData& on = shapes_[plane];
+      const Quat& turn = states[box].orientation;
+      const Vec3 local = turn.conjugate() * (manifold.points[j].point - states[box].position);
+      const Vec3 half = shapes_[box].shape.half_extents.array() - fixed;
+      const Vec3 corner =
+          states[box].position +
+          turn * Vec3(local.array().sign() * half.array());
+      separation = on.plane_normal.dot(corner) - (on.plane_offset - fixed);
+      point = corner - 0.5 * separation * on.plane_normal;
+    }
+    p.anchor_a = (point - states[a].position).cast<float>();
+    p.anchor_b = (point - states[b].position).cast<float>();
+    p.base_separation = float(separation);
+    p.normal_impulse = 0.0f;
+    p.feature = manifold.points[j].feature;
+    deepest = std::max(deepest, -separation);
+  }
+  return deepest;
 }
 
 std::size_t ContactPipeline::point_count() const { return point_count_; }

@@ -182,7 +182,7 @@ class ContactPipeline final : public ContactStages {
   std::size_t matched_points() const override { return matched_; }
   std::size_t reused_pairs() const override { return reused_; }
   std::size_t reused_manifolds() const override { return moved_; }
-  bool contacts_held() const override { return held_; }
+  std::size_t held_contacts() const override { return held_ ? held_count_ : 0; }
 
  private:
   struct BodyShapeData;
@@ -256,6 +256,10 @@ class ContactPipeline final : public ContactStages {
   bool prepare_lanes(ContactBlock& block, ContactBlockRest& rest, const PointAnchors& anchors,
                      const std::array<LaneMask, 4>& exists,
                      const std::array<LaneMask, 4>& cold, Lane acceleration, double h) const;
+  // a touching pair's contact from its manifold, no impulse carried and no point cold yet;
+  // returns its deepest overlap (m)
+  double build_contact(const Manifold& manifold, BodyId a, BodyId b,
+                       std::span<const BodyState> states, ContactConstraint& c) const;
   std::vector<std::uint32_t> colour_order_;  // contact indices, colour by colour
   std::vector<std::uint32_t> colour_start_;  // colour k: colour_order_[start[k], start[k + 1])
   std::vector<std::uint64_t> body_colours_;  // per body, the colours holding it this step
@@ -311,21 +315,30 @@ class ContactPipeline final : public ContactStages {
   static constexpr std::size_t kPackedPoseFloats = 16;
   using PackedPose = std::array<float, kPackedPoseFloats>;
   void record_pose(BodyId a, BodyId b, PackedPose& out) const;
-  // Contacts held (docs/solver.md, "Held contacts"): a step whose candidate pairs are last
-  // step's, none of whose touching pairs has moved more than ContactSettings::
-  // contact_hold_distance in its bodies' frames since its contact was packed into the blocks,
-  // keeps the blocks as they are: each point's separation goes on from where last step's solve
-  // left it, and no manifold is moved, no contact built, matched, coloured or packed.
+  // Contacts held (docs/solver.md, "Held contacts"): a step whose candidate pairs and touching
+  // pairs are last step's keeps its blocks' contacts and order, and each block none of whose
+  // pairs has moved more than ContactSettings::contact_hold_distance in its bodies' frames since
+  // its contact was packed stays as it is: each point's separation goes on from where last
+  // step's solve left it, and no manifold is moved, no contact built, matched or packed for it.
+  // The other blocks' contacts are built again, in place, and packed again.
   // Each contact's pose when its block was packed (by contact, as contacts_)
   std::vector<PackedPose> packed_poses_;
   std::vector<std::uint64_t> held_candidates_;  // last step's candidates, where it may hold
   bool held_ = false;                  // this step holds
   bool blocks_follow_contacts_ = false;  // the blocks hold contacts_, packed or held last step
   bool any_restitution_ = false;       // some lane's restitution is above zero (prepare())
-  // whether this step holds: the blocks' separations carried on and their deepest overlap
-  // taken where it does (false: nothing the full step reads has changed)
-  bool hold_contacts(double dt);
+  // each held block's separations carried on (block_refresh_ 0); their deepest overlap (m)
+  double hold_contacts();
   std::vector<float> hold_deepest_;  // its scratch: each thread's deepest overlap (m)
+  // per contact its block (prepare()); per contact, 1 where its block is packed again this
+  // step (a lane of it moved past the hold distance), and per block the same
+  std::vector<std::uint32_t> block_of_contact_;
+  std::vector<std::uint8_t> contact_refresh_, block_refresh_;
+  std::size_t held_count_ = 0;  // the contacts held this step (in blocks not packed again)
+  // pack_block(): block bi's lanes from contacts_ (lane i from contacts_[record_of[i]];
+  // kNoContact: empty), with prepare_lanes(); whether some lane's point bounces
+  bool pack_block(std::size_t bi, const std::array<std::uint32_t, kBlockLanes>& record_of,
+                  const Vec3& gravity, double h);
   // each body's rotation in single precision, row by row (nine floats, then zeros), a record of
   // kRotationFloats floats: what motion_in_lanes reads
   static constexpr std::size_t kRotationFloats = 16;
@@ -350,6 +363,7 @@ class ContactPipeline final : public ContactStages {
   std::vector<std::uint8_t> has_entry_;        // per candidate: 1 if its slot holds last step's
   std::vector<std::uint8_t> outcome_;  // per candidate: touching, found apart, still apart...
   std::vector<std::uint32_t> visit_;   // the candidates the narrow phase tests this step
+  std::vector<std::uint8_t> visit_touched_;  // holding: whether each touched last step
   std::vector<std::uint32_t> touching_;     // the candidates whose manifold has points
   std::size_t reused_ = 0, moved_ = 0;
   std::vector<Pose> poses_;  // per body, this step

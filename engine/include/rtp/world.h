@@ -216,9 +216,9 @@ struct StepProfile {
   std::size_t matched_points = 0;  // points that carried last step's impulses
   std::size_t reused_pairs = 0;    // candidate pairs the pair cache found still apart
   std::size_t reused_manifolds = 0;  // touching pairs whose manifold was moved, not computed
-  // the step held its contacts: the solver's blocks were last step's, no manifold moved and no
-  // contact built (ContactSettings::contact_hold_distance)
-  bool contacts_held = false;
+  // contacts held in last step's solver blocks, no manifold moved and no contact built for them
+  // (ContactSettings::contact_hold_distance)
+  std::size_t held_contacts = 0;
   std::size_t swept_stops = 0;     // fast bodies the continuous stage stopped short
   std::size_t relax_passes = 0;    // relax solves this step, over its substeps
   int threads = 1;                 // the team the step ran on (ThreadGovernor)
