@@ -45,6 +45,7 @@ std::map<std::string, std::function<void(rtp::ContactSettings&, double)>> settin
       {"threads", [](rtp::ContactSettings& s, double v) { s.threads = int(v); }},
       {"cache", [](rtp::ContactSettings& s, double v) { s.pair_cache_distance = v; }},
       {"reuse", [](rtp::ContactSettings& s, double v) { s.manifold_reuse_distance = v; }},
+      {"hold", [](rtp::ContactSettings& s, double v) { s.contact_hold_distance = v; }},
       {"match", [](rtp::ContactSettings& s, double v) { s.match_distance = v; }},
       {"local", [](rtp::ContactSettings& s, double v) { s.local_iterations = int(v); }},
       {"alternate", [](rtp::ContactSettings& s, double v) { s.alternate_order = v != 0.0; }},

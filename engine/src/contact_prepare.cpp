@@ -106,29 +106,67 @@ void ContactPipeline::load_bodies(std::span<const BodyState> states,
   });
 }
 
-double ContactPipeline::hold_contacts() {
-  // each point's separation at the step's start is where last step's solve left it, computed
+double ContactPipeline::hold_contacts(double dt, const Vec3& gravity) {
+  // Each point's separation at the step's start is where last step's solve left it, computed
   // from the bodies' final poses (a relax pass follows the positions' last integration): the
-  // base the passes add this step's motion to, less the frame offset prepare_lanes() takes off;
-  // in every block but those packed again (block_refresh_)
+  // base the passes add this step's motion to, less the frame offset prepare_lanes() takes off.
+  // Which points start cold, and so which lanes are fresh, from the velocities now, as
+  // cold_points() and prepare_lanes() decide it (kept from the step the block was packed, a
+  // block would be solved several times a pass for a point that has pushed since). In every
+  // block but those packed again (block_refresh_), each thread the blocks it solves
   std::vector<ContactBlock>& blocks = lanes_->blocks;
   std::vector<ContactBlockRest>& rest = lanes_->rest;
+  const std::vector<std::uint32_t>& block_start = lanes_->colour_start;
+  const int colours = int(block_start.size()) - 1;
   const std::size_t block_count = blocks.size();
+  const double h = settings_.solver == ContactSolver::SoftStep ? dt / settings_.substeps : dt;
   const Lane zero = splat(0.0f);
+  const Lane horizon = splat(float(2.0 * dt)), half_horizon_squared = splat(float(2.0 * dt * dt));
+  const Lane half_step = splat(float(0.5 * h));
+  const Lane threshold = splat(float(-settings_.restitution_threshold));
+  const V3 g{splat(float(gravity.x())), splat(float(gravity.y())), splat(float(gravity.z()))};
   std::vector<float>& deepest_of = hold_deepest_;
   deepest_of.assign(std::size_t(std::max(1, threads_)), 0.0f);
   parallel_region(threads_, block_count >= 64, [&] {
-    const auto [first, last] = share_of(block_count, team_size(), team_index());
     Lane deepest = zero;
-    for (std::size_t bi = first; bi < last; ++bi) {
-      if (block_refresh_[bi]) continue;
-      ContactBlock& c = blocks[bi];
-      const FrameOffset offset(c);
-      for (int j = 0; j < 4; ++j) {
-        const Lane s = c.points[j].separation;
-        rest[bi].points[j].base_separation = s - offset.d[2];
-        // (a point that is not there has no mass)
-        deepest = simd::max(deepest, simd::select(c.points[j].normal_mass > zero, zero - s, zero));
+    for (int k = 0; k < colours; ++k) {
+      const auto [begin, end] =
+          share_of(block_start[k + 1] - block_start[k], team_size(), team_index());
+      for (std::size_t bi = block_start[k] + begin; bi < block_start[k] + end; ++bi) {
+        if (block_refresh_[bi]) continue;
+        ContactBlock& c = blocks[bi];
+        ContactBlockRest& r = rest[bi];
+        const FrameOffset offset(c);
+        const LanePair pair(bodies_, c);
+        const V3 n = load3(c.normal);
+        const Tangents tangents = tangents_of(c, n);
+        // the gravity along n that free flight closes a gap with (b's less a's)
+        const Lane g_n = dot(n, g);
+        const Lane acceleration = simd::select(pair.inverse_mass_b > zero, g_n, zero) -
+                                  simd::select(pair.inverse_mass_a > zero, g_n, zero);
+        LaneMask fresh = zero != zero;
+        for (int j = 0; j < 4; ++j) {
+          const ContactBlock::Point& p = c.points[j];
+          const Lane s = p.separation;
+          r.points[j].base_separation = s - offset.d[2];
+          const LaneMask exists = p.normal_mass > zero;  // (a point not there has no mass)
+          deepest = simd::max(deepest, simd::select(exists, zero - s, zero));
+          const Lane v = pair.normal_velocity(n, NormalRow(p, tangents.t0, tangents.t1, offset));
+          // no impulse carried, and touching or closed by free flight within two steps
+          const LaneMask cold =
+              exists & (p.normal_impulse == zero) &
+              ((s <= zero) | (s + horizon * v + half_horizon_squared * acceleration < zero));
+          // or an approach fast enough to bounce, at the instant of the positions
+          const Lane approach = v + half_step * acceleration;
+          const LaneMask apart = exists & (s > zero);
+          const Lane squared = approach * approach - splat(2.0f) * acceleration * s;
+          r.points[j].approach_velocity =
+              simd::select(apart, zero - simd::sqrt(simd::max(squared, zero)), approach);
+          fresh |= cold | (exists & (r.points[j].approach_velocity < threshold));
+        }
+        r.fresh = fresh;
+        lanes_->flags[bi] = std::uint8_t((lanes_->flags[bi] & ~kFreshBlock) |
+                                         (simd::any_of(fresh) ? kFreshBlock : 0));
       }
     }
     float most = 0.0f;

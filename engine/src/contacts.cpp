@@ -496,7 +496,7 @@ void ContactPipeline::collide_pairs(std::span<const BodyState> states, double dt
     for (std::size_t at = 0; at < visit_.size() && !changed; ++at)
       changed = (outcome_[visit_[at]] <= kHeld) != (visit_touched_[at] != 0);
     if (!changed) {
-      held_deepest = hold_contacts();
+      held_deepest = hold_contacts(dt, gravity);
       for (std::size_t i = 0; i < m_held; ++i) {
         if (!contact_refresh_[i]) continue;
         const std::size_t k = touching_[i];
@@ -606,11 +606,7 @@ void ContactPipeline::collide_pairs(std::span<const BodyState> states, double dt
       if (settings_.warm_start && old < previous_keys_.size() && previous_keys_[old] == c.key())
         matched += carry_impulses(previous_[old], previous_impulses_[old], c);
       c.cold = cold_points(c, dt, gravity);
-      bool quiet = c.cold == 0 && c.friction_impulse[0] == 0.0f &&
-                   c.friction_impulse[1] == 0.0f && c.twist_impulse == 0.0f;
-      for (std::uint8_t j = 0; j < c.count && quiet; ++j)
-        quiet = c.points[j].normal_impulse == 0.0f;
-      contact_class_[i] = c.cold != 0 ? kColdContact : quiet ? kQuietContact : 0;
+      contact_class_[i] = class_of(c);
     }
   };
   if (threads_ > 1 && m >= 1024) {
@@ -693,6 +689,13 @@ double ContactPipeline::build_contact(const Manifold& manifold, BodyId a, BodyId
     deepest = std::max(deepest, -separation);
   }
   return deepest;
+}
+
+std::uint8_t ContactPipeline::class_of(const ContactConstraint& c) {
+  bool quiet = c.cold == 0 && c.friction_impulse[0] == 0.0f && c.friction_impulse[1] == 0.0f &&
+               c.twist_impulse == 0.0f;
+  for (std::uint8_t j = 0; j < c.count && quiet; ++j) quiet = c.points[j].normal_impulse == 0.0f;
+  return c.cold != 0 ? kColdContact : quiet ? kQuietContact : 0;
 }
 
 std::size_t ContactPipeline::point_count() const { return point_count_; }

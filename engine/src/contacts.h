@@ -327,14 +327,17 @@ class ContactPipeline final : public ContactStages {
   bool held_ = false;                  // this step holds
   bool blocks_follow_contacts_ = false;  // the blocks hold contacts_, packed or held last step
   bool any_restitution_ = false;       // some lane's restitution is above zero (prepare())
-  // each held block's separations carried on (block_refresh_ 0); their deepest overlap (m)
-  double hold_contacts();
+  // each held block's separations carried on, and its cold and fresh lanes taken again from the
+  // velocities (block_refresh_ 0); their deepest overlap (m)
+  double hold_contacts(double dt, const Vec3& gravity);
   std::vector<float> hold_deepest_;  // its scratch: each thread's deepest overlap (m)
   // per contact its block (prepare()); per contact, 1 where its block is packed again this
   // step (a lane of it moved past the hold distance), and per block the same
   std::vector<std::uint32_t> block_of_contact_;
   std::vector<std::uint8_t> contact_refresh_, block_refresh_;
   std::size_t held_count_ = 0;  // the contacts held this step (in blocks not packed again)
+  // a contact's class for the colouring: kColdContact, kQuietContact or 0 (c's cold set)
+  static std::uint8_t class_of(const ContactConstraint& c);
   // pack_block(): block bi's lanes from contacts_ (lane i from contacts_[record_of[i]];
   // kNoContact: empty), with prepare_lanes(); whether some lane's point bounces
   bool pack_block(std::size_t bi, const std::array<std::uint32_t, kBlockLanes>& record_of,
