@@ -322,9 +322,8 @@ void ContactPipeline::collide_pairs(std::span<const BodyState> states, double dt
   const bool hold = settings_.contact_hold_distance > 0.0 && cache_touching &&
                     settings_.warm_start && lanes_ && blocks_follow_contacts_ &&
                     !separations_stale_ && !any_restitution_ && !contacts_.empty();
-  held_ = hold && outcome_.size() == n && candidates_ == held_candidates_;
-  if (hold) held_candidates_ = candidates_;
-  else held_candidates_.clear();
+  // (find_pairs() leaves last step's candidates in sorted_candidates_, swapped out)
+  held_ = hold && poses_packed_ && outcome_.size() == n && candidates_ == sorted_candidates_;
   const std::size_t m_held = held_ ? contacts_.size() : 0;
   if (held_) {
     // which touching pairs moved past the hold distance since their contacts were packed; each
@@ -566,6 +565,7 @@ void ContactPipeline::collide_pairs(std::span<const BodyState> states, double dt
     return;
   }
   blocks_follow_contacts_ = false;
+  poses_packed_ = hold;
 
   // every contact built and matched with last step's on the threads (each writes its own; last
   // step's is found by key in its sorted list): the same contacts on any number of threads
@@ -606,7 +606,11 @@ void ContactPipeline::collide_pairs(std::span<const BodyState> states, double dt
       if (settings_.warm_start && old < previous_keys_.size() && previous_keys_[old] == c.key())
         matched += carry_impulses(previous_[old], previous_impulses_[old], c);
       c.cold = cold_points(c, dt, gravity);
-      contact_class_[i] = class_of(c);
+      bool quiet = c.cold == 0 && c.friction_impulse[0] == 0.0f &&
+                   c.friction_impulse[1] == 0.0f && c.twist_impulse == 0.0f;
+      for (std::uint8_t j = 0; j < c.count && quiet; ++j)
+        quiet = c.points[j].normal_impulse == 0.0f;
+      contact_class_[i] = c.cold != 0 ? kColdContact : quiet ? kQuietContact : 0;
     }
   };
   if (threads_ > 1 && m >= 1024) {
@@ -689,13 +693,6 @@ double ContactPipeline::build_contact(const Manifold& manifold, BodyId a, BodyId
     deepest = std::max(deepest, -separation);
   }
   return deepest;
-}
-
-std::uint8_t ContactPipeline::class_of(const ContactConstraint& c) {
-  bool quiet = c.cold == 0 && c.friction_impulse[0] == 0.0f && c.friction_impulse[1] == 0.0f &&
-               c.twist_impulse == 0.0f;
-  for (std::uint8_t j = 0; j < c.count && quiet; ++j) quiet = c.points[j].normal_impulse == 0.0f;
-  return c.cold != 0 ? kColdContact : quiet ? kQuietContact : 0;
 }
 
 std::size_t ContactPipeline::point_count() const { return point_count_; }

@@ -323,7 +323,7 @@ class ContactPipeline final : public ContactStages {
   // The other blocks' contacts are built again, in place, and packed again.
   // Each contact's pose when its block was packed (by contact, as contacts_)
   std::vector<PackedPose> packed_poses_;
-  std::vector<std::uint64_t> held_candidates_;  // last step's candidates, where it may hold
+  bool poses_packed_ = false;  // packed_poses_ holds every contact's (the last build's, if held)
   bool held_ = false;                  // this step holds
   bool blocks_follow_contacts_ = false;  // the blocks hold contacts_, packed or held last step
   bool any_restitution_ = false;       // some lane's restitution is above zero (prepare())
@@ -336,8 +336,6 @@ class ContactPipeline final : public ContactStages {
   std::vector<std::uint32_t> block_of_contact_;
   std::vector<std::uint8_t> contact_refresh_, block_refresh_;
   std::size_t held_count_ = 0;  // the contacts held this step (in blocks not packed again)
-  // a contact's class for the colouring: kColdContact, kQuietContact or 0 (c's cold set)
-  static std::uint8_t class_of(const ContactConstraint& c);
   // pack_block(): block bi's lanes from contacts_ (lane i from contacts_[record_of[i]];
   // kNoContact: empty), with prepare_lanes(); whether some lane's point bounces
   bool pack_block(std::size_t bi, const std::array<std::uint32_t, kBlockLanes>& record_of,
