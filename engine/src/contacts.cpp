@@ -551,7 +551,7 @@ void ContactPipeline::collide_pairs(std::span<const BodyState> states, double dt
       ContactConstraint& c = contacts_[i];
       const ContactConstraint last = c;
       build_contact(manifolds_[k], a, b, states, c);
-      record_pose(a, b, packed_poses_[i]);
+      record_pose(a, b, packed_poses_[i].data());
       const std::size_t carried = carry_impulses(last, impulses_[i], c);
       c.cold = cold_points(c, dt, gravity);
       points += c.count;
@@ -596,7 +596,7 @@ void ContactPipeline::collide_pairs(std::span<const BodyState> states, double dt
       const Manifold& manifold = manifolds_[k];
       const BodyId a = BodyId(candidates_[k] >> 32), b = BodyId(candidates_[k] & 0xffffffffu);
       ContactConstraint& c = contacts_[i];
-      if (hold) record_pose(a, b, packed_poses_[i]);
+      if (hold) record_pose(a, b, packed_poses_[i].data());
       deepest = std::max(deepest, build_contact(manifold, a, b, states, c));
       contact_keys_[i] = c.key();
       points += c.count;

@@ -311,10 +311,11 @@ class ContactPipeline final : public ContactStages {
                     const std::array<std::int32_t, kMotionLanes>& at,
                     const std::array<bool, kMotionLanes>& valid,
                     std::array<std::array<float, 2>, kMotionLanes>& out) const;
-  // a pair's pose as an entry records it (Raᵀ(xb − xa), Rbᵀ(xa − xb), Raᵀ Rb), padded
+  // a pair's pose as an entry records it, into its first fifteen floats (Raᵀ(xb − xa),
+  // Rbᵀ(xa − xb), Raᵀ Rb): cache_pair()'s, and a packed contact's (PackedPose, padded)
   static constexpr std::size_t kPackedPoseFloats = 16;
   using PackedPose = std::array<float, kPackedPoseFloats>;
-  void record_pose(BodyId a, BodyId b, PackedPose& out) const;
+  void record_pose(BodyId a, BodyId b, float* out) const;
   // Contacts held (docs/solver.md, "Held contacts"): a step whose candidate pairs and touching
   // pairs are last step's keeps its blocks' contacts and order, and each block none of whose
   // pairs has moved more than ContactSettings::contact_hold_distance in its bodies' frames since

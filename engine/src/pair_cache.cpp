@@ -11,6 +11,19 @@
 namespace rtp {
 inline namespace RTP_CONTACT_ISA_NAMESPACE {
 
+void ContactPipeline::record_pose(BodyId a, BodyId b, float* out) const {
+  // the pair's pose as an entry holds it, fifteen floats: Raᵀ(xb − xa), Rbᵀ(xa − xb), Raᵀ Rb
+  // (column by column), from the rotations motion_in_lanes reads
+  using RowMajor3f = Eigen::Matrix<float, 3, 3, Eigen::RowMajor>;
+  const Eigen::Map<const RowMajor3f> ra(rotations_[a].data()), rb(rotations_[b].data());
+  const Eigen::Vector3f d = (poses_[b].position - poses_[a].position).cast<float>();
+  Eigen::Map<Eigen::Vector3f> offset_in_a(out), offset_in_b(out + 3);
+  Eigen::Map<Eigen::Matrix3f> relative_rotation(out + 6);
+  offset_in_a = ra.transpose() * d;
+  offset_in_b = -(rb.transpose() * d);
+  relative_rotation = ra.transpose() * rb;
+}
+
 void ContactPipeline::cache_pair(BodyId a, BodyId b, double growth, const Manifold* manifold,
                                  CachedPair& out) const {
   // in single precision from the rotations motion_in_lanes reads, each vector from a body's
@@ -19,10 +32,9 @@ void ContactPipeline::cache_pair(BodyId a, BodyId b, double growth, const Manifo
   const Eigen::Map<const RowMajor3f> ra(rotations_[a].data()), rb(rotations_[b].data());
   const Vec3& xa = poses_[a].position;
   const Vec3& xb = poses_[b].position;
-  const Eigen::Vector3f d = (xb - xa).cast<float>();
-  out.offset_in_a = ra.transpose() * d;
-  out.offset_in_b = -(rb.transpose() * d);
-  out.relative_rotation = ra.transpose() * rb;
+  static_assert(offsetof(CachedPair, offset_in_b) == 3 * sizeof(float) &&
+                offsetof(CachedPair, relative_rotation) == 6 * sizeof(float));
+  record_pose(a, b, out.offset_in_a.data());
   out.growth = float(growth);
   out.count = 0;
   out.normal_on_b = false;
@@ -42,16 +54,6 @@ void ContactPipeline::cache_pair(BodyId a, BodyId b, double growth, const Manifo
   }
 }
 
-void ContactPipeline::record_pose(BodyId a, BodyId b, PackedPose& out) const {
-  // as cache_pair() records an entry's pose, in its layout
-  using RowMajor3f = Eigen::Matrix<float, 3, 3, Eigen::RowMajor>;
-  const Eigen::Map<const RowMajor3f> ra(rotations_[a].data()), rb(rotations_[b].data());
-  const Eigen::Vector3f d = (poses_[b].position - poses_[a].position).cast<float>();
-  Eigen::Map<Eigen::Vector3f>(out.data()) = ra.transpose() * d;
-  Eigen::Map<Eigen::Vector3f>(out.data() + 3) = -(rb.transpose() * d);
-  Eigen::Map<Eigen::Matrix3f>(out.data() + 6) = ra.transpose() * rb;
-  out[15] = 0.0f;
-}
 
 void ContactPipeline::motion_in_lanes(const std::uint32_t* ks, std::size_t count,
                                       std::array<std::array<float, 2>, kMotionLanes>& out) const {
