@@ -92,6 +92,30 @@ TEST(Contacts, RestingBoxDoesNotJitter) {
   EXPECT_NEAR(world.state(box).position.y(), 0.5, 1e-3);
 }
 
+// A unit cube turned 45° about z stands on one edge, balanced (its fall from there takes seconds
+// to grow from rounding), on a static box and on a plane: the contact points are the edge's two
+// corners, and the centre must stand √½ m above the surface, as on the plane. The narrow phase
+// finds the corners on the boxes grown by the speculative margin, whose corners lie the growth
+// beyond the true ones along each of the cube's axes: √2 times it along the normal here. Taken as
+// the growth along the normal, the cube stood 4 mm high on the box
+TEST(Contacts, ACubeOnItsEdgeStandsAsHighOnABoxAsOnAPlane) {
+  auto height = [](bool on_box) {
+    World world = world_with(ContactSolver::SoftStep);
+    if (on_box)
+      add_box(world, {0.0, -1.0, 0.0}, 0.0, 0.6, 0.0, Quat::Identity(), Vec3(4.0, 1.0, 4.0));
+    else
+      add_ground(world, 0.6);
+    const Quat turn(Eigen::AngleAxisd(M_PI / 4.0, Vec3::UnitZ()));
+    const BodyId cube = add_box(world, {0.0, std::sqrt(0.5), 0.0}, 1.0, 0.6, 0.0, turn);
+    for (int i = 0; i < 30; ++i) world.step(kDt);
+    EXPECT_LT(std::abs(world.state(cube).position.x()), 1e-4) << "balanced";
+    return world.state(cube).position.y();
+  };
+  const double on_plane = height(false), on_box = height(true);
+  EXPECT_NEAR(on_plane, std::sqrt(0.5), 1e-3);
+  EXPECT_NEAR(on_box, on_plane, 2e-4);
+}
+
 // A box spun about the vertical on the ground stops by friction: with its weight on the four
 // corners of its face, each sliding at ω r, the friction torque is μ m g r̄, r̄ the corners' mean
 // distance from the centre (√½ m for a unit box; the friction at a manifold's centre carries it
