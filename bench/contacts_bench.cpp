@@ -63,11 +63,12 @@ void Pyramid(benchmark::State& state) {
   const double dt = 1.0 / 60.0;
   std::array<double, rtp::StepProfile::kStageNames.size()> sum{};
   double total = 0.0, relax_passes = 0.0;
-  std::size_t steps = 0, held = 0, touching = 0;
+  std::size_t steps = 0, held = 0, touching = 0, reordered = 0;
   for (auto _ : state) {
     world.step(dt);
     const rtp::StepProfile& p = world.profile();
     held += p.held_contacts;
+    reordered += p.reordered_contacts;
     touching += p.contact_pairs;
     const auto stages = p.stage_seconds();
     for (std::size_t i = 0; i < sum.size(); ++i) sum[i] += stages[i];
@@ -87,6 +88,8 @@ void Pyramid(benchmark::State& state) {
   // the share of the contacts held in last step's solver blocks, none built
   // (ContactSettings::contact_hold_distance)
   state.counters["held_contacts"] = touching > 0 ? double(held) / double(touching) : 0.0;
+  // the held contacts moved between lanes a step, to keep each colour in class order
+  state.counters["reordered_per_step"] = double(reordered) / double(steps);
   state.counters["ms_per_step"] = 1e3 * total / double(steps);
   // the solve's passes over every point in a step: per substep one biased, and the relax passes
   // (as many as the step took: more while a pass still changes a velocity past the tolerance)
@@ -159,6 +162,48 @@ void ThreadScaling(benchmark::State& state) {
   state.counters["team_share_2t"] = double(on_team) / double(steps);
 }
 
+// Held contacts against every contact built every step (ContactSettings::contact_hold_distance
+// 0), paired: two worlds of the same scene, each settled, stepped in turns of ten steps over the
+// same moments of the machine. Reports each one's ms a step and the ratios held/built of the
+// step, of the passes (warm start, biased solve, relax) and of the narrow phase with `prepare`
+void HeldAgainstBuilt(benchmark::State& state) {
+  const physbench::Scene scene = scene_of(int(state.range(0)));
+  constexpr int kRun = 10;
+  std::array<std::unique_ptr<rtp::World>, 2> worlds;  // held, built
+  for (int k = 0; k < 2; ++k) {
+    rtp::ContactSettings settings = settings_for(1);
+    if (k == 1) settings.contact_hold_distance = 0.0;
+    worlds[std::size_t(k)] = std::make_unique<rtp::World>(
+        physbench::make_rtp_world(scene, rtp::Integrator::SemiImplicitEuler, settings));
+    for (int i = 0; i < kSettleSteps; ++i) worlds[std::size_t(k)]->step(scene.dt);
+  }
+  const auto& names = rtp::StepProfile::kStageNames;
+  auto at = [&](std::string_view name) {
+    return std::size_t(std::find(names.begin(), names.end(), name) - names.begin());
+  };
+  std::array<double, 2> total{}, passes{}, build{};
+  std::size_t steps = 0, held = 0, touching = 0;
+  for (auto _ : state) {
+    for (std::size_t k = 0; k < 2; ++k)
+      for (int r = 0; r < kRun; ++r) {
+        worlds[k]->step(scene.dt);
+        const rtp::StepProfile& p = worlds[k]->profile();
+        const auto stages = p.stage_seconds();
+        total[k] += p.total;
+        passes[k] += stages[at("warm_start")] + stages[at("solve")] + stages[at("relax")];
+        build[k] += stages[at("narrow_phase")] + stages[at("prepare")];
+        if (k == 0) held += p.held_contacts, touching += p.contact_pairs;
+      }
+    steps += kRun;
+  }
+  state.counters["ms_per_step_held"] = 1e3 * total[0] / double(steps);
+  state.counters["ms_per_step_built"] = 1e3 * total[1] / double(steps);
+  state.counters["step_ratio"] = total[0] / total[1];
+  state.counters["passes_ratio"] = passes[0] / passes[1];
+  state.counters["narrow_prepare_ratio"] = build[0] / build[1];
+  state.counters["held_contacts"] = touching > 0 ? double(held) / double(touching) : 0.0;
+}
+
 }  // namespace
 
 int main(int argc, char** argv) {
@@ -217,6 +262,18 @@ int main(int argc, char** argv) {
   thread_scaling("ManyPyramidsThreadScaling", kManyPyramids, "scene", 200);
   for (int base : {50, 100})
     thread_scaling("ThreadScaling", base, "base", base >= 100 ? 300 : 600);
+  benchmark::RegisterBenchmark("HeldAgainstBuilt", HeldAgainstBuilt)
+      ->Arg(100)
+      ->ArgName("base")
+      ->Unit(benchmark::kMillisecond)
+      ->UseRealTime()
+      ->Iterations(30);
+  benchmark::RegisterBenchmark("ManyPyramidsHeldAgainstBuilt", HeldAgainstBuilt)
+      ->Arg(kManyPyramids)
+      ->ArgName("scene")
+      ->Unit(benchmark::kMillisecond)
+      ->UseRealTime()
+      ->Iterations(20);
   triad(1);
   benchmark::Initialize(&argc, argv);
   if (benchmark::ReportUnrecognizedArguments(argc, argv)) return 1;

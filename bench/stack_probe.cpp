@@ -47,6 +47,8 @@ std::map<std::string, std::function<void(rtp::ContactSettings&, double)>> settin
       {"reuse", [](rtp::ContactSettings& s, double v) { s.manifold_reuse_distance = v; }},
       {"hold", [](rtp::ContactSettings& s, double v) { s.contact_hold_distance = v; }},
       {"match", [](rtp::ContactSettings& s, double v) { s.match_distance = v; }},
+      // (the harness's adapter sets the scenes' 0.1 m/s: docs/scene-format.md)
+      {"threshold", [](rtp::ContactSettings& s, double v) { s.restitution_threshold = v; }},
       {"local", [](rtp::ContactSettings& s, double v) { s.local_iterations = int(v); }},
       {"alternate", [](rtp::ContactSettings& s, double v) { s.alternate_order = v != 0.0; }},
   };

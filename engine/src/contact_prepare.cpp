@@ -7,9 +7,12 @@
 #include <algorithm>
 #include <array>
 #include <atomic>
+#include <bit>
 #include <cstddef>
 #include <cstdint>
+#include <cstring>
 #include <span>
+#include <type_traits>
 #include <utility>
 #include <vector>
 
@@ -125,6 +128,7 @@ double ContactPipeline::hold_contacts(double dt, const Vec3& gravity) {
   const Lane half_step = splat(float(0.5 * h));
   const Lane threshold = splat(float(-settings_.restitution_threshold));
   const V3 g{splat(float(gravity.x())), splat(float(gravity.y())), splat(float(gravity.z()))};
+  held_classes_.resize(block_count);
   std::vector<float>& deepest_of = hold_deepest_;
   deepest_of.assign(std::size_t(std::max(1, threads_)), 0.0f);
   parallel_region(threads_, block_count >= 64, [&] {
@@ -167,6 +171,7 @@ double ContactPipeline::hold_contacts(double dt, const Vec3& gravity) {
         r.fresh = fresh;
         lanes_->flags[bi] = std::uint8_t((lanes_->flags[bi] & ~kFreshBlock) |
                                          (simd::any_of(fresh) ? kFreshBlock : 0));
+        held_classes_[bi] = lane_classes(c, r);
       }
     }
     float most = 0.0f;
@@ -176,12 +181,134 @@ double ContactPipeline::hold_contacts(double dt, const Vec3& gravity) {
   return *std::max_element(deepest_of.begin(), deepest_of.end());
 }
 
+namespace {
+// lane i of a block and lane j of another exchanged: every row of both structs is kBlockLanes
+// four-byte lanes (ContactBlock's 44, ContactBlockRest's 25)
+template <class Block>
+void swap_lane(Block& x, std::size_t i, Block& y, std::size_t j) {
+  static_assert(sizeof(Block) % (4 * kBlockLanes) == 0 && std::is_trivially_copyable_v<Block>);
+  auto* bx = reinterpret_cast<unsigned char*>(&x);
+  auto* by = reinterpret_cast<unsigned char*>(&y);
+  for (std::size_t row = 0; row < sizeof(Block) / (4 * kBlockLanes); ++row) {
+    unsigned char* a = bx + (row * kBlockLanes + i) * 4;
+    unsigned char* b = by + (row * kBlockLanes + j) * 4;
+    std::uint32_t u, v;
+    std::memcpy(&u, a, 4);
+    std::memcpy(&v, b, 4);
+    std::memcpy(a, &v, 4);
+    std::memcpy(b, &u, 4);
+  }
+}
+}  // namespace
+
+ContactPipeline::LaneClasses ContactPipeline::lane_classes(const ContactBlock& c,
+                                                         const ContactBlockRest& r) {
+  // (a filled lane's first point is there, and has a mass; an empty lane's none)
+  const Lane zero = splat(0.0f);
+  LaneMask pushing = (c.friction_impulse[0] != zero) | (c.friction_impulse[1] != zero) |
+                     (c.twist_impulse != zero);
+  for (int j = 0; j < 4; ++j) pushing |= c.points[j].normal_impulse != zero;
+  const unsigned filled = simd::lane_bits(c.points[0].normal_mass > zero);
+  const unsigned fresh = simd::lane_bits(r.fresh) & filled;
+  return {std::uint32_t(fresh), std::uint32_t(filled & ~fresh & ~simd::lane_bits(pushing)),
+          std::uint32_t(filled)};
+}
+
+void ContactPipeline::order_held_lanes() {
+  // A held step keeps last step's blocks, whose lanes were put in class order when their colour
+  // was packed: fresh (cold) contacts first, so that few blocks are solved several times a pass,
+  // and quiet ones last, so that blocks of them alone skip their friction and the write of
+  // their bodies (colour_contacts()). Held for hundreds of steps, the classes change under that
+  // order (a settled pyramid's side contacts start and stop pushing) and the passes slow down.
+  // So each part of a colour (the share one thread solves, as colour_contacts() packed it) is
+  // put back in class order by exchanging lanes between its blocks: the misplaced lanes alone
+  // move, in two partitions (fresh from the rest, then quiet from pushing). Only isotropic
+  // blocks exchange lanes, so no block's kind of rows changes; the overflow colour, solved in
+  // order, is left as it is. The parts are the same on any team, so the order is too
+  std::vector<ContactBlock>& blocks = lanes_->blocks;
+  std::vector<ContactBlockRest>& rest = lanes_->rest;
+  std::vector<std::uint8_t>& flags = lanes_->flags;
+  const std::vector<std::uint32_t>& block_start = lanes_->colour_start;
+  std::atomic<std::size_t> moved{0};
+  parallel_region(threads_, blocks.size() >= 64, [&] {
+    std::size_t exchanges = 0;
+    // a part's lanes: block * W + lane of its isotropic blocks' filled lanes, and their classes
+    // (0 fresh, 1 pushing, 2 quiet)
+    thread_local std::vector<std::uint32_t> lanes;
+    thread_local std::vector<std::uint8_t> rank;
+    for (int k = 0; k + 1 < kColours; ++k) {
+      const std::size_t count = block_start[k + 1] - block_start[k];
+      const int parts = count >= kParallelColour / W ? kPackParts : 1;
+      for (int part = team_index(); part < parts; part += team_size()) {
+        const auto [begin, end] = share_of(count, parts, part);
+        const std::size_t first = block_start[k] + begin, last = block_start[k] + end;
+        // in order already (most steps): each block's fresh lanes a run from its first lane and
+        // its quiet ones a run to its last filled one, and no block's lowest class below the
+        // highest before it
+        bool ordered = true;
+        unsigned highest = 0;
+        for (std::size_t bi = first; bi < last && ordered; ++bi) {
+          if ((flags[bi] & kIsotropicBlock) == 0) continue;
+          // (a block packed again this step has no classes from hold_contacts())
+          if (block_refresh_[bi]) held_classes_[bi] = lane_classes(blocks[bi], rest[bi]);
+          const LaneClasses& classes = held_classes_[bi];
+          if (classes.filled == 0) continue;
+          const unsigned fresh = classes.fresh, loud = classes.filled & ~classes.quiet;
+          const unsigned lowest = (fresh & 1u) ? 0 : (loud & 1u) ? 1 : 2;
+          ordered = (fresh & (fresh + 1)) == 0 && (loud & (loud + 1)) == 0 && lowest >= highest;
+          highest = loud == classes.filled ? (fresh == classes.filled ? 0 : 1) : 2;
+        }
+        if (ordered) continue;
+        lanes.clear();
+        rank.clear();
+        for (std::size_t bi = first; bi < last; ++bi) {
+          if ((flags[bi] & kIsotropicBlock) == 0) continue;
+          if (block_refresh_[bi]) held_classes_[bi] = lane_classes(blocks[bi], rest[bi]);
+          const LaneClasses& classes = held_classes_[bi];
+          for (unsigned bits = classes.filled; bits != 0; bits &= bits - 1) {
+            const unsigned i = unsigned(std::countr_zero(bits));
+            lanes.push_back(std::uint32_t(bi * W + i));
+            rank.push_back((classes.fresh >> i & 1u) ? 0 : (classes.quiet >> i & 1u) ? 2 : 1);
+          }
+        }
+        // the lanes of rank below `split` to the front of [from, to): a misplaced one from the
+        // front exchanged with a misplaced one from the back
+        auto partition = [&](std::size_t from, std::size_t to, std::uint8_t split) {
+          std::size_t front = from, back = to;
+          while (true) {
+            while (front < back && rank[front] < split) ++front;
+            while (front < back && rank[back - 1] >= split) --back;
+            if (front == back) return front;
+            const std::size_t x = lanes[front], y = lanes[back - 1];
+            swap_lane(blocks[x / W], x % W, blocks[y / W], y % W);
+            swap_lane(rest[x / W], x % W, rest[y / W], y % W);
+            for (const std::size_t lane : {x, y}) {
+              const std::size_t bi = lane / W;
+              block_of_contact_[rest[bi].contact[lane % W]] = std::uint32_t(bi);
+              flags[bi] = std::uint8_t((flags[bi] & ~kFreshBlock) |
+                                       (simd::any_of(rest[bi].fresh) ? kFreshBlock : 0));
+            }
+            std::swap(rank[front], rank[back - 1]);
+            ++exchanges;
+            ++front;
+            --back;
+          }
+        };
+        partition(partition(0, lanes.size(), 1), lanes.size(), 2);
+      }
+    }
+    moved.fetch_add(2 * exchanges, std::memory_order_relaxed);
+  });
+  reordered_ = moved.load(std::memory_order_relaxed);
+}
+
 void ContactPipeline::prepare(const Vec3& gravity, double h) {
   separations_stale_ = true;
   gravity_ = gravity;
   restitution_step_ = h;
   if (held_ && held_count_ == contacts_.size()) {  // every block as last step left it
     bounces_ = false;
+    order_held_lanes();
     return;
   }
   if (!held_) colour_contacts();  // (holding, the blocks keep their contacts and order)
@@ -243,6 +370,7 @@ void ContactPipeline::prepare(const Vec3& gravity, double h) {
     }
   });
   bounces_ = bounces.load(std::memory_order_relaxed);
+  if (held_) order_held_lanes();
   blocks_follow_contacts_ = true;
   any_restitution_ = std::any_of(lanes_->flags.begin(), lanes_->flags.end(),
                                  [](std::uint8_t f) { return (f & kBouncingBlock) != 0; });

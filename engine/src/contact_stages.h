@@ -81,6 +81,8 @@ class ContactStages {
   virtual std::size_t reused_manifolds() const = 0;
   // the contacts this step held in last step's solver blocks, none built (ContactPipeline)
   virtual std::size_t held_contacts() const = 0;
+  // the held contacts moved to another lane this step to put their colour in class order again
+  virtual std::size_t reordered_contacts() const = 0;
 };
 
 // the sizes and alignments of the types the world and a copy of the pipeline pass each other, as

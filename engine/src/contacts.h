@@ -183,6 +183,7 @@ class ContactPipeline final : public ContactStages {
   std::size_t reused_pairs() const override { return reused_; }
   std::size_t reused_manifolds() const override { return moved_; }
   std::size_t held_contacts() const override { return held_ ? held_count_ : 0; }
+  std::size_t reordered_contacts() const override { return held_ ? reordered_ : 0; }
 
  private:
   struct BodyShapeData;
@@ -331,6 +332,16 @@ class ContactPipeline final : public ContactStages {
   // each held block's separations carried on, and its cold and fresh lanes taken again from the
   // velocities (block_refresh_ 0); their deepest overlap (m)
   double hold_contacts(double dt, const Vec3& gravity);
+  // a held step's lanes exchanged within each part of a colour so that its classes are in
+  // order again, fresh first and quiet last (prepare(), after the blocks packed again)
+  void order_held_lanes();
+  // a block's lanes by class, a bit each: fresh, quiet (no impulse carried, not fresh), filled
+  struct LaneClasses {
+    std::uint32_t fresh, quiet, filled;
+  };
+  static LaneClasses lane_classes(const ContactBlock& c, const ContactBlockRest& r);
+  std::vector<LaneClasses> held_classes_;  // per block, from hold_contacts()
+  std::size_t reordered_ = 0;  // the lanes order_held_lanes() moved this step
   std::vector<float> hold_deepest_;  // its scratch: each thread's deepest overlap (m)
   // per contact its block (prepare()); per contact, 1 where its block is packed again this
   // step (a lane of it moved past the hold distance), and per block the same

@@ -219,6 +219,8 @@ struct StepProfile {
   // contacts held in last step's solver blocks, no manifold moved and no contact built for them
   // (ContactSettings::contact_hold_distance)
   std::size_t held_contacts = 0;
+  // of those, the ones moved to another lane of their colour to put it in class order again
+  std::size_t reordered_contacts = 0;
   std::size_t swept_stops = 0;     // fast bodies the continuous stage stopped short
   std::size_t relax_passes = 0;    // relax solves this step, over its substeps
   int threads = 1;                 // the team the step ran on (ThreadGovernor)
