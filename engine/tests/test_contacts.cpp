@@ -97,23 +97,30 @@ TEST(Contacts, RestingBoxDoesNotJitter) {
 // corners, and the centre must stand √½ m above the surface, as on the plane. The narrow phase
 // finds the corners on the boxes grown by the speculative margin, whose corners lie the growth
 // beyond the true ones along each of the cube's axes: √2 times it along the normal here. Taken as
-// the growth along the normal, the cube stood 4 mm high on the box
+// the growth along the normal, the cube stood 4 mm high on the box. The box is the pair's first
+// body and then its second (the face on the second body, the corners on the first)
 TEST(Contacts, ACubeOnItsEdgeStandsAsHighOnABoxAsOnAPlane) {
-  auto height = [](bool on_box) {
+  enum class Under { kPlane, kBoxFirst, kBoxSecond };  // the box as the pair's first body or second
+  auto height = [](Under under) {
     World world = world_with(ContactSolver::SoftStep);
-    if (on_box)
-      add_box(world, {0.0, -1.0, 0.0}, 0.0, 0.6, 0.0, Quat::Identity(), Vec3(4.0, 1.0, 4.0));
-    else
-      add_ground(world, 0.6);
+    auto add_under = [&] {
+      if (under == Under::kPlane)
+        add_ground(world, 0.6);
+      else
+        add_box(world, {0.0, -1.0, 0.0}, 0.0, 0.6, 0.0, Quat::Identity(), Vec3(4.0, 1.0, 4.0));
+    };
+    if (under != Under::kBoxSecond) add_under();
     const Quat turn(Eigen::AngleAxisd(M_PI / 4.0, Vec3::UnitZ()));
     const BodyId cube = add_box(world, {0.0, std::sqrt(0.5), 0.0}, 1.0, 0.6, 0.0, turn);
+    if (under == Under::kBoxSecond) add_under();
     for (int i = 0; i < 30; ++i) world.step(kDt);
     EXPECT_LT(std::abs(world.state(cube).position.x()), 1e-4) << "balanced";
     return world.state(cube).position.y();
   };
-  const double on_plane = height(false), on_box = height(true);
+  const double on_plane = height(Under::kPlane);
   EXPECT_NEAR(on_plane, std::sqrt(0.5), 1e-3);
-  EXPECT_NEAR(on_box, on_plane, 2e-4);
+  EXPECT_NEAR(height(Under::kBoxFirst), on_plane, 2e-4);
+  EXPECT_NEAR(height(Under::kBoxSecond), on_plane, 2e-4);
 }
 
 // A box spun about the vertical on the ground stops by friction: with its weight on the four
