@@ -667,47 +667,43 @@ double ContactPipeline::build_contact(const Manifold& manifold, BodyId a, BodyId
   const bool box_on_plane =
       shapes_[box].kind == BodyShape::Box && shapes_[plane].kind == BodyShape::Plane;
   const bool two_boxes = shapes_[a].kind == BodyShape::Box && shapes_[b].kind == BodyShape::Box;
+  // the corner of box `of` nearest `near` (a point of its grown corner), grown by `growth` beyond
+  // the true one along each of its axes (0: the true corner); the shape holds the fixed growth,
+  // the pair's may be more (surface_growth())
+  const double fixed = 0.5 * settings_.speculative_distance;
+  auto corner_of = [&](BodyId of, const Vec3& near, double growth) {
+    const Quat& turn = states[of].orientation;
+    const Vec3 sign = (turn.conjugate() * (near - states[of].position)).array().sign();
+    const Vec3 half = shapes_[of].shape.half_extents.array() - fixed + growth;
+    return Vec3(states[of].position + turn * Vec3(sign.array() * half.array()));
+  };
   for (std::uint8_t j = 0; j < manifold.count; ++j) {
     ContactPointConstraint& p = c.points[j];
     // the point between the true surfaces: the manifold's lies between the grown ones;
     // its depth is of the grown shapes, less the growth: the real separation (< 0:
     // penetrating)
-    Vec3 point = manifold.points[j].point + shift;
-    double separation = growth_a + growth_b - manifold.points[j].depth;
+    const ContactPoint& found = manifold.points[j];
+    Vec3 point = found.point + shift;
+    double separation = growth_a + growth_b - found.depth;
     if (box_on_plane) {
-      const double fixed = 0.5 * settings_.speculative_distance;
       const BodyShapeData& on = shapes_[plane];
-      const Quat& turn = states[box].orientation;
-      const Vec3 local = turn.conjugate() * (manifold.points[j].point - states[box].position);
-      const Vec3 half = shapes_[box].shape.half_extents.array() - fixed;
-      const Vec3 corner =
-          states[box].position +
-          turn * Vec3(local.array().sign() * half.array());
+      const Vec3 corner = corner_of(box, found.point, 0.0);
       separation = on.plane_normal.dot(corner) - (on.plane_offset - fixed);
       point = corner - 0.5 * separation * on.plane_normal;
-    } else if (two_boxes && manifold.points[j].feature.type == ContactType::FaceVertex) {
+    } else if (two_boxes && found.feature.type == ContactType::FaceVertex) {
       // a corner of one box below the other's face: the grown corner lies the growth beyond
       // the true one along each of its box's axes, so up to √3 times it along n where the box
       // is turned (a box leaning 40° on a wall rested 4 mm off it); the true corner, its
-      // height over the reference face (a face: grown by its growth along n exactly), and the
-      // point midway
-      const bool incident_a = manifold.points[j].feature.flipped != 0;
-      const BodyId corner_of = incident_a ? a : b;
+      // height over the reference face (a face: grown by its growth along n exactly; the
+      // grown corner's height over the grown face is the manifold's, −depth), and the point
+      // midway
+      const bool incident_a = found.feature.flipped != 0;
+      const BodyId incident = incident_a ? a : b;
       const double growth = incident_a ? growth_a : growth_b;
       const double reference_growth = incident_a ? growth_b : growth_a;
-      const Quat& turn = states[corner_of].orientation;
-      const Vec3 local =
-          turn.conjugate() * (manifold.points[j].point - states[corner_of].position);
-      const Vec3 sign = local.array().sign();
-      // (the shape holds the fixed growth; the pair's may be more, surface_growth())
-      const Vec3 half =
-          shapes_[corner_of].shape.half_extents.array() - 0.5 * settings_.speculative_distance;
-      const Vec3 grown_corner =
-          states[corner_of].position + turn * Vec3(sign.array() * (half.array() + growth));
-      const Vec3 corner = states[corner_of].position + turn * Vec3(sign.array() * half.array());
-      // (the grown corner's separation from the grown face is the manifold's: −depth)
-      const double along = manifold.normal.dot(corner - grown_corner);
-      separation = -manifold.points[j].depth + reference_growth + (incident_a ? -along : along);
+      const Vec3 corner = corner_of(incident, found.point, 0.0);
+      const double along = manifold.normal.dot(corner - corner_of(incident, found.point, growth));
+      separation = -found.depth + reference_growth + (incident_a ? -along : along);
       point = corner + (incident_a ? 0.5 : -0.5) * separation * manifold.normal;
     }
     p.anchor_a = (point - states[a].position).cast<float>();
