@@ -131,7 +131,7 @@ void ContactPipeline::colour_contacts() {
         continue;
       }
       const std::size_t blocks = (n + W - 1) / W;
-      const int parts = blocks >= kParallelColour / W ? kPackParts : 1;
+      const int parts = pack_parts(blocks);
       for (int part = index; part < parts; part += size) {
         const auto [begin, end] = share_of(blocks, parts, part);
         const std::size_t from = first + begin * W, to = first + std::min(end * W, n);

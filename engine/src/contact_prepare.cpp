@@ -238,7 +238,7 @@ void ContactPipeline::order_held_lanes() {
     thread_local std::vector<std::uint8_t> rank;
     for (int k = 0; k + 1 < kColours; ++k) {
       const std::size_t count = block_start[k + 1] - block_start[k];
-      const int parts = count >= kParallelColour / W ? kPackParts : 1;
+      const int parts = pack_parts(count);
       for (int part = team_index(); part < parts; part += team_size()) {
         const auto [begin, end] = share_of(count, parts, part);
         const std::size_t first = block_start[k] + begin, last = block_start[k] + end;

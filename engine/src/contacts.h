@@ -104,6 +104,10 @@ inline constexpr std::size_t kParallelColour = 256;
 // such a colour is packed into blocks in this many parts on any team (colour_contacts), so that
 // its blocks hold the same contacts on one thread as on two: a team of two solves a part each
 inline constexpr int kPackParts = 2;
+// the parts a colour of `blocks` blocks is packed in: kPackParts where it is wide enough to share
+inline constexpr int pack_parts(std::size_t blocks) {
+  return blocks >= kParallelColour / kBlockLanes ? kPackParts : 1;
+}
 
 // colours beyond the 63rd are one last group, solved one contact a block, in order
 inline constexpr int kColours = 64;
