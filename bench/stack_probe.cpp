@@ -44,6 +44,7 @@ std::map<std::string, std::function<void(rtp::ContactSettings&, double)>> settin
       {"push", [](rtp::ContactSettings& s, double v) { s.max_push_speed = v; }},
       {"threads", [](rtp::ContactSettings& s, double v) { s.threads = int(v); }},
       {"cache", [](rtp::ContactSettings& s, double v) { s.pair_cache_distance = v; }},
+      {"margin", [](rtp::ContactSettings& s, double v) { s.bounds_margin = v; }},
       {"reuse", [](rtp::ContactSettings& s, double v) { s.manifold_reuse_distance = v; }},
       {"hold", [](rtp::ContactSettings& s, double v) { s.contact_hold_distance = v; }},
       {"match", [](rtp::ContactSettings& s, double v) { s.match_distance = v; }},

@@ -52,6 +52,7 @@ std::optional<rtp::ContactSettings> contact_settings_for(const std::string& vari
     settings.pair_cache_distance = 0.0;
     settings.manifold_reuse_distance = 0.0;
     settings.contact_hold_distance = 0.0;
+    settings.bounds_margin = 0.0;
   } else if (base == "soft-step-4") {
     settings.solver = rtp::ContactSolver::SoftStep;
     settings.substeps = 4;
@@ -251,6 +252,10 @@ EngineInfo rtp_engine_info() {
                : "contacts made this far apart, plus each body's motion in the step"},
           {"threads", std::to_string(c.threads), "narrow phase and each colour of the solve"},
           {"sleeping", "none", "rtp has no sleeping"},
+          {"broad-phase margin",
+           c.bounds_margin > 0.0 ? number(c.bounds_margin) + " m" : "off",
+           "each body's box in the broad phase is its bounds grown this much more; pairs are "
+           "looked for again only in a step where some body's bounds leave its box"},
           {"pair cache",
            c.pair_cache_distance > 0.0 ? number(c.pair_cache_distance) + " m" : "off",
            "a pair found apart is not tested again while neither shape has moved this far in "

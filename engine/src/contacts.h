@@ -204,6 +204,10 @@ class ContactPipeline final : public ContactStages {
   // the number of c's points that took an old point's impulses (old's stored)
   std::size_t carry_impulses(const ContactConstraint& old, const StoredImpulses& impulses,
                              ContactConstraint& c) const;
+  // whether a dynamic body's box reaches a plane's grown surface
+  bool reaches_plane(BodyId plane, const Aabb& box) const;
+  // whether two bodies' bounds this step overlap (a plane's: whether the other's reach it)
+  bool bounds_meet(BodyId a, BodyId b) const;
   // a pair's growth this step, the two bodies' together (m); and the two shapes grown by it
   double pair_growth(const BodyShapeData& a, const BodyShapeData& b) const;
   // how far each shape's surface lies beyond the true one in the pair's narrow phase (m)
@@ -221,6 +225,12 @@ class ContactPipeline final : public ContactStages {
   // per body, this step's bounds, grown (not for planes); apart from the shapes, so the passes
   // over every body's bounds read 24 bytes a body
   std::vector<Aabb> bounds_;
+  // per body, the box the broad phase holds: this step's bounds grown by bounds_margin when they
+  // last left it (Box2D's enlarged boxes), so a body resting or creeping keeps its box; while no
+  // body's bounds leave its box the pairs are last step's, and find_pairs() keeps them
+  std::vector<Aabb> broad_bounds_;
+  bool boxes_moved_ = true;   // this step: a body's bounds left its box, or a body came
+  bool pairs_kept_ = false;   // this step's candidates are last step's (find_pairs())
   std::vector<BodyId> planes_;
   std::vector<BodyId> dynamic_shaped_;  // bodies that meet the planes
   std::vector<BodyId> static_shaped_;   // what a fast body is swept against

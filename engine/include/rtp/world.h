@@ -153,6 +153,9 @@ struct ContactSettings {
                                        // arrives at a surface instead of sinking into it
   double motion_margin_share = 1.0;    // a body's bounds and contacts grow by its motion in
                                        // the step, up to this times its smallest half extent
+  double bounds_margin = 0.05;  // m: the broad phase holds each body's bounds grown by this
+                                // more, and looks for pairs again only in a step where some
+                                // body's bounds leave the box it holds (0: every step)
   double restitution_threshold = 1.0;  // m/s: slower approaches do not bounce
   bool warm_start = true;              // soft step and sequential impulse
   bool alternate_order = true;  // soft step: odd substeps visit the colours backwards, so the
