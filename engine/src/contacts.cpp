@@ -594,7 +594,7 @@ void ContactPipeline::collide_pairs(std::span<const BodyState> states, double dt
       const ContactConstraint last = c;
       build_contact(manifolds_[k], a, b, states, c);
       record_pose(a, b, packed_poses_[i].data());
-      const std::size_t carried = carry_impulses(last, impulses_[i], c);
+      const std::size_t carried = carry_impulses(last, stored_impulses(i), c);
       c.cold = cold_points(c, dt, gravity);
       points += c.count;
       points -= last.count;
@@ -606,6 +606,7 @@ void ContactPipeline::collide_pairs(std::span<const BodyState> states, double dt
     matched_ = matched;
     return;
   }
+  if (impulses_in_blocks_) write_impulses();  // (before the blocks stop following contacts_)
   blocks_follow_contacts_ = false;
   poses_packed_ = hold;
 

@@ -201,6 +201,10 @@ class ContactPipeline final : public ContactStages {
     std::array<float, 2> friction{};  // along the contact's tangents (N s)
     float twist = 0.0f;               // about its normal (N m s)
   };
+  // the blocks' impulses into impulses_, every contact's
+  void write_impulses();
+  // contact i's impulses: impulses_[i], or its lane's where the blocks still hold them
+  StoredImpulses stored_impulses(std::size_t i) const;
   // the number of c's points that took an old point's impulses (old's stored)
   std::size_t carry_impulses(const ContactConstraint& old, const StoredImpulses& impulses,
                              ContactConstraint& c) const;
@@ -250,6 +254,7 @@ class ContactPipeline final : public ContactStages {
   std::vector<std::uint64_t> candidates_;  // pair keys, sorted
   std::vector<ContactConstraint> contacts_, previous_;
   std::vector<StoredImpulses> impulses_, previous_impulses_;  // contacts_' and previous_'s
+  bool impulses_in_blocks_ = false;  // impulses_ not written since the solve (store_impulses())
   std::vector<std::uint64_t> contact_keys_, previous_keys_;  // each contact's key(), in order
   // contacts by colour (graph colouring, as Box2D v3's constraint graph): no two contacts of a
   // colour share a dynamic body, so a colour's contacts are solved at once, on any number of
