@@ -377,11 +377,12 @@ void ContactPipeline::collide_pairs(std::span<const BodyState> states, double dt
     block_refresh_.assign(lanes_->blocks.size(), 0);
     for (std::size_t i = 0; i < m_held; ++i)
       if (contact_refresh_[i]) block_refresh_[block_of_contact_[i]] = 1;
-    held_count_ = 0;
+    refreshed_.clear();
     for (std::size_t i = 0; i < m_held; ++i) {
       contact_refresh_[i] = block_refresh_[block_of_contact_[i]];
-      held_count_ += contact_refresh_[i] == 0;
+      if (contact_refresh_[i]) refreshed_.push_back(std::uint32_t(i));
     }
+    held_count_ = m_held - refreshed_.size();
   }
   outcome_.resize(n);
   if (cache) {
@@ -538,15 +539,20 @@ void ContactPipeline::collide_pairs(std::span<const BodyState> states, double dt
       changed = (outcome_[visit_[at]] <= kHeld) != (visit_touched_[at] != 0);
     if (!changed) {
       held_deepest = hold_contacts(dt, gravity);
-      for (std::size_t i = 0; i < m_held; ++i) {
-        if (!contact_refresh_[i]) continue;
-        const std::size_t k = touching_[i];
-        ContactConstraint scratch;
-        held_deepest =
-            std::max(held_deepest, build_contact(manifolds_[k], BodyId(candidates_[k] >> 32),
-                                                 BodyId(candidates_[k] & 0xffffffffu), states,
-                                                 scratch));
+      // the contacts packed again, built aside (last step's stay for their impulses, and for
+      // the build of every contact should the step not hold after all), on the threads
+      const std::size_t r = refreshed_.size();
+      refreshed_contacts_.resize(r);
+      double deepest = 0.0;
+#pragma omp parallel for num_threads(threads_) schedule(static) reduction(max : deepest) \
+    if (threads_ > 1 && r >= 64)
+      for (std::size_t j = 0; j < r; ++j) {
+        const std::size_t k = touching_[refreshed_[j]];
+        deepest = std::max(deepest, build_contact(manifolds_[k], BodyId(candidates_[k] >> 32),
+                                                  BodyId(candidates_[k] & 0xffffffffu), states,
+                                                  refreshed_contacts_[j]));
       }
+      held_deepest = std::max(held_deepest, deepest);
     }
     if (changed || (soft && held_deepest > settings_.max_push_speed * dt)) {
       held_ = false;
@@ -585,25 +591,27 @@ void ContactPipeline::collide_pairs(std::span<const BodyState> states, double dt
   // holding, the contacts stay, each of a block packed again built again over its record of
   // last step, which it is matched with (hold_contacts() carried the others' separations on)
   if (held_) {
-    std::size_t points = point_count_, matched = point_count_;
-    for (std::size_t i = 0; i < m_held; ++i) {
-      if (!contact_refresh_[i]) continue;
-      const std::size_t k = touching_[i];
+    // (the counts as sums of changes, each a thread's, from last step's)
+    std::ptrdiff_t points = 0, matched = 0;
+    const std::size_t r = refreshed_.size();
+#pragma omp parallel for num_threads(threads_) schedule(static) reduction(+ : points, matched) \
+    if (threads_ > 1 && r >= 64)
+    for (std::size_t j = 0; j < r; ++j) {
+      const std::size_t i = refreshed_[j], k = touching_[i];
       const BodyId a = BodyId(candidates_[k] >> 32), b = BodyId(candidates_[k] & 0xffffffffu);
       ContactConstraint& c = contacts_[i];
       const ContactConstraint last = c;
-      build_contact(manifolds_[k], a, b, states, c);
+      c = refreshed_contacts_[j];
       record_pose(a, b, packed_poses_[i].data());
-      const std::size_t carried = carry_impulses(last, stored_impulses(i), c);
+      const std::ptrdiff_t carried = std::ptrdiff_t(carry_impulses(last, stored_impulses(i), c));
       c.cold = cold_points(c, dt, gravity);
-      points += c.count;
-      points -= last.count;
-      matched += carried;
-      matched -= last.count;
+      points += std::ptrdiff_t(c.count) - std::ptrdiff_t(last.count);
+      matched += carried - std::ptrdiff_t(last.count);
     }
     deepest_ = held_deepest;
-    point_count_ = points;
-    matched_ = matched;
+    const std::ptrdiff_t before = std::ptrdiff_t(point_count_);  // every point matched, held
+    point_count_ = std::size_t(before + points);
+    matched_ = std::size_t(before + matched);
     return;
   }
   if (impulses_in_blocks_) write_impulses();  // (before the blocks stop following contacts_)

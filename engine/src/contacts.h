@@ -367,6 +367,8 @@ class ContactPipeline final : public ContactStages {
   std::vector<std::uint32_t> block_of_contact_;
   std::vector<std::uint8_t> contact_refresh_, block_refresh_;
   std::size_t held_count_ = 0;  // the contacts held this step (in blocks not packed again)
+  std::vector<std::uint32_t> refreshed_;  // the others, the contacts packed again, in order
+  std::vector<ContactConstraint> refreshed_contacts_;  // and their contacts, built this step
   // pack_block(): block bi's lanes from contacts_ (lane i from contacts_[record_of[i]];
   // kNoContact: empty), with prepare_lanes(); whether some lane's point bounces
   bool pack_block(std::size_t bi, const std::array<std::uint32_t, kBlockLanes>& record_of,
