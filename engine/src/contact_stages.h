@@ -83,6 +83,8 @@ class ContactStages {
   virtual std::size_t held_contacts() const = 0;
   // the held contacts moved to another lane this step to put their colour in class order again
   virtual std::size_t reordered_contacts() const = 0;
+  // whether this step's candidate pairs are last step's, the broad phase not run (its boxes kept)
+  virtual bool pairs_kept() const = 0;
 };
 
 // the sizes and alignments of the types the world and a copy of the pipeline pass each other, as

@@ -188,6 +188,7 @@ class ContactPipeline final : public ContactStages {
   std::size_t reused_manifolds() const override { return moved_; }
   std::size_t held_contacts() const override { return held_ ? held_count_ : 0; }
   std::size_t reordered_contacts() const override { return held_ ? reordered_ : 0; }
+  bool pairs_kept() const override { return pairs_kept_; }
 
  private:
   struct BodyShapeData;

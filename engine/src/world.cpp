@@ -540,6 +540,7 @@ void World::step_with_contacts(double dt) {
   profile_.reused_manifolds = contacts.reused_manifolds();
   profile_.held_contacts = contacts.held_contacts();
   profile_.reordered_contacts = contacts.reordered_contacts();
+  profile_.pairs_kept = contacts.pairs_kept();
   profile_.total = seconds_since(start);
   profile_.threads = active_threads_;
   governor_.record(active_threads_, profile_.total);

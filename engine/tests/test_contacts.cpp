@@ -735,5 +735,48 @@ TEST(Contacts, BadShapesAndMaterialsAreRefused) {
   EXPECT_THROW(World(kGravity, Integrator::SemiImplicitEuler, bad), std::invalid_argument);
 }
 
+// The broad phase holds each body's bounds grown by bounds_margin and looks for pairs again only
+// in a step where some body's bounds leave the box it holds. A box sliding on frictionless ground
+// at 1 cm a step towards a static wall 1 m off leaves its box every few steps: in between, the
+// pairs are kept; when it reaches the wall the pair must be found, and the run must end on the
+// same bits as a broad phase run every step on the bounds themselves (margin 0), since a pair whose
+// held boxes meet but whose bounds do not is apart either way. A box whose move went unseen would
+// slide through the wall.
+TEST(Contacts, ABoxSlidingTowardsAWallMeetsItThoughItsBroadPhaseBoxIsKept) {
+  struct Run {
+    std::vector<double> state;
+    int kept = 0;
+    double x = 0.0;
+  };
+  auto run = [](double margin) {
+    ContactSettings settings;
+    settings.bounds_margin = margin;
+    World world(kGravity, Integrator::SemiImplicitEuler, settings);
+    add_ground(world, 0.0);
+    add_box(world, {2.0, 0.5, 0.0}, 0.0, 0.0);  // the wall: its face at x = 1.5
+    BodyDef def;
+    def.mass = 1.0;
+    def.principal_inertia = Vec3::Constant(1.0 / 6.0);
+    def.position = Vec3(0.0, 0.5, 0.0);
+    def.linear_velocity = Vec3(0.6, 0.0, 0.0);  // 1 cm a step
+    def.shape.kind = BodyShape::Box;
+    def.shape.half_extents = Vec3::Constant(0.5);
+    def.friction = 0.0;
+    const BodyId box = world.add_body(def);
+    Run out;
+    for (int i = 0; i < 150; ++i) {
+      world.step(kDt);
+      out.kept += world.profile().pairs_kept;
+    }
+    out.state = state_numbers(world);
+    out.x = world.state(box).position.x();
+    return out;
+  };
+  const Run held = run(0.05), every = run(0.0);
+  EXPECT_GT(held.kept, 75);           // most of its steps keep the pairs
+  EXPECT_NEAR(held.x, 1.0, 1e-3);     // at the wall, not through it
+  EXPECT_EQ(held.state, every.state);
+}
+
 }  // namespace
 }  // namespace rtp

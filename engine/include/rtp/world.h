@@ -224,6 +224,9 @@ struct StepProfile {
   std::size_t held_contacts = 0;
   // of those, the ones moved to another lane of their colour to put it in class order again
   std::size_t reordered_contacts = 0;
+  // the broad phase kept last step's pairs: no body's bounds left the box it holds for it
+  // (ContactSettings::bounds_margin)
+  bool pairs_kept = false;
   std::size_t swept_stops = 0;     // fast bodies the continuous stage stopped short
   std::size_t relax_passes = 0;    // relax solves this step, over its substeps
   int threads = 1;                 // the team the step ran on (ThreadGovernor)
