@@ -758,7 +758,8 @@ ContactPipeline::StoredImpulses ContactPipeline::stored_impulses(std::size_t i) 
   const std::size_t b = block_of_contact_[i];
   const ContactBlock& block = lanes_->blocks[b];
   const auto& contact = lanes_->rest[b].contact;
-  const std::size_t lane = std::size_t(std::find(contact.begin(), contact.end(), i) - contact.begin());
+  const std::size_t lane =
+      std::size_t(std::find(contact.begin(), contact.end(), i) - contact.begin());
   StoredImpulses stored;
   for (int j = 0; j < 4; ++j) stored.normal[j] = block.points[j].normal_impulse[lane];
   stored.friction = {block.friction_impulse[0][lane], block.friction_impulse[1][lane]};
