@@ -594,6 +594,9 @@ void ContactPipeline::collide_pairs(std::span<const BodyState> states, double dt
     // (the counts as sums of changes, each a thread's, from last step's)
     std::ptrdiff_t points = 0, matched = 0;
     const std::size_t r = refreshed_.size();
+    // a contact's impulses read from its lane touch seven lines of its block: where many are
+    // packed again (a settling pile), the blocks are written out in order first
+    if (impulses_in_blocks_ && 8 * r > m_held) write_impulses();
 #pragma omp parallel for num_threads(threads_) schedule(static) reduction(+ : points, matched) \
     if (threads_ > 1 && r >= 64)
     for (std::size_t j = 0; j < r; ++j) {
