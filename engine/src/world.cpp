@@ -65,7 +65,8 @@ World::World(Vec3 gravity, Integrator integrator, ContactSettings contacts)
       !(contacts.max_push_speed > 0.0) || !(contacts.relax_tolerance >= 0.0) ||
       !std::isfinite(contacts.relax_tolerance) || !(contacts.restitution_tolerance >= 0.0) ||
       !std::isfinite(contacts.restitution_tolerance) ||
-      !(contacts.contact_hold_distance >= 0.0) || !std::isfinite(contacts.contact_hold_distance))
+      !(contacts.contact_hold_distance >= 0.0) || !std::isfinite(contacts.contact_hold_distance) ||
+      !(contacts.bounds_margin >= 0.0) || !std::isfinite(contacts.bounds_margin))
     throw std::invalid_argument("rtp: contact distances, stiffness and speeds must be >= 0");
   contact_isa_ = &contact_isa(contacts.instruction_set);
 }

@@ -14,6 +14,7 @@
 #include <atomic>
 #include <cmath>
 #include <cstdlib>
+#include <limits>
 #include <new>
 #include <numbers>
 #include <stdexcept>
@@ -728,6 +729,12 @@ TEST(Contacts, BadShapesAndMaterialsAreRefused) {
   for (const double tolerance : {-0.01, std::nan("")}) {
     ContactSettings bad;
     bad.relax_tolerance = tolerance;
+    EXPECT_THROW(World(kGravity, Integrator::SemiImplicitEuler, bad), std::invalid_argument);
+  }
+  // a negative margin would hold boxes smaller than the bounds, and miss pairs
+  for (const double margin : {-0.01, std::nan(""), std::numeric_limits<double>::infinity()}) {
+    ContactSettings bad;
+    bad.bounds_margin = margin;
     EXPECT_THROW(World(kGravity, Integrator::SemiImplicitEuler, bad), std::invalid_argument);
   }
   ContactSettings bad;
