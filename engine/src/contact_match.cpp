@@ -113,6 +113,11 @@ ContactPipeline::StoredImpulses ContactPipeline::stored_impulses(std::size_t i) 
   const auto& contact = lanes_->rest[b].contact;
   const std::size_t lane =
       std::size_t(std::find(contact.begin(), contact.end(), i) - contact.begin());
+  return lane_impulses(block, lane);
+}
+
+ContactPipeline::StoredImpulses ContactPipeline::lane_impulses(const ContactBlock& block,
+                                                               std::size_t lane) {
   StoredImpulses stored;
   for (int j = 0; j < 4; ++j) stored.normal[j] = block.points[j].normal_impulse[lane];
   stored.friction = {block.friction_impulse[0][lane], block.friction_impulse[1][lane]};
@@ -158,11 +163,7 @@ void ContactPipeline::write_impulses() {
     const ContactBlock& block = blocks[b];
     const auto& contact = rest[b].contact;
     for (std::size_t i = 0; i < kBlockLanes; ++i) {
-      if (contact[i] == kNoContact) continue;
-      StoredImpulses& stored = impulses_[contact[i]];
-      for (int j = 0; j < 4; ++j) stored.normal[j] = block.points[j].normal_impulse[i];
-      stored.friction = {block.friction_impulse[0][i], block.friction_impulse[1][i]};
-      stored.twist = block.twist_impulse[i];
+      if (contact[i] != kNoContact) impulses_[contact[i]] = lane_impulses(block, i);
     }
   });
 }

@@ -195,10 +195,7 @@ void ContactPipeline::update_bounds(std::span<const BodyState> states, double dt
     bounds_[i] = box;
     // the broad phase's box, grown again where the bounds left it
     Aabb& held = broad_bounds_[i];
-    const bool inside = held.min[0] <= box.min[0] && held.min[1] <= box.min[1] &&
-                        held.min[2] <= box.min[2] && box.max[0] <= held.max[0] &&
-                        box.max[1] <= held.max[1] && box.max[2] <= held.max[2];
-    if (inside && margin > 0.0f) return;
+    if (margin > 0.0f && contains(held, box)) return;
     for (int k = 0; k < 3; ++k) {
       held.min[k] = box.min[k] - margin;
       held.max[k] = box.max[k] + margin;

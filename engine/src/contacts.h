@@ -206,6 +206,8 @@ class ContactPipeline final : public ContactStages {
   void write_impulses();
   // contact i's impulses: impulses_[i], or its lane's where the blocks still hold them
   StoredImpulses stored_impulses(std::size_t i) const;
+  // a block's impulses in one lane
+  static StoredImpulses lane_impulses(const ContactBlock& block, std::size_t lane);
   // the number of c's points that took an old point's impulses (old's stored)
   std::size_t carry_impulses(const ContactConstraint& old, const StoredImpulses& impulses,
                              ContactConstraint& c) const;

@@ -44,6 +44,13 @@ inline bool overlaps(const Aabb& a, const Aabb& b) {
          b.min[1] <= a.max[1] && a.min[2] <= b.max[2] && b.min[2] <= a.max[2];
 }
 
+// whether box `inner` lies within `outer` (closed: a shared face counts)
+inline bool contains(const Aabb& outer, const Aabb& inner) {
+  return outer.min[0] <= inner.min[0] && outer.min[1] <= inner.min[1] &&
+         outer.min[2] <= inner.min[2] && inner.max[0] <= outer.max[0] &&
+         inner.max[1] <= outer.max[1] && inner.max[2] <= outer.max[2];
+}
+
 // the bounds of a convex shape's vertices (body frame) at a pose: tight under rotation
 Aabb bounds_of_points(const std::vector<Vec3>& body_vertices, const Vec3& position,
                       const Quat& orientation);
