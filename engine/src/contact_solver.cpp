@@ -514,8 +514,9 @@ bool ContactPipeline::solve(double h, bool bias, bool backwards, double toleranc
     // the lanes where a point pushes out at max_push_speed: deep in an overlap (boxes spawned
     // into each other), whose normal impulse is mostly push-out (below)
     [[maybe_unused]] LaneMask pushing_out = zero != zero;
-    for (int round = 0; round < rounds; ++round) {
-      const LaneMask active = round == 0 ? LaneMask(zero == zero) : r.fresh;
+    // a round over the four points: the first on every lane, each later one on the fresh lanes
+    // alone (`active`); the first is a kernel of its own, without the select on its chain
+    auto point_rows = [&]<bool kEveryLane>([[maybe_unused]] LaneMask active) {
       for (int j = 0; j < 4; ++j) {
         ContactBlock::Point& p = c.points[j];
         ahead.ahead(16);
@@ -553,8 +554,9 @@ bool ContactPipeline::solve(double h, bool bias, bool backwards, double toleranc
           // no bias: only a gap's closing is allowed, no push out
           impulse = zero - p.normal_mass * (vn + simd::select(apart, closing, zero));
         }
-        const Lane accumulated =
-            simd::select(active, simd::max(p.normal_impulse + impulse, zero), p.normal_impulse);
+        const Lane clamped = simd::max(p.normal_impulse + impulse, zero);
+        Lane accumulated = clamped;
+        if constexpr (!kEveryLane) accumulated = simd::select(active, clamped, p.normal_impulse);
         const Lane applied = accumulated - p.normal_impulse;
         p.normal_impulse = accumulated;
         if (any_bounce)
@@ -575,7 +577,9 @@ bool ContactPipeline::solve(double h, bool bias, bool backwards, double toleranc
           }
         }
       }
-    }
+    };
+    point_rows.template operator()<true>(LaneMask{});
+    for (int round = 1; round < rounds; ++round) point_rows.template operator()<false>(r.fresh);
     if constexpr (kIsotropic) wrote = simd::any_of(pushed);
     // Coulomb friction at the manifold's centre: the friction impulse accumulates on the two
     // tangents and its length stays within μ times the manifold's normal impulse (the friction
