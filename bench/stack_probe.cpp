@@ -12,6 +12,11 @@
 //   build/bench/bench/stack_probe pyramid-100 10
 //   build/bench/bench/stack_probe pyramid-50 3 substeps 16 hertz 240
 //   build/bench/bench/stack_probe pyramid-100 2 every 0.1     (a line every 0.1 s, not every second)
+//   build/bench/bench/stack_probe pyramid-10 20 kick 0.01     (the top box pushed sideways at 1 s)
+//
+// `kick V` gives the top box a velocity of V m/s along z (across a pyramid's one-box depth) at
+// t = 1 s, once the stack has settled, and each progress line then gives the range of the top's
+// z over its interval: a sway that a standing stack damps shrinks line by line.
 #include <array>
 #include <cmath>
 #include <cstdint>
@@ -56,7 +61,7 @@ std::map<std::string, std::function<void(rtp::ContactSettings&, double)>> settin
 }
 
 int usage(const char* why) {
-  std::fprintf(stderr, "stack_probe: %s\nusage: stack_probe SCENARIO SECONDS [SETTING VALUE]...\nsettings: every (seconds between progress lines)", why);
+  std::fprintf(stderr, "stack_probe: %s\nusage: stack_probe SCENARIO SECONDS [SETTING VALUE]...\nsettings: every (seconds between progress lines) kick (m/s along z, the top box at 1 s)", why);
   for (const auto& [name, _] : settings_by_name()) std::fprintf(stderr, " %s", name.c_str());
   std::fprintf(stderr, "\n");
   return 2;
@@ -74,10 +79,17 @@ int main(int argc, char** argv) {
   rtp::ContactSettings settings;
   const auto known = settings_by_name();
   double every = 1.0;  // seconds between the progress lines
+  double kick = 0.0;   // m/s along z given to the top box at 1 s
   for (int i = 3; i + 1 < argc; i += 2) {
     if (std::string(argv[i]) == "every") {
       every = std::strtod(argv[i + 1], &end);
       if (*end || !(every > 0.0 && every <= seconds)) return usage("every must be in (0, SECONDS]");
+      continue;
+    }
+    if (std::string(argv[i]) == "kick") {
+      kick = std::strtod(argv[i + 1], &end);
+      if (*end || !(std::abs(kick) <= 10.0)) return usage("kick must be a speed within ±10 m/s");
+      if (kick != 0.0 && seconds <= 1.0) return usage("kick comes at 1 s: SECONDS must be over 1");
       continue;
     }
     const auto setting = known.find(argv[i]);
@@ -106,8 +118,16 @@ int main(int argc, char** argv) {
   std::size_t line_team_steps = 0;  // steps on more than one thread since then (the governor)
   std::size_t line_held = 0, line_touching = 0;  // contacts held, and all, since then
   std::array<double, rtp::StepProfile::kStageNames.size()> stage_seconds{};
+  const int kick_step = int(std::lround(1.0 / scene.dt));
+  double sway_low = 0.0, sway_high = 0.0;  // the top's z less its start, over the line's interval
   for (int k = 0; k < steps; ++k) {
+    if (kick != 0.0 && k == kick_step)
+      world.apply_impulse(top, rtp::Vec3(0.0, 0.0, kick * world.mass(top)),
+                          world.state(top).position);
     world.step(scene.dt);
+    const double sway = world.state(top).position.z() - start[top].z();
+    sway_low = (k % per_line == 0) ? sway : std::min(sway_low, sway);
+    sway_high = (k % per_line == 0) ? sway : std::max(sway_high, sway);
     seconds_stepping += world.profile().total;
     relax_passes += world.profile().relax_passes;
     line_relax_passes += world.profile().relax_passes;
@@ -129,11 +149,13 @@ int main(int argc, char** argv) {
     if ((k + 1) % per_line == 0) {
       std::fprintf(stderr,
                    "t = %.2f s  drift %.4f m  top x %+.4f m, height %+.4f m  deepest %.4f m  "
-                   "%.1f relax passes a step  %.0f %% of steps on the team  %.0f %% of contacts held\n",
+                   "%.1f relax passes a step  %.0f %% of steps on the team  %.0f %% of contacts held"
+                   "  top z %+.5f..%+.5f m\n",
                    (k + 1) * scene.dt, drift, world.state(top).position.x() - start[top].x(),
                    world.state(top).position.y() - start[top].y(), world.deepest_penetration(),
                    double(line_relax_passes) / per_line, 100.0 * double(line_team_steps) / per_line,
-                   line_touching > 0 ? 100.0 * double(line_held) / double(line_touching) : 0.0);
+                   line_touching > 0 ? 100.0 * double(line_held) / double(line_touching) : 0.0,
+                   sway_low, sway_high);
       line_relax_passes = 0;
       line_team_steps = 0;
       line_held = line_touching = 0;
