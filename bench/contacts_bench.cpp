@@ -10,7 +10,9 @@
 // beside the times, so that a slow spell shows in the run itself (Triad/threads:N/at:0 and at:1;
 // with --benchmark_enable_random_interleaving they run among the others instead); and with it the
 // machine's two-thread ceiling (ceiling.h, Ceiling/at:0 and at:1), what ThreadScaling's speedup
-// is read against.
+// is read against, and the cache line's round trip between the two threads' cores (RoundTrip/at:0
+// and at:1; ThreadScaling's round_trip_ns, taken before its turns and after them), which tells the
+// spells apart in which two threads scale well or not.
 #include <benchmark/benchmark.h>
 
 #include <algorithm>
@@ -129,6 +131,8 @@ void ThreadScaling(benchmark::State& state) {
   std::array<double, 2> total{}, first{};  // each world's time, and its turns' first steps'
   std::size_t steps = 0, turns = 0;
   std::size_t on_team = 0;  // the steps the two-thread world ran on its team
+  // the cores' round trip (ceiling.h) before the turns and after them: which spell the run met
+  const double round_trip_before = round_trip_ns(20'000);
   for (auto _ : state) {
     for (int k = 0; k < 2; ++k) {
       for (int r = 0; r < run; ++r) {
@@ -160,6 +164,7 @@ void ThreadScaling(benchmark::State& state) {
   }
   // the governor runs a step on one thread to probe it, or while one thread measures faster
   state.counters["team_share_2t"] = double(on_team) / double(steps);
+  state.counters["round_trip_ns"] = 0.5 * (round_trip_before + round_trip_ns(20'000));
 }
 
 // Held contacts against every contact built every step (ContactSettings::contact_hold_distance
@@ -231,6 +236,12 @@ int main(int argc, char** argv) {
         ->Unit(benchmark::kMillisecond)
         ->UseRealTime()
         ->Iterations(10);
+    benchmark::RegisterBenchmark("RoundTrip", RoundTrip)
+        ->Arg(at)
+        ->ArgName("at")
+        ->Unit(benchmark::kMillisecond)
+        ->UseRealTime()
+        ->Iterations(5);
   };
   triad(0);
   for (int base : {10, 20, 50, 100})

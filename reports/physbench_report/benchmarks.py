@@ -176,6 +176,7 @@ def contacts_benchmark(folder: Path) -> dict | None:
     paired: dict[tuple, dict] = {}  # (base, steps a turn) -> its ThreadScaling row
     triad: dict[tuple, list] = {}  # (threads, at) -> bytes/s of each run
     ceiling: dict[int, list] = {}  # at -> the two-thread ceiling's speedup of each run
+    round_trip: dict[int, list] = {}  # at -> the cores' round trip (ns) of each run
     for run in document.get("benchmarks", []):
         name = run.get("run_name", run.get("name", ""))
         if name.startswith("Triad/"):
@@ -197,6 +198,17 @@ def contacts_benchmark(folder: Path) -> dict | None:
             fields = dict(part.split(":", 1) for part in name.split("/")[1:] if ":" in part)
             try:
                 ceiling.setdefault(int(fields["at"]), []).append(float(run["speedup_2t"]))
+            except (KeyError, ValueError) as exc:
+                raise ReportError(f"{folder / 'benchmarks' / 'contacts.json'}: benchmark {name!r} lacks "
+                                  f"or garbles {exc}") from exc
+            continue
+        if name.startswith("RoundTrip/"):
+            # a cache line's round trip between the two threads' cores (bench/ceiling.h), ns
+            if run.get("run_type") == "aggregate" or run.get("error_occurred"):
+                continue
+            fields = dict(part.split(":", 1) for part in name.split("/")[1:] if ":" in part)
+            try:
+                round_trip.setdefault(int(fields["at"]), []).append(float(run["round_trip_ns"]))
             except (KeyError, ValueError) as exc:
                 raise ReportError(f"{folder / 'benchmarks' / 'contacts.json'}: benchmark {name!r} lacks "
                                   f"or garbles {exc}") from exc
@@ -244,15 +256,18 @@ def contacts_benchmark(folder: Path) -> dict | None:
                 scene=context.get("scene", ""), paired=[paired[key] for key in sorted(paired)],
                 bandwidth=bandwidth,
                 ceiling=[statistics.median(ceiling[at]) if at in ceiling else None for at in (0, 1)]
-                if ceiling else None)
+                if ceiling else None,
+                round_trip=[statistics.median(round_trip[at]) if at in round_trip else None for at in (0, 1)]
+                if round_trip else None)
 
 
 def thread_scaling_row(folder: Path, name: str, run: dict) -> dict | None:
     """One ThreadScaling run of contacts_bench (one thread against two, the same steps in turn,
     `run` steps a turn: 1 where the name has no run, as before it had one): its base and run,
     each world's ms per step and the speedup, and for turns of several steps each world's first
-    step of a turn apart from the rest; None for an aggregate other than the median, a failed run
-    named as such."""
+    step of a turn apart from the rest, and the cores' round trip the run met (ns; None in a run
+    from before it was taken); None for an aggregate other than the median, a failed run named as
+    such."""
     if run.get("run_type") == "aggregate" and run.get("aggregate_name") != "median":
         return None
     fields = dict(part.split(":", 1) for part in name.split("/")[1:] if ":" in part)
@@ -267,6 +282,7 @@ def thread_scaling_row(folder: Path, name: str, run: dict) -> dict | None:
                     ms_2t=float(run["ms_per_step_2t"]), speedup=float(run["speedup_2t"]),
                     # (a median's own "iterations" counts the repetitions: the name holds the run's)
                     steps=int(fields.get("iterations", run["iterations"])) * turn, first=first, rest=rest,
+                    round_trip=float(run["round_trip_ns"]) if "round_trip_ns" in run else None,
                     error=None)
     except (KeyError, ValueError) as exc:
         raise ReportError(f"{folder / 'benchmarks' / 'contacts.json'}: benchmark {name!r} lacks "

@@ -569,11 +569,16 @@ def test_thread_scaling_runs_are_the_paired_speedups(tmp_path):
              "first_ms_1t": 12.0, "first_ms_2t": 7.0, "rest_ms_1t": 10.7, "rest_ms_2t": 5.9}
     ceiling = {"name": "Ceiling/at:1/iterations:10/real_time", "run_type": "iteration", "iterations": 10,
                "real_time": 80.0, "time_unit": "ms", "speedup_2t": 1.9}
+    # the cores' round trip at the start, and the one the run in turns of ten met
+    round_trip = {"name": "RoundTrip/at:0/iterations:5/real_time", "run_type": "iteration", "iterations": 5,
+                  "real_time": 6.2, "time_unit": "ms", "round_trip_ns": 62.0}
+    turns["round_trip_ns"] = 318.0
     (tmp_path / "benchmarks" / "contacts.json").write_text(
-        contacts_json([pyramid_run(10, 1, 2.0), turns, scaling, failed, ceiling]))
+        contacts_json([pyramid_run(10, 1, 2.0), turns, scaling, failed, ceiling, round_trip]))
     bench = benchmarks.contacts_benchmark(tmp_path)
     # the machine's ceiling read beside them: at the end only here
     assert bench["ceiling"] == [None, pytest.approx(1.9)]
+    assert bench["round_trip"] == [pytest.approx(62.0), None]
     assert [(p["base"], p["run"]) for p in bench["paired"]] == [(50, 1), (100, 1), (100, 10)]
     assert bench["paired"][0]["error"] == "two threads did not give one thread's poses"
     assert bench["paired"][1]["speedup"] == pytest.approx(11.0 / 6.5)
@@ -582,6 +587,13 @@ def test_thread_scaling_runs_are_the_paired_speedups(tmp_path):
     assert bench["paired"][2]["steps"] == 300
     assert bench["paired"][2]["speedup"] == pytest.approx(1.8)
     assert bench["paired"][2]["first"] == (12.0, 7.0) and bench["paired"][2]["rest"] == (10.7, 5.9)
+    # a run from before the round trip was taken says so; one with it carries its own
+    assert bench["paired"][1]["round_trip"] is None
+    assert bench["paired"][2]["round_trip"] == pytest.approx(318.0)
+    broken = dict(round_trip, round_trip_ns="fast")
+    (tmp_path / "benchmarks" / "contacts.json").write_text(contacts_json([pyramid_run(10, 1, 2.0), broken]))
+    with pytest.raises(build_report.ReportError, match=r"contacts.json: benchmark 'RoundTrip/at:0.*fast"):
+        benchmarks.contacts_benchmark(tmp_path)
 
 
 def test_a_thread_scaling_median_counts_the_steps_of_one_repetition(tmp_path):
