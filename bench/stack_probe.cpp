@@ -19,6 +19,10 @@
 // z over its interval: a sway that a standing stack damps shrinks line by line. `nudge V` gives
 // every dynamic body V m/s along x at the start: with V at 1e-9 m/s or so, a run whose results
 // differ from the unnudged one at round-off only, so that a rare event can be counted over runs.
+// `pad N` puts N static boxes, far below the ground and apart, before the scene's own bodies
+// (after its first, the ground), so that those take the body indices they would have after N
+// others: the contacts' keys, and so the colours' order, of a scene's part as it runs in a larger
+// one (`stack_probe pyramid-10 12 pad 9185` is many-pyramids' swaying pyramid alone).
 #include <array>
 #include <cmath>
 #include <cstdint>
@@ -63,7 +67,7 @@ std::map<std::string, std::function<void(rtp::ContactSettings&, double)>> settin
 }
 
 int usage(const char* why) {
-  std::fprintf(stderr, "stack_probe: %s\nusage: stack_probe SCENARIO SECONDS [SETTING VALUE]...\nsettings: every (seconds between progress lines) kick (m/s along z, the top box at 1 s) nudge (m/s along x, every body at the start)", why);
+  std::fprintf(stderr, "stack_probe: %s\nusage: stack_probe SCENARIO SECONDS [SETTING VALUE]...\nsettings: every (seconds between progress lines) kick (m/s along z, the top box at 1 s) nudge (m/s along x, every body at the start) pad (static boxes before the scene's bodies)", why);
   for (const auto& [name, _] : settings_by_name()) std::fprintf(stderr, " %s", name.c_str());
   std::fprintf(stderr, "\n");
   return 2;
@@ -83,6 +87,7 @@ int main(int argc, char** argv) {
   double every = 1.0;  // seconds between the progress lines
   double kick = 0.0;   // m/s along z given to the top box at 1 s
   double nudge = 0.0;  // m/s along x given to every dynamic body at the start
+  long pad = 0;        // static boxes put before the scene's bodies (after its first)
   for (int i = 3; i + 1 < argc; i += 2) {
     if (std::string(argv[i]) == "every") {
       every = std::strtod(argv[i + 1], &end);
@@ -93,6 +98,11 @@ int main(int argc, char** argv) {
       kick = std::strtod(argv[i + 1], &end);
       if (*end || !(std::abs(kick) <= 10.0)) return usage("kick must be a speed within ±10 m/s");
       if (kick != 0.0 && seconds <= 1.0) return usage("kick comes at 1 s: SECONDS must be over 1");
+      continue;
+    }
+    if (std::string(argv[i]) == "pad") {
+      pad = std::strtol(argv[i + 1], &end, 10);
+      if (*end || pad < 0 || pad > 1'000'000) return usage("pad must be a count of boxes in [0, 1000000]");
       continue;
     }
     if (std::string(argv[i]) == "nudge") {
@@ -106,8 +116,24 @@ int main(int argc, char** argv) {
     if (*end || !std::isfinite(value)) return usage((std::string("not a number: ") + argv[i + 1]).c_str());
     setting->second(settings, value);
   }
-  const physbench::Scene scene = scenario->build();
+  physbench::Scene scene = scenario->build();
   if (!scene.has_contacts()) return usage("the scenario has no contacts");
+  if (pad > 0) {
+    // (springs, impulses and a chosen probe name bodies by index, which the boxes would shift)
+    if (!scene.springs.empty() || !scene.impulses.empty() || !scene.probe.bodies.empty())
+      return usage("pad needs a scenario without springs, impulses or chosen probed bodies");
+    std::vector<physbench::BodySpec> boxes(static_cast<std::size_t>(pad));
+    for (long i = 0; i < pad; ++i) {
+      physbench::BodySpec& b = boxes[std::size_t(i)];
+      b.name = "pad" + std::to_string(i);
+      b.shape.kind = physbench::ShapeKind::Box;
+      b.shape.half_extents = rtp::Vec3::Constant(0.5);
+      b.mass = 0.0;
+      b.position = rtp::Vec3(-500.0 + 3.0 * double(i % 300), -50.0, -500.0 + 3.0 * double(i / 300));
+    }
+    scene.bodies.insert(scene.bodies.begin() + std::min<std::ptrdiff_t>(1, std::ptrdiff_t(scene.bodies.size())),
+                        boxes.begin(), boxes.end());
+  }
   rtp::World world = physbench::make_rtp_world(scene, rtp::Integrator::SemiImplicitEuler, settings);
   const int n = int(world.body_count());
   std::vector<rtp::Vec3> start(n);
