@@ -21,6 +21,7 @@
 #include <memory>
 #include <string>
 #include <string_view>
+#include <tuple>
 
 #include "physbench/rtp_world.h"
 #include "physbench/scenarios.h"
@@ -230,18 +231,14 @@ int main(int argc, char** argv) {
           ->ArgNames({"threads", "at"})
           ->Unit(benchmark::kMillisecond)
           ->UseRealTime();
-    benchmark::RegisterBenchmark("Ceiling", Ceiling)
-        ->Arg(at)
-        ->ArgName("at")
-        ->Unit(benchmark::kMillisecond)
-        ->UseRealTime()
-        ->Iterations(10);
-    benchmark::RegisterBenchmark("RoundTrip", RoundTrip)
-        ->Arg(at)
-        ->ArgName("at")
-        ->Unit(benchmark::kMillisecond)
-        ->UseRealTime()
-        ->Iterations(5);
+    for (const auto& [name, figure, measures] :
+         {std::tuple{"Ceiling", &Ceiling, 10}, std::tuple{"RoundTrip", &RoundTrip, 5}})
+      benchmark::RegisterBenchmark(name, figure)
+          ->Arg(at)
+          ->ArgName("at")
+          ->Unit(benchmark::kMillisecond)
+          ->UseRealTime()
+          ->Iterations(measures);
   };
   triad(0);
   for (int base : {10, 20, 50, 100})

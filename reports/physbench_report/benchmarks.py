@@ -174,41 +174,24 @@ def contacts_benchmark(folder: Path) -> dict | None:
         return None
     cases: dict[tuple, dict] = {}
     paired: dict[tuple, dict] = {}  # (base, steps a turn) -> its ThreadScaling row
-    triad: dict[tuple, list] = {}  # (threads, at) -> bytes/s of each run
-    ceiling: dict[int, list] = {}  # at -> the two-thread ceiling's speedup of each run
-    round_trip: dict[int, list] = {}  # at -> the cores' round trip (ns) of each run
+    # the machine's own figures in the same run, each at the run's start (at:0) and end (at:1):
+    # its memory bandwidth (bench/triad.h, GB/s, per thread count), its two-thread ceiling and
+    # the cores' round trip (bench/ceiling.h, a speedup and ns); each run's, by (threads,) at
+    machine = {"Triad/": (("threads", "at"), "bytes_per_second", 1e-9),
+               "Ceiling/": (("at",), "speedup_2t", 1.0),
+               "RoundTrip/": (("at",), "round_trip_ns", 1.0)}
+    readings: dict[str, dict[tuple, list]] = {prefix: {} for prefix in machine}
     for run in document.get("benchmarks", []):
         name = run.get("run_name", run.get("name", ""))
-        if name.startswith("Triad/"):
-            # the machine's bandwidth at the run's start (at:0) and end (at:1), GB/s
+        prefix = next((p for p in machine if name.startswith(p)), None)
+        if prefix is not None:
             if run.get("run_type") == "aggregate" or run.get("error_occurred"):
                 continue
+            keys, counter, scale = machine[prefix]
             fields = dict(part.split(":", 1) for part in name.split("/")[1:] if ":" in part)
             try:
-                key = (int(fields["threads"]), int(fields["at"]))
-                triad.setdefault(key, []).append(float(run["bytes_per_second"]) / 1e9)
-            except (KeyError, ValueError) as exc:
-                raise ReportError(f"{folder / 'benchmarks' / 'contacts.json'}: benchmark {name!r} lacks "
-                                  f"or garbles {exc}") from exc
-            continue
-        if name.startswith("Ceiling/"):
-            # the machine's two-thread ceiling (bench/ceiling.h) at the run's start and end
-            if run.get("run_type") == "aggregate" or run.get("error_occurred"):
-                continue
-            fields = dict(part.split(":", 1) for part in name.split("/")[1:] if ":" in part)
-            try:
-                ceiling.setdefault(int(fields["at"]), []).append(float(run["speedup_2t"]))
-            except (KeyError, ValueError) as exc:
-                raise ReportError(f"{folder / 'benchmarks' / 'contacts.json'}: benchmark {name!r} lacks "
-                                  f"or garbles {exc}") from exc
-            continue
-        if name.startswith("RoundTrip/"):
-            # a cache line's round trip between the two threads' cores (bench/ceiling.h), ns
-            if run.get("run_type") == "aggregate" or run.get("error_occurred"):
-                continue
-            fields = dict(part.split(":", 1) for part in name.split("/")[1:] if ":" in part)
-            try:
-                round_trip.setdefault(int(fields["at"]), []).append(float(run["round_trip_ns"]))
+                key = tuple(int(fields[k]) for k in keys)
+                readings[prefix].setdefault(key, []).append(float(run[counter]) * scale)
             except (KeyError, ValueError) as exc:
                 raise ReportError(f"{folder / 'benchmarks' / 'contacts.json'}: benchmark {name!r} lacks "
                                   f"or garbles {exc}") from exc
@@ -249,16 +232,20 @@ def contacts_benchmark(folder: Path) -> dict | None:
     fig.update_layout(barmode="stack", title="rtp contact step: each stage's share of the step (contacts_bench)",
                       yaxis_title="share of the step")
     context = document.get("context", {})
+    triad = readings["Triad/"]
+
+    def start_and_end(prefix: str) -> list | None:
+        """a figure's median at the run's start and end (None where not run), None if never run"""
+        runs = readings[prefix]
+        return [statistics.median(runs[(at,)]) if (at,) in runs else None for at in (0, 1)] if runs else None
+
     bandwidth = [dict(threads=threads, start=statistics.median(triad[(threads, 0)]) if (threads, 0) in triad else None,
                       end=statistics.median(triad[(threads, 1)]) if (threads, 1) in triad else None)
                  for threads in sorted({threads for threads, _ in triad})]
     return dict(rows=rows, stages=stages, chart=figure_html(fig) if rows else "", solver=context.get("solver", ""),
                 scene=context.get("scene", ""), paired=[paired[key] for key in sorted(paired)],
                 bandwidth=bandwidth,
-                ceiling=[statistics.median(ceiling[at]) if at in ceiling else None for at in (0, 1)]
-                if ceiling else None,
-                round_trip=[statistics.median(round_trip[at]) if at in round_trip else None for at in (0, 1)]
-                if round_trip else None)
+                ceiling=start_and_end("Ceiling/"), round_trip=start_and_end("RoundTrip/"))
 
 
 def thread_scaling_row(folder: Path, name: str, run: dict) -> dict | None:
