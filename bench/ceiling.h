@@ -18,7 +18,8 @@
 #include <omp.h>
 #endif
 
-// a hint to the core that this thread spins on a flag
+// a hint to the core that this thread spins on a flag (the engine has its own, spin_pause() in
+// engine/src/threads.h, which is private to it)
 inline void spin_wait() {
 #if defined(__x86_64__) || defined(__i386__)
   __builtin_ia32_pause();
