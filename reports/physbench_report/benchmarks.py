@@ -252,8 +252,8 @@ def thread_scaling_row(folder: Path, name: str, run: dict) -> dict | None:
     """One ThreadScaling run of contacts_bench (one thread against two, the same steps in turn,
     `run` steps a turn: 1 where the name has no run, as before it had one): its base and run,
     each world's ms per step and the speedup, and for turns of several steps each world's first
-    step of a turn apart from the rest, and the cores' round trip the run met (ns; None in a run
-    from before it was taken); None for an aggregate other than the median, a failed run named as
+    step of a turn apart from the rest, and the cores' round trip before its turns and after them
+    (ns; None in a run from before it was taken); None for an aggregate other than the median, a failed run named as
     such."""
     if run.get("run_type") == "aggregate" and run.get("aggregate_name") != "median":
         return None
@@ -269,7 +269,8 @@ def thread_scaling_row(folder: Path, name: str, run: dict) -> dict | None:
                     ms_2t=float(run["ms_per_step_2t"]), speedup=float(run["speedup_2t"]),
                     # (a median's own "iterations" counts the repetitions: the name holds the run's)
                     steps=int(fields.get("iterations", run["iterations"])) * turn, first=first, rest=rest,
-                    round_trip=float(run["round_trip_ns"]) if "round_trip_ns" in run else None,
+                    round_trip=(float(run["round_trip_before_ns"]), float(run["round_trip_after_ns"]))
+                    if "round_trip_before_ns" in run else None,
                     error=None)
     except (KeyError, ValueError) as exc:
         raise ReportError(f"{folder / 'benchmarks' / 'contacts.json'}: benchmark {name!r} lacks "
